@@ -1,0 +1,2 @@
+"""Shared fixtures. Reference numbers live in tests/reference.py, copied from
+shared/DESIGN.md section 5 and the seed paper, never produced by our code."""
