@@ -1,0 +1,112 @@
+"""Reading user-supplied input files: damping matrices and beam properties."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from analysis.beam import BeamProperties
+from daq.errors import UserError
+
+#: Largest damping matrix / Ritz model accepted: beyond ~60 functions M is too
+#: ill-conditioned (cond > 1e13) for the eigenvalues to mean much.
+MAX_FUNCTIONS = 60
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise UserError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise UserError(f"{path}: is a directory, expected a file") from None
+    except UnicodeDecodeError:
+        raise UserError(f"{path}: not a UTF-8 text file") from None
+    except OSError as exc:
+        raise UserError(f"{path}: cannot read ({exc.strerror})") from None
+
+
+def read_damping_matrix(path: Path) -> np.ndarray:
+    """An N x N damping matrix (N s/m) from .npy, .json or a text table.
+
+    JSON: a list of rows, or an object with a ``damping_matrix`` list of rows.
+    Text: one row per line, numbers separated by spaces or commas, ``#`` comments.
+    """
+    if path.suffix.lower() == ".npy":
+        try:
+            values = np.load(path, allow_pickle=False)
+        except FileNotFoundError:
+            raise UserError(f"{path}: no such file") from None
+        except (OSError, ValueError) as exc:
+            raise UserError(f"{path}: not a readable .npy array ({exc})") from None
+    elif path.suffix.lower() == ".json":
+        try:
+            data = json.loads(_read_text(path))
+        except json.JSONDecodeError as exc:
+            raise UserError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
+        if isinstance(data, dict):
+            if "damping_matrix" not in data:
+                raise UserError(f"{path}: a JSON object must hold a 'damping_matrix' list of rows")
+            data = data["damping_matrix"]
+        values = _rows_to_array(data, path)
+    else:
+        rows = []
+        for lineno, line in enumerate(_read_text(path).splitlines(), start=1):
+            line = line.split("#", 1)[0].replace(",", " ").strip()
+            if not line:
+                continue
+            try:
+                rows.append([float(tok) for tok in line.split()])
+            except ValueError:
+                raise UserError(f"{path}:{lineno}: not a row of numbers: {line!r}") from None
+        values = _rows_to_array(rows, path)
+    return _check_matrix(np.asarray(values), path)
+
+
+def _rows_to_array(rows: object, path: Path) -> np.ndarray:
+    if not isinstance(rows, list) or not rows or not all(isinstance(r, list) for r in rows):
+        raise UserError(f"{path}: expected a non-empty list of rows")
+    lengths = {len(r) for r in rows}
+    if len(lengths) != 1:
+        raise UserError(f"{path}: rows have different lengths {sorted(lengths)}")
+    try:
+        return np.array(rows, dtype=float)
+    except (TypeError, ValueError):
+        raise UserError(f"{path}: every entry must be a number") from None
+
+
+def _check_matrix(values: np.ndarray, path: Path) -> np.ndarray:
+    if values.ndim != 2 or values.shape[0] != values.shape[1]:
+        shape = "x".join(str(s) for s in values.shape) or "a scalar"
+        raise UserError(f"{path}: the damping matrix must be square, got {shape}")
+    if not np.issubdtype(values.dtype, np.number):
+        raise UserError(f"{path}: the damping matrix must hold numbers")
+    values = values.astype(float)
+    if not np.all(np.isfinite(values)):
+        raise UserError(f"{path}: the damping matrix holds non-finite values")
+    if not 1 <= values.shape[0] <= MAX_FUNCTIONS:
+        raise UserError(f"{path}: the damping matrix must be at most {MAX_FUNCTIONS}x{MAX_FUNCTIONS}")
+    return values
+
+
+def read_beam(path: Path) -> BeamProperties:
+    """Beam properties from a TOML or JSON table of field names (SI units); missing
+    fields keep the seed's Table 1 values."""
+    text = _read_text(path)
+    try:
+        data = json.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)
+    except json.JSONDecodeError as exc:
+        raise UserError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise UserError(f"{path}: invalid TOML: {exc}") from None
+    if isinstance(data, dict) and isinstance(data.get("beam"), dict):
+        data = data["beam"]
+    if not isinstance(data, dict):
+        raise UserError(f"{path}: expected a table of beam properties")
+    try:
+        return BeamProperties.from_dict(data)
+    except (TypeError, ValueError) as exc:
+        raise UserError(f"{path}: {exc}") from None

@@ -1,0 +1,62 @@
+"""`daq model`: the seed's Table 2 redone, and the modal damping of a damping matrix."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from daq.errors import UserError
+from daq.inputs import MAX_FUNCTIONS
+
+
+def model(
+    modes_n: Annotated[
+        int,
+        typer.Option("--modes-n", "-n", help=f"Number N of Ritz admissible functions (1-{MAX_FUNCTIONS})."),
+    ] = 3,
+    section: Annotated[
+        str,
+        typer.Option(
+            help="A and I of the Ritz model and damped model: 'tabulated' (Table 1) or 'derived' (b·h)."
+        ),
+    ] = "tabulated",
+    damping: Annotated[
+        Path | None,
+        typer.Option(
+            help="Damping matrix file (.npy, .json or text rows), N s/m; default: the seed's eq (18).",
+            dir_okay=False,
+        ),
+    ] = None,
+    beam_file: Annotated[
+        Path | None,
+        typer.Option("--beam", help="TOML/JSON beam properties (SI field names); default: Table 1."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the same as JSON.")] = False,
+) -> None:
+    """Print the seed's Table 2 side by side with our models, and the modal damping of a
+    damping matrix."""
+    if not 1 <= modes_n <= MAX_FUNCTIONS:
+        raise UserError(f"--modes-n must be between 1 and {MAX_FUNCTIONS}, got {modes_n}", exit_code=2)
+    if section not in ("tabulated", "derived"):
+        raise UserError(f"--section must be 'tabulated' or 'derived', got {section!r}", exit_code=2)
+    # Imported here so that `daq --help` does not pay for scipy.
+    from rich.console import Console
+
+    from analysis.beam import TABLE_1
+    from analysis.seed import eq18_damping_matrix
+    from daq.inputs import read_beam, read_damping_matrix
+    from daq.model_report import build_report, render
+
+    beam = TABLE_1 if beam_file is None else read_beam(beam_file)
+    if damping is None:
+        matrix, source = eq18_damping_matrix(), "seed eq (18)"
+    else:
+        matrix, source = read_damping_matrix(damping), str(damping)
+    t2, ds, report = build_report(beam, modes_n, section, matrix, source)  # type: ignore[arg-type]
+    if as_json:
+        print(json.dumps(report, indent=2))
+    else:
+        render(Console(), beam, t2, ds, source)
