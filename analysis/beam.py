@@ -35,8 +35,25 @@ class BeamProperties:
             value = getattr(self, f.name)
             if not isinstance(value, (int, float)) or isinstance(value, bool):
                 raise ValueError(f"beam property {f.name} must be a number, got {value!r}")
+            try:
+                value = float(value)
+            except OverflowError:
+                raise ValueError(f"beam property {f.name} is too large") from None
             if not math.isfinite(value) or value <= 0.0:
                 raise ValueError(f"beam property {f.name} must be positive and finite, got {value!r}")
+            object.__setattr__(self, f.name, value)
+        # Products the models form must stay finite and non-zero too (1e200 m is a number).
+        rho_a_l4 = self.density_kg_m3 * self.area_m2 * self.length_m**4
+        derived = {
+            "rho*A*L": self.density_kg_m3 * self.area_m2 * self.length_m,
+            "E*I": self.youngs_modulus_pa * self.second_moment_m4,
+            "b*h^3/12": self.width_m * self.height_m**3 / 12.0,
+            "rho*A*L^4": rho_a_l4,
+            "E*I/(rho*A*L^4)": self.youngs_modulus_pa * self.second_moment_m4 / rho_a_l4 if rho_a_l4 else 0.0,
+        }
+        for name, value in derived.items():
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"beam properties out of range: {name} is {value!r}")
 
     @property
     def mass_per_length_kg_m(self) -> float:
@@ -73,7 +90,12 @@ class BeamProperties:
 
     @classmethod
     def from_dict(cls, values: dict[str, object]) -> BeamProperties:
-        """Build from a mapping of field names to numbers; missing keys keep Table 1 values."""
+        """Build from a mapping of field names to numbers; missing keys keep Table 1 values.
+
+        A mapping that changes width or height but gives neither area nor second
+        moment gets A = b*h and I = b*h^3/12 from them: keeping Table 1's A and I
+        for another cross-section would silently model the wrong beam.
+        """
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(values) - known)
         if unknown:
@@ -81,7 +103,12 @@ class BeamProperties:
                 f"unknown beam propert{'y' if len(unknown) == 1 else 'ies'} {', '.join(unknown)}; "
                 f"known: {', '.join(sorted(known))}"
             )
-        return cls(**values)  # type: ignore[arg-type]
+        beam = cls(**values)  # type: ignore[arg-type]
+        changes_section = {"width_m", "height_m"} & set(values)
+        gives_section = {"area_m2", "second_moment_m4"} & set(values)
+        if changes_section and not gives_section:
+            beam = beam.with_section("derived")
+        return beam
 
 
 #: The seed paper's Table 1.

@@ -26,9 +26,11 @@ def cantilever_roots(n_modes: int) -> np.ndarray:
     if not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
         raise ValueError(f"the number of modes must be a positive integer, got {n_modes!r}")
 
-    # cos(x) + 1/cosh(x) has the same roots and stays O(1) for large x.
+    # cos(x) + sech(x) has the same roots and stays O(1) for large x; sech is
+    # written with e^-x so that it never overflows.
     def f(x: float) -> float:
-        return np.cos(x) + 1.0 / np.cosh(x)
+        e = np.exp(-x)
+        return np.cos(x) + 2.0 * e / (1.0 + e * e)
 
     return np.array(
         [
@@ -55,7 +57,8 @@ def cantilever_mode_shapes(x_m: np.ndarray | float, n_modes: int, length_m: floa
     u = beta_l * x / length_m
     e_l = np.exp(-beta_l)
     sin_l, cos_l = np.sin(beta_l), np.cos(beta_l)
-    sigma = (np.cosh(beta_l) + cos_l) / (np.sinh(beta_l) + sin_l)
+    # sigma = (cosh bL + cos bL) / (sinh bL + sin bL), times 2 e^-bL above and below.
+    sigma = (1.0 + 2.0 * cos_l * e_l + e_l**2) / (1.0 - e_l**2 + 2.0 * sin_l * e_l)
     # (1 - sigma) e^u, with 1 - sigma and e^u / sinh(bL) each formed without overflow.
     one_minus_sigma_e_u = (
         (sin_l - cos_l - e_l) * 2.0 * np.exp(u - beta_l) / (1.0 - e_l**2 + 2.0 * sin_l * e_l)

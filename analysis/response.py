@@ -81,6 +81,8 @@ def frequency_response(
     if f.ndim != 1 or not np.all(np.isfinite(f)):
         raise ValueError("frequencies_hz must be a finite 1-D array")
     s = 2j * np.pi * f
+    if flat.shape[0] == 0:
+        return np.zeros((*batch, f.size), dtype=complex)
     a, b, c, d = model.state_space(flat, output)
     lam, res, ok = _modal_terms(a, b, c)
     with np.errstate(all="ignore"):
@@ -197,6 +199,10 @@ def time_response(
     force = np.asarray(force_n, dtype=float)
     if force.ndim < 1 or force.shape[-1] < 1 or not np.all(np.isfinite(force)):
         raise ValueError("force_n must be a finite array with samples along its last axis")
+    try:
+        sample_rate_hz = float(sample_rate_hz)
+    except (TypeError, ValueError):
+        raise ValueError(f"sample_rate_hz must be a number, got {sample_rate_hz!r}") from None
     if not (np.isfinite(sample_rate_hz) and sample_rate_hz > 0):
         raise ValueError(f"sample_rate_hz must be positive, got {sample_rate_hz!r}")
     n_samples = force.shape[-1]
@@ -207,6 +213,8 @@ def time_response(
             f"force_n of shape {force.shape} does not broadcast against the batch {batch}"
         ) from None
     dt = 1.0 / sample_rate_hz
+    if flat.shape[0] == 0:
+        return np.zeros((*batch, n_samples))
 
     a, b, c, d = model.state_space(flat, output)
     lam, res, ok = _modal_terms(a, b, c)

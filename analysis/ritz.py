@@ -71,8 +71,8 @@ def ritz_matrices(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Mass and stiffness matrices of the assumed-modes model.
 
-    Returns ``(M, K)``, each (N, N): M in kg, K in N/m (generalized coordinates are
-    dimensionless multipliers of the eq (6) functions, which are in m per unit).
+    Returns ``(M, K)``, each (N, N): M in kg, K in N/m (the eq (6) functions are
+    dimensionless, so the generalized coordinates q are in m).
 
     ``method="closed_form"`` evaluates the seed's eqs (10)-(11) with the leading
     ``rho L`` read as rho*A*L (mass per length times length); ``"quadrature"``

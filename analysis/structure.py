@@ -60,6 +60,12 @@ class StructuralModel:
             object.__setattr__(self, name, value)
         if not np.all(np.isfinite(mass)):
             raise ValueError("mass holds non-finite values")
+        if not np.allclose(mass, mass.T, rtol=1e-10, atol=0.0):
+            raise ValueError("mass matrix must be symmetric")
+        try:
+            np.linalg.cholesky(mass)
+        except np.linalg.LinAlgError:
+            raise ValueError("mass matrix must be positive definite") from None
         object.__setattr__(self, "mass", mass)
 
     @property

@@ -72,8 +72,24 @@ class DampingSummary:
     modes: DampedModes  # unbatched: arrays of shape (N,)
 
     @property
+    def definiteness(self) -> str:
+        """ "positive definite", "positive semi-definite" or "indefinite" (of the symmetric
+        part, with a relative tolerance of 1e-12): only an indefinite R can feed energy in."""
+        eig = self.symmetric_eigenvalues
+        tol = 1e-12 * float(np.max(np.abs(eig))) if eig.size else 0.0
+        if eig[0] > tol:
+            return "positive definite"
+        if eig[0] >= -tol:
+            return "positive semi-definite"
+        return "indefinite"
+
+    @property
     def positive_definite(self) -> bool:
-        return bool(self.symmetric_eigenvalues[0] > 0.0)
+        return self.definiteness == "positive definite"
+
+    @property
+    def symmetric(self) -> bool:
+        return bool(np.allclose(self.damping, self.damping.T, rtol=1e-12, atol=0.0))
 
 
 def damping_summary(

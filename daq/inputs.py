@@ -16,13 +16,30 @@ from daq.errors import UserError
 MAX_FUNCTIONS = 60
 
 
-def _read_text(path: Path) -> str:
+#: Input files are small tables; anything larger is a wrong file, not a beam.
+MAX_INPUT_BYTES = 1_000_000
+
+
+def _check_file(path: Path) -> None:
     try:
-        return path.read_text(encoding="utf-8")
+        info = path.stat()
     except FileNotFoundError:
         raise UserError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise UserError(f"{path}: is a directory, expected a file") from None
+    except OSError as exc:
+        raise UserError(f"{path}: cannot read ({exc.strerror})") from None
+    if path.is_dir():
+        raise UserError(f"{path}: is a directory, expected a file")
+    if not path.is_file():
+        raise UserError(f"{path}: not a regular file")
+    if info.st_size > MAX_INPUT_BYTES:
+        raise UserError(f"{path}: {info.st_size} bytes is too large for this input (limit {MAX_INPUT_BYTES})")
+
+
+def _read_text(path: Path) -> str:
+    _check_file(path)
+    try:
+        # utf-8-sig: a spreadsheet's CSV export often starts with a byte-order mark.
+        return path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError:
         raise UserError(f"{path}: not a UTF-8 text file") from None
     except OSError as exc:
@@ -36,12 +53,13 @@ def read_damping_matrix(path: Path) -> np.ndarray:
     Text: one row per line, numbers separated by spaces or commas, ``#`` comments.
     """
     if path.suffix.lower() == ".npy":
+        _check_file(path)
         try:
             values = np.load(path, allow_pickle=False)
-        except FileNotFoundError:
-            raise UserError(f"{path}: no such file") from None
-        except (OSError, ValueError) as exc:
-            raise UserError(f"{path}: not a readable .npy array ({exc})") from None
+        except (OSError, ValueError, EOFError) as exc:
+            raise UserError(f"{path}: not a readable .npy array ({exc or 'empty file'})") from None
+        if not isinstance(values, np.ndarray) or values.dtype.kind not in "iuf":
+            raise UserError(f"{path}: the damping matrix must hold real numbers")
     elif path.suffix.lower() == ".json":
         try:
             data = json.loads(_read_text(path))
@@ -72,23 +90,24 @@ def _rows_to_array(rows: object, path: Path) -> np.ndarray:
     lengths = {len(r) for r in rows}
     if len(lengths) != 1:
         raise UserError(f"{path}: rows have different lengths {sorted(lengths)}")
+    # JSON true/false and "1.5" would pass np.array(..., float): refuse them.
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for r in rows for v in r):
+        raise UserError(f"{path}: every entry must be a number")
     try:
         return np.array(rows, dtype=float)
-    except (TypeError, ValueError):
-        raise UserError(f"{path}: every entry must be a number") from None
+    except (TypeError, ValueError, OverflowError):
+        raise UserError(f"{path}: every entry must be a finite number") from None
 
 
 def _check_matrix(values: np.ndarray, path: Path) -> np.ndarray:
     if values.ndim != 2 or values.shape[0] != values.shape[1]:
         shape = "x".join(str(s) for s in values.shape) or "a scalar"
         raise UserError(f"{path}: the damping matrix must be square, got {shape}")
-    if not np.issubdtype(values.dtype, np.number):
-        raise UserError(f"{path}: the damping matrix must hold numbers")
     values = values.astype(float)
     if not np.all(np.isfinite(values)):
         raise UserError(f"{path}: the damping matrix holds non-finite values")
     if not 1 <= values.shape[0] <= MAX_FUNCTIONS:
-        raise UserError(f"{path}: the damping matrix must be at most {MAX_FUNCTIONS}x{MAX_FUNCTIONS}")
+        raise UserError(f"{path}: the damping matrix must be 1x1 to {MAX_FUNCTIONS}x{MAX_FUNCTIONS}")
     return values
 
 
@@ -103,10 +122,13 @@ def read_beam(path: Path) -> BeamProperties:
     except tomllib.TOMLDecodeError as exc:
         raise UserError(f"{path}: invalid TOML: {exc}") from None
     if isinstance(data, dict) and isinstance(data.get("beam"), dict):
+        outside = sorted(set(data) - {"beam"})
+        if outside:
+            raise UserError(f"{path}: keys outside the [beam] table: {', '.join(outside)}")
         data = data["beam"]
     if not isinstance(data, dict):
         raise UserError(f"{path}: expected a table of beam properties")
     try:
         return BeamProperties.from_dict(data)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise UserError(f"{path}: {exc}") from None

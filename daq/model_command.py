@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -12,17 +13,22 @@ from daq.errors import UserError
 from daq.inputs import MAX_FUNCTIONS
 
 
+class Section(StrEnum):
+    tabulated = "tabulated"
+    derived = "derived"
+
+
 def model(
     modes_n: Annotated[
         int,
         typer.Option("--modes-n", "-n", help=f"Number N of Ritz admissible functions (1-{MAX_FUNCTIONS})."),
     ] = 3,
     section: Annotated[
-        str,
+        Section,
         typer.Option(
-            help="A and I of the Ritz model and damped model: 'tabulated' (Table 1) or 'derived' (b·h)."
+            help="A and I of the Ritz and damped models: tabulated (Table 1) or derived (b·h, b·h³/12)."
         ),
-    ] = "tabulated",
+    ] = Section.tabulated,
     damping: Annotated[
         Path | None,
         typer.Option(
@@ -40,9 +46,8 @@ def model(
     damping matrix."""
     if not 1 <= modes_n <= MAX_FUNCTIONS:
         raise UserError(f"--modes-n must be between 1 and {MAX_FUNCTIONS}, got {modes_n}", exit_code=2)
-    if section not in ("tabulated", "derived"):
-        raise UserError(f"--section must be 'tabulated' or 'derived', got {section!r}", exit_code=2)
     # Imported here so that `daq --help` does not pay for scipy.
+    import numpy as np
     from rich.console import Console
 
     from analysis.beam import TABLE_1
@@ -55,7 +60,13 @@ def model(
         matrix, source = eq18_damping_matrix(), "seed eq (18)"
     else:
         matrix, source = read_damping_matrix(damping), str(damping)
-    t2, ds, report = build_report(beam, modes_n, section, matrix, source)  # type: ignore[arg-type]
+    try:
+        # Finite but extreme inputs (a 1e200 m beam, a 1e300 damping entry) must end
+        # in one clear line, not in NaN tables or a LAPACK traceback.
+        with np.errstate(over="raise", invalid="raise", divide="raise"):
+            t2, ds, report = build_report(beam, modes_n, section.value, matrix, source)  # type: ignore[arg-type]
+    except (FloatingPointError, np.linalg.LinAlgError, OverflowError, ValueError) as exc:
+        raise UserError(f"the model cannot be evaluated with these numbers ({exc})") from None
     if as_json:
         print(json.dumps(report, indent=2))
     else:

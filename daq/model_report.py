@@ -49,8 +49,11 @@ def build_report(
             "n_functions": int(ds.damping.shape[0]),
             "matrix_n_s_per_m": ds.damping.tolist(),
             "symmetric_part_eigenvalues": ds.symmetric_eigenvalues.tolist(),
+            "definiteness": ds.definiteness,
             "positive_definite": ds.positive_definite,
-            "n_overdamped_poles": int(modes.n_overdamped_poles),
+            "symmetric": ds.symmetric,
+            "n_real_poles": int(modes.n_real_poles),
+            "n_unstable_poles": int(modes.n_unstable_poles),
             "modes": [
                 {
                     "mode": k + 1,
@@ -67,7 +70,8 @@ def build_report(
 
 
 def _fmt(value: float, digits: int = 5) -> str:
-    return "—" if not math.isfinite(value) else f"{value:.{digits}f}"
+    # + 0.0 turns -0.0 into 0.0: an undamped mode should not print as "-0.000000".
+    return "—" if not math.isfinite(value) else f"{round(value, digits) + 0.0:.{digits}f}"
 
 
 def _pct(value: float) -> str:
@@ -126,11 +130,19 @@ def render(console: Console, beam: BeamProperties, t2: Table2, ds: DampingSummar
                 _fmt(modes.damping_ratios[k], 6),
             )
     console.print(damp)
-    eig = ", ".join(f"{v:.4g}" for v in ds.symmetric_eigenvalues)
-    kind = "positive definite" if ds.positive_definite else "NOT positive definite: the model can gain energy"
-    console.print(f"Eigenvalues of R (symmetric part): {eig} ({kind})")
-    if int(modes.n_overdamped_poles):
-        console.print(f"{int(modes.n_overdamped_poles)} real (overdamped) poles are not listed as modes.")
+    eig = ", ".join(f"{v:.4g}" for v in ds.symmetric_eigenvalues + 0.0)
+    meaning = {
+        "positive definite": "every mode is damped",
+        "positive semi-definite": "some motion is undamped",
+        "indefinite": "the model can gain energy",
+    }[ds.definiteness]
+    console.print(f"Eigenvalues of R (symmetric part): {eig} ({ds.definiteness}: {meaning})")
+    if not ds.symmetric:
+        console.print("R is not symmetric: its antisymmetric part acts as a gyroscopic, not a damping, term.")
+    if int(modes.n_real_poles):
+        console.print(f"{int(modes.n_real_poles)} real (non-oscillating) poles are not listed as modes.")
+    if int(modes.n_unstable_poles):
+        console.print(f"[red]{int(modes.n_unstable_poles)} poles have a positive real part: unstable.[/]")
     ratios = modes.damping_ratios[np.isfinite(modes.damping_ratios)]
     if ratios.size and ratios.max() > PLAUSIBLE_DAMPING_RATIO:
         console.print(

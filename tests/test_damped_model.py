@@ -16,15 +16,22 @@ def test_seed_module_carries_eq18_verbatim():
     np.testing.assert_array_equal(eq18_damping_matrix(), np.array(EQ18))
 
 
-def test_eq18_eigenvalues():
-    np.testing.assert_allclose(np.linalg.eigvalsh(np.array(EQ18)), EQ18_EIGENVALUES, rtol=1e-3)
+def test_eq18_eigenvalues_and_summary():
+    from analysis.table2 import damping_summary
+
+    summary = damping_summary(np.array(EQ18))
+    np.testing.assert_allclose(summary.symmetric_eigenvalues, EQ18_EIGENVALUES, rtol=1e-3)
+    assert summary.definiteness == "positive definite"
+    assert summary.symmetric
+    np.testing.assert_allclose(summary.modes.damping_ratios, EQ18_DAMPING_RATIOS, atol=1e-5)
 
 
 def test_eq18_poles_and_damping_ratios(ritz3):
     modes = damped_modes(ritz3, np.array(EQ18))
     np.testing.assert_allclose(modes.natural_frequencies_hz, EQ18_POLE_MAGNITUDE_HZ, atol=1e-5)
     np.testing.assert_allclose(modes.damping_ratios, EQ18_DAMPING_RATIOS, atol=1e-5)
-    assert int(modes.n_overdamped_poles) == 0
+    assert int(modes.n_real_poles) == 0
+    assert int(modes.n_unstable_poles) == 0
     assert np.all(modes.poles.real < 0)
 
 
@@ -69,10 +76,18 @@ def test_batched_modes_equal_one_at_a_time(ritz3):
 def test_overdamped_member_is_padded_not_crashing(ritz3):
     heavy = np.diag([1e4, 0.0, 0.0])  # kills the first mode's oscillation
     modes = damped_modes(ritz3, np.stack([np.array(EQ18), heavy]))
-    assert int(modes.n_overdamped_poles[0]) == 0
-    assert int(modes.n_overdamped_poles[1]) >= 2
-    assert np.isnan(modes.damping_ratios[1]).sum() >= 1
+    assert int(modes.n_real_poles[0]) == 0
+    assert int(modes.n_real_poles[1]) >= 2
+    assert int(modes.n_unstable_poles[1]) == 0
+    padded = np.isnan(modes.damping_ratios[1])
+    assert padded.sum() >= 1
+    assert np.all(np.isnan(modes.damped_frequencies_hz[1][padded]))
     assert np.all(np.isfinite(modes.damping_ratios[0]))
+
+
+def test_unstable_poles_are_counted(ritz3):
+    modes = damped_modes(ritz3, -1e6 * np.eye(3))
+    assert int(modes.n_unstable_poles) >= 1
 
 
 def test_rejects_wrong_damping_shape(ritz3):

@@ -70,3 +70,50 @@ def test_modal_model_reproduces_frequencies_and_damping():
     assert np.count_nonzero(r - np.diag(np.diag(r))) == 0
     with pytest.raises(ValueError, match="expected 6 damping ratios"):
         beam.modal_damping_matrix([0.01, 0.02])
+
+
+def test_modal_damping_matrix_gives_back_the_ratios():
+    from analysis.modal import damped_modes
+
+    beam = ExactCantilever.build(n_modes=6)
+    zeta = np.array([0.002, 0.004, 0.006, 0.008, 0.01, 0.05])
+    modes = damped_modes(beam.structure(), beam.modal_damping_matrix(zeta))
+    np.testing.assert_allclose(modes.damping_ratios, zeta, rtol=1e-9)
+    np.testing.assert_allclose(modes.natural_frequencies_hz, beam.frequencies_hz(), rtol=1e-9)
+
+
+def test_static_tip_compliance_is_l3_over_3ei():
+    # Textbook statics: a tip load P deflects a cantilever's tip by P L^3 / (3 E I).
+    # The modal sum converges to it (slowly, as 1/n^4 per mode).
+    from analysis.response import frequency_response
+
+    beam = ExactCantilever.build(n_modes=60)
+    h0 = frequency_response(beam.structure(), np.zeros((60, 60)), [0.0], "displacement")[0]
+    expected = TABLE_1.length_m**3 / (3 * TABLE_1.flexural_rigidity_n_m2)
+    assert h0.real == pytest.approx(expected, rel=1e-6)
+
+
+def test_structure_defaults_to_the_tip_and_is_reciprocal():
+    from analysis.response import frequency_response
+
+    beam = ExactCantilever.build(n_modes=6)
+    tip = beam.structure()
+    np.testing.assert_allclose(np.abs(tip.force_shape), 2.0, atol=1e-9)
+    np.testing.assert_array_equal(tip.force_shape, tip.sensor_shape)
+    damping = beam.modal_damping_matrix(0.01)
+    f = np.linspace(1, 300, 50)
+    h_ab = frequency_response(beam.structure(force_at_m=0.3, sensor_at_m=0.7), damping, f)
+    h_ba = frequency_response(beam.structure(force_at_m=0.7, sensor_at_m=0.3), damping, f)
+    np.testing.assert_allclose(h_ab, h_ba, rtol=1e-10)
+
+
+def test_very_high_modes_stay_finite():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        roots = cantilever_roots(300)
+        shapes = cantilever_mode_shapes(np.linspace(0, 0.7, 11), 300, 0.7)
+    np.testing.assert_allclose(roots[-1], (2 * 300 - 1) * np.pi / 2, rtol=1e-12)
+    assert np.all(np.isfinite(shapes))
+    np.testing.assert_allclose(np.abs(shapes[:, -1]), 2.0, atol=1e-9)

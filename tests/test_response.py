@@ -158,3 +158,19 @@ def test_input_validation(ritz3):
         frequency_response(ritz3, damping, [1.0], "jerk")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="frequencies_hz"):
         frequency_response(ritz3, damping, [[1.0]])
+    with pytest.raises(ValueError, match="sample_rate_hz must be a number"):
+        time_response(ritz3, damping, np.ones(8), "fast")  # type: ignore[arg-type]
+
+
+def test_empty_batch(ritz3):
+    assert time_response(ritz3, np.zeros((0, 3, 3)), np.ones(8), 100.0).shape == (0, 8)
+    assert frequency_response(ritz3, np.zeros((0, 3, 3)), [1.0, 2.0]).shape == (0, 2)
+
+
+def test_structural_model_rejects_a_bad_mass_matrix():
+    from analysis.structure import StructuralModel
+
+    with pytest.raises(ValueError, match="symmetric"):
+        StructuralModel(np.array([[1.0, 0.5], [0.0, 1.0]]), np.eye(2), np.ones(2), np.ones(2))
+    with pytest.raises(ValueError, match="positive definite"):
+        StructuralModel(np.diag([1.0, -1.0]), np.eye(2), np.ones(2), np.ones(2))

@@ -88,3 +88,18 @@ def test_rejects_bad_n(n):
 def test_rejects_positions_off_the_beam():
     with pytest.raises(ValueError, match="on the beam"):
         RitzBeam.build().structure(sensor_at_m=0.8)
+
+
+def test_ritz_static_tip_compliance_approaches_l3_over_3ei():
+    # Independent statics: P L^3 / (3 E I). The Ritz model is stiffer (an upper bound).
+    from analysis.response import frequency_response
+
+    expected = TABLE_1.length_m**3 / (3 * TABLE_1.flexural_rigidity_n_m2)
+    h3 = frequency_response(
+        RitzBeam.build(n_functions=3).structure(), np.zeros((3, 3)), [0.0], "displacement"
+    )
+    h12 = frequency_response(
+        RitzBeam.build(n_functions=12).structure(), np.zeros((12, 12)), [0.0], "displacement"
+    )
+    assert h3[0].real < h12[0].real <= expected * (1 + 1e-9)
+    assert h12[0].real == pytest.approx(expected, rel=1e-3)
