@@ -20,6 +20,7 @@ from typer._click import exceptions as click_exc
 from daq import __version__
 from daq.errors import UserError
 from daq.model_command import model
+from daq.sim_command import sim_app
 
 app = typer.Typer(
     name="daq",
@@ -54,6 +55,7 @@ def _root(
 
 
 app.command(name="model")(model)
+app.add_typer(sim_app, name="sim")
 
 
 def _fail(message: str, exit_code: int) -> int:
@@ -69,9 +71,9 @@ def main(argv: list[str] | None = None) -> int:
     command = typer.main.get_command(app)
     try:
         result = command.main(args=argv, prog_name="daq", standalone_mode=False)
-    except click_exc.NoArgsIsHelpError as exc:
-        # Bare `daq` (or a bare group): the help is the answer, not an error.
-        print(exc.ctx.get_help() if exc.ctx else "")
+    except click_exc.NoArgsIsHelpError:
+        # Bare `daq` (or a bare group): building this error printed the help
+        # already; the help is the answer, not an error.
         return 0
     except click_exc.UsageError as exc:
         hint = f" (see '{exc.ctx.command_path} --help')" if exc.ctx else ""

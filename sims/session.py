@@ -1,0 +1,189 @@
+"""One client's connection to the simulated analyzer: framing, simulator control, faults.
+
+Front ends (TCP, the Prologix pty, in-process) own the bytes; a Session turns
+complete messages into instrument commands and the instrument's replies into
+``Chunk``s to send, with the faults armed on this connection applied.
+
+Simulator control travels in-band, in a namespace no instrument command uses:
+
+| command                 | effect                                                        |
+|-------------------------|---------------------------------------------------------------|
+| ``SIM:FAULT spec``      | arm a fault on this connection (see sims.faults)              |
+| ``SIM:FAULT CLEAR``     | disarm every fault on this connection                         |
+| ``SIM:FAULT?``          | the armed faults, ``;``-separated, or NONE                    |
+| ``SIM:NOISE 0|1``       | sensor noise off/on (physics source)                          |
+| ``SIM:SEED n``          | restart the physics random stream                             |
+| ``SIM:SCEN name``       | switch the specimen (seed, realistic)                         |
+| ``SIM:TIME scale``      | time scale: 1 real time, 0 instant                            |
+| ``SIM:HAMMER k=v,...``  | peak_force_n, pulse_width_s, double_hit_probability, rel_spread |
+| ``SIM:HITS?``           | hits the hammer has struck so far                             |
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+from sims.faults import Fault, garbage_bytes, parse_fault
+from sims.instrument import Analyzer, Reply
+from sims.sources import PhysicsSource
+
+#: A client that sends this much without a line end is not talking to us.
+MAX_PENDING_BYTES = 65536
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Bytes to send after waiting ``delay_s``; ``close`` ends the connection after them."""
+
+    data: bytes
+    delay_s: float = 0.0
+    close: bool = False
+
+
+class Session:
+    def __init__(self, analyzer: Analyzer, faults: list[str] | tuple[str, ...] = ()) -> None:
+        self.analyzer = analyzer
+        self.faults: list[Fault] = []
+        self.closed = False
+        self._pending = b""
+        for spec in faults:
+            self.arm(spec)
+
+    # ------------------------------------------------------------- faults
+    def arm(self, spec: str) -> None:
+        fault = parse_fault(spec)
+        if fault.name == "error":
+            self.analyzer.enter_hardware_fault()
+            return
+        self.faults.append(fault)
+
+    def _fault(self, name: str) -> Fault | None:
+        """The first armed fault of this name that acts on the current event."""
+        for fault in self.faults:
+            if fault.name == name and fault.fires():
+                return fault
+        return None
+
+    # ------------------------------------------------------------- framing
+    def feed(self, data: bytes) -> list[Chunk]:
+        """Bytes from the client; replies to every message they complete (LF ends one)."""
+        if self.closed:
+            return []
+        self._pending += data
+        out: list[Chunk] = []
+        while b"\n" in self._pending:
+            message, _, self._pending = self._pending.partition(b"\n")
+            out += self.message(message)
+        if len(self._pending) > MAX_PENDING_BYTES:
+            self._pending = b""
+            with self.analyzer.lock:
+                self.analyzer.push_error(8, "message too long")
+        return out
+
+    def end_of_message(self) -> list[Chunk]:
+        """GPIB EOI: whatever is buffered is a complete message."""
+        message, self._pending = self._pending, b""
+        return self.message(message) if message.strip() else []
+
+    def clear(self) -> None:
+        """Device clear: drop any partial input."""
+        self._pending = b""
+        self.analyzer.device_clear()
+
+    def message(self, raw: bytes) -> list[Chunk]:
+        """One complete message: commands separated by ``;``."""
+        text = raw.decode("ascii", errors="replace")
+        out: list[Chunk] = []
+        for part in text.replace("\r", "").split(";"):
+            part = part.strip()
+            if not part:
+                continue
+            if part.upper().startswith("SIM:"):
+                reply = self._control(part)
+                replies = [Reply(reply.encode("ascii") + b"\r\n")] if reply is not None else []
+            elif part.upper() == "STRT" and self._fault("no_hit"):
+                self.analyzer.start(never_hit=True)
+                replies = []
+            else:
+                replies = self.analyzer.execute(part)
+            for reply in replies:
+                out += self._deliver(reply)
+                if self.closed:
+                    return out
+        return out
+
+    def _deliver(self, reply: Reply) -> list[Chunk]:
+        delay = 0.0
+        slow = self._fault("slow")
+        if slow:
+            delay = slow.params["delay"]
+        data = reply.data
+        garbage = self._fault("garbage")
+        if garbage:
+            data = garbage_bytes(garbage) + data
+        if reply.binary:
+            drop = self._fault("drop")
+            if drop:
+                self.closed = True
+                return [Chunk(data[: int(len(data) * drop.params["keep"])], delay, close=True)]
+            truncate = self._fault("truncate")
+            if truncate:
+                return [Chunk(data[: int(len(data) * truncate.params["keep"])], delay)]
+        return [Chunk(data, delay)]
+
+    # ------------------------------------------------------------- control
+    def _control(self, text: str) -> str | None:
+        head, _, arg = text.partition(" ")
+        head, arg = head.upper(), arg.strip()
+        analyzer = self.analyzer
+        try:
+            if head == "SIM:FAULT?":
+                live = [f.describe() for f in self.faults if not f.exhausted]
+                return ";".join(live) if live else "NONE"
+            if head == "SIM:FAULT":
+                if arg.upper() == "CLEAR":
+                    self.faults.clear()
+                else:
+                    self.arm(arg)
+                return None
+            if head == "SIM:HITS?":
+                return str(getattr(analyzer.source, "hits_drawn", 0))
+            if head == "SIM:TIME?":
+                return repr(analyzer.time_scale)
+            if head == "SIM:TIME":
+                scale = float(arg)
+                if not (math.isfinite(scale) and scale >= 0):
+                    raise ValueError("time scale must be >= 0")
+                analyzer.time_scale = scale
+                return None
+            source = analyzer.source
+            if not isinstance(source, PhysicsSource):
+                raise ValueError(f"{head} needs the physics source, not a replay")
+            if head == "SIM:NOISE?":
+                return "1" if source.noise.enabled else "0"
+            if head == "SIM:NOISE":
+                if arg not in ("0", "1"):
+                    raise ValueError("SIM:NOISE takes 0 or 1")
+                source.set_noise(arg == "1")
+            elif head == "SIM:SEED":
+                source.reseed(int(arg))
+            elif head == "SIM:SCEN?":
+                return source.specimen.name
+            elif head == "SIM:SCEN":
+                analyzer.source = PhysicsSource(arg.lower(), source.hammer, source.noise, source.seed)
+            elif head == "SIM:HAMMER":
+                changes = {}
+                for pair in arg.split(","):
+                    key, _, value = pair.partition("=")
+                    key = key.strip().lower()
+                    if key not in ("peak_force_n", "pulse_width_s", "double_hit_probability", "rel_spread"):
+                        raise ValueError(f"unknown hammer setting {key!r}")
+                    changes[key] = float(value)
+                source.hammer = replace(source.hammer, **changes)
+            else:
+                raise ValueError(f"unknown simulator command {head}")
+        except ValueError as exc:
+            with analyzer.lock:
+                analyzer.push_error(3, str(exc))
+        return None

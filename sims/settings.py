@@ -1,0 +1,146 @@
+"""The simulated analyzer's settings, their preset and the record geometry they imply."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+#: Maximum span and the number of halvings the analyzer offers (102.4 kHz / 2^n).
+MAX_SPAN_HZ = 102_400.0
+N_SPANS = 20
+SPANS_HZ = tuple(MAX_SPAN_HZ / 2**n for n in range(N_SPANS))
+#: Input ranges, V peak: 1 dB steps from -51 dBV to +27 dBV.
+RANGES_V = tuple(10.0 ** (db / 20.0) for db in range(-51, 28))
+N_LINES = 400
+RECORD_SAMPLES = 1024
+SAMPLE_RATE_PER_SPAN = 2.56
+ADC_BITS = 16
+
+
+@dataclass
+class AnalyzerSettings:
+    """Every persistent setting; the defaults are the preset (RST)."""
+
+    span_hz: float = MAX_SPAN_HZ
+    center_hz: float = MAX_SPAN_HZ / 2
+    n_averages: int = 1
+    averaging: str = "AVOF"
+    preview: int = 0
+    measurement: str = "FRQR"
+    mode: str = "LNRS"
+    window1: str = "HANN"
+    window2: str = "HANN"
+    force_width1_s: float = 0.05
+    force_width2_s: float = 0.05
+    exp_decay1_s: float = 1.0
+    exp_decay2_s: float = 1.0
+    range1_v: float = 1.0
+    range2_v: float = 1.0
+    autorange1: int = 0
+    autorange2: int = 0
+    ac_coupled1: int = 0
+    ac_coupled2: int = 0
+    sensitivity1_v_per_eu: float = 2.25e-3
+    sensitivity2_v_per_eu: float = 1.02e-3
+    trigger_source: str = "FREE"
+    trigger_level_v: float = 0.0
+    trigger_slope: str = "POS"
+    trigger_delay_s: float = 0.0
+    trace: str = "A"
+    display: dict[str, str] = field(default_factory=lambda: {"A": "FRSP", "B": "COHR"})
+
+    # -- derived geometry
+    @property
+    def zoom(self) -> bool:
+        """A zoom measurement: the span does not start at 0 Hz. Its time records are
+        complex (the band mixed down by the center frequency), 512 points at
+        1.28 x span, so that the record length stays 400 / span."""
+        return self.start_hz > 1e-9 * self.span_hz
+
+    @property
+    def record_points(self) -> int:
+        return RECORD_SAMPLES // 2 if self.zoom else RECORD_SAMPLES
+
+    @property
+    def sample_rate_hz(self) -> float:
+        return SAMPLE_RATE_PER_SPAN * self.span_hz / (2 if self.zoom else 1)
+
+    @property
+    def record_length_s(self) -> float:
+        return self.record_points / self.sample_rate_hz
+
+    @property
+    def line_spacing_hz(self) -> float:
+        return self.span_hz / N_LINES
+
+    @property
+    def start_hz(self) -> float:
+        return self.center_hz - self.span_hz / 2
+
+    def channel(self, name: str, ch: int) -> object:
+        """Per-channel field ``name`` (e.g. ``range``) of channel 1 or 2."""
+        for f in fields(self):
+            if f.name.startswith(name + str(ch)):
+                return getattr(self, f.name)
+        raise KeyError(name)
+
+    def state_commands(self) -> str:
+        """The commands that restore this state, ``;``-separated (the DSAS reply)."""
+
+        def num(v: float) -> str:
+            return repr(float(v))
+
+        parts = [
+            f"FRS {num(self.span_hz)} HZ",
+            f"CF {num(self.center_hz)} HZ",
+            f"NAVG {self.n_averages}",
+            self.averaging,
+            f"PRVW {self.preview}",
+            self.measurement,
+            self.mode,
+        ]
+        for ch in (1, 2):
+            parts += [
+                f"WIN{ch} {self.channel('window', ch)}",
+                f"FWD{ch} {num(self.channel('force_width', ch))} S",  # type: ignore[arg-type]
+                f"EXD{ch} {num(self.channel('exp_decay', ch))} S",  # type: ignore[arg-type]
+                f"RNG{ch} {num(self.channel('range', ch))} V",  # type: ignore[arg-type]
+                f"C{ch}AC {self.channel('ac_coupled', ch)}",
+                f"SNS{ch} {num(self.channel('sensitivity', ch))} V",  # type: ignore[arg-type]
+            ]
+            if self.channel("autorange", ch):
+                parts.append(f"AU{ch}")
+        parts += [
+            f"TSRC {self.trigger_source}",
+            f"TLVL {num(self.trigger_level_v)} V",
+            f"TSLP {self.trigger_slope}",
+            f"TDLY {num(self.trigger_delay_s)} S",
+            "TRCA",
+            self.display["A"],
+            "TRCB",
+            self.display["B"],
+            f"TRC{self.trace}",
+        ]
+        return ";".join(parts)
+
+
+def coerce_span(value_hz: float) -> float:
+    """The smallest offered span at or above ``value_hz``; ValueError outside the offer."""
+    if not (math.isfinite(value_hz) and SPANS_HZ[-1] * (1 - 1e-9) <= value_hz <= MAX_SPAN_HZ * (1 + 1e-9)):
+        raise ValueError(f"span must be {SPANS_HZ[-1]:.6g} Hz to {MAX_SPAN_HZ:g} Hz")
+    return min(s for s in SPANS_HZ if s >= value_hz * (1 - 1e-9))
+
+
+def coerce_range(value_v: float) -> float:
+    """The smallest input range at or above ``value_v`` (V peak)."""
+    if not (math.isfinite(value_v) and 0 < value_v <= RANGES_V[-1] * (1 + 1e-9)):
+        raise ValueError(f"range must be up to {RANGES_V[-1]:.4g} V")
+    return min((r for r in RANGES_V if r >= value_v * (1 - 1e-9)), default=RANGES_V[0])
+
+
+def check_center(center_hz: float, span_hz: float) -> float:
+    """``center_hz`` if the band [center - span/2, center + span/2] fits 0..102.4 kHz."""
+    low, high = span_hz / 2, MAX_SPAN_HZ - span_hz / 2
+    if not (math.isfinite(center_hz) and low * (1 - 1e-9) <= center_hz <= high + low * 1e-9):
+        raise ValueError(f"with a {span_hz:g} Hz span the center must be {low:g} Hz to {high:g} Hz")
+    return min(max(center_hz, span_hz / 2), MAX_SPAN_HZ - span_hz / 2)

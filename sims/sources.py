@@ -1,0 +1,141 @@
+"""Where the simulated analyzer's hits come from: physics, or a recorded run (replay)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from sims.acquisition import ChannelChains, NoiseModel, Record, acquire, channel_chains
+from sims.hammer import HammerModel, draw_hit
+from sims.pole_residue import PoleResidueSystem
+from sims.scenarios import Specimen, build_specimen
+from sims.settings import RECORD_SAMPLES, AnalyzerSettings
+
+#: A technician who sees no trigger hits again; after this many misses the
+#: analyzer waits for ever (the driver's trigger timeout takes over).
+MAX_MISSED_HITS = 20
+
+
+class SourceError(Exception):
+    """The source cannot serve a hit with these settings (reported as an instrument error)."""
+
+
+@dataclass(frozen=True)
+class TimedRecord:
+    """A record and how long after arming its trigger came, physics seconds."""
+
+    record: Record
+    trigger_after_s: float
+
+
+class PhysicsSource:
+    """Hits on a specimen from the beam model, with a random hammer and sensor noise."""
+
+    def __init__(
+        self,
+        specimen: Specimen | str = "seed",
+        hammer: HammerModel | None = None,
+        noise: NoiseModel | None = None,
+        seed: int = 0,
+    ) -> None:
+        self.specimen = build_specimen(specimen) if isinstance(specimen, str) else specimen
+        self.hammer = hammer or HammerModel()
+        self.noise = noise or NoiseModel()
+        self.reseed(seed)
+        self._accel: PoleResidueSystem = self.specimen.acceleration_system()
+        self._cache: dict[tuple, ChannelChains] = {}
+        self.hits_drawn = 0
+
+    def reseed(self, seed: int) -> None:
+        self.seed = int(seed)
+        self.rng = np.random.default_rng(self.seed)
+
+    def set_noise(self, enabled: bool) -> None:
+        self.noise = replace(self.noise, enabled=enabled)
+
+    def _chains(self, settings: AnalyzerSettings) -> ChannelChains:
+        key = (
+            settings.span_hz,
+            settings.sensitivity1_v_per_eu,
+            settings.sensitivity2_v_per_eu,
+            settings.ac_coupled1,
+            settings.ac_coupled2,
+        )
+        if key not in self._cache:
+            self._cache.clear()
+            self._cache[key] = channel_chains(self._accel, settings)
+        return self._cache[key]
+
+    def next_record(self, settings: AnalyzerSettings) -> TimedRecord | None:
+        """The next hit that triggers, or None if the technician gives up."""
+        chains = self._chains(settings)
+        waited = 0.0
+        pre_trigger = max(0.0, -settings.trigger_delay_s)
+        for _ in range(MAX_MISSED_HITS):
+            hit = draw_hit(self.hammer, self.rng, earliest_s=pre_trigger + 0.01)
+            self.hits_drawn += 1
+            record = acquire(hit, chains, settings, self.noise, self.rng)
+            if record is not None:
+                if settings.trigger_source == "FREE":
+                    return TimedRecord(record, waited)
+                # The crossing comes within the contact; its start is close enough
+                # for the analyzer's status timing.
+                return TimedRecord(record, waited + hit.start_s)
+            waited += hit.start_s + settings.record_length_s
+        return None
+
+
+@dataclass
+class RecordedHit:
+    """One hit of a recorded run: the two channels in engineering units."""
+
+    force_n: np.ndarray
+    acceleration_m_s2: np.ndarray
+    sample_rate_hz: float
+    start_s: float = 0.0
+    overload: tuple[bool, bool] = (False, False)
+
+
+@dataclass
+class ReplaySource:
+    """Serves recorded hits in order, bit for bit, instead of physics.
+
+    The analyzer must be set to the recording's span (sample rate); ``loop``
+    starts over after the last hit, otherwise the hammer falls silent.
+    """
+
+    hits: Sequence[RecordedHit]
+    loop: bool = False
+    position: int = field(default=0)
+
+    def __post_init__(self) -> None:
+        for i, hit in enumerate(self.hits):
+            if hit.force_n.shape != (RECORD_SAMPLES,) or hit.acceleration_m_s2.shape != (RECORD_SAMPLES,):
+                raise ValueError(f"recorded hit {i} does not hold two {RECORD_SAMPLES}-sample channels")
+
+    def next_record(self, settings: AnalyzerSettings) -> TimedRecord | None:
+        if self.position >= len(self.hits):
+            if not self.loop or not self.hits:
+                return None
+            self.position = 0
+        hit = self.hits[self.position]
+        if settings.zoom:
+            raise SourceError("replay serves baseband records: set CF to span/2")
+        if not math.isclose(hit.sample_rate_hz, settings.sample_rate_hz, rel_tol=1e-9):
+            raise SourceError(
+                f"replay recorded at {hit.sample_rate_hz:g} Hz sampling (span "
+                f"{hit.sample_rate_hz / 2.56:g} Hz); set FRS to match"
+            )
+        self.position += 1
+        record = Record(
+            force_n=np.array(hit.force_n, dtype=float),
+            acceleration_m_s2=np.array(hit.acceleration_m_s2, dtype=float),
+            start_s=hit.start_s,
+            sample_rate_hz=hit.sample_rate_hz,
+            overload=hit.overload,
+            peak_v=(math.nan, math.nan),
+        )
+        return TimedRecord(record, 0.5)

@@ -1,0 +1,136 @@
+"""TCP front end: the analyzer as ``TCPIP::127.0.0.1::<port>::SOCKET`` for pyvisa-py.
+
+Binds to 127.0.0.1 unless told otherwise. One thread accepts, one thread serves
+each client; all clients share the one instrument, as on a GPIB bus. Closing
+the server closes every client and joins every thread: nothing leaks.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import socket
+import threading
+import time
+from collections.abc import Sequence
+
+from sims.faults import parse_fault
+from sims.instrument import Analyzer
+from sims.session import Session
+
+log = logging.getLogger(__name__)
+
+#: How often blocked threads look up to see whether the server is closing, s.
+POLL_S = 0.1
+
+
+class TcpServer:
+    """Serve ``analyzer`` on ``host:port`` (port 0: the system picks a free one)."""
+
+    def __init__(
+        self,
+        analyzer: Analyzer,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        faults: Sequence[str] = (),
+    ) -> None:
+        self.analyzer = analyzer
+        self.faults = tuple(faults)
+        for spec in self.faults:  # a bad spec fails here, not on the first connection
+            parse_fault(spec)
+        self._listener = socket.create_server((host, port))
+        self._listener.settimeout(POLL_S)
+        self.host, self.port = self._listener.getsockname()[:2]
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._clients: dict[threading.Thread, socket.socket] = {}
+        self._accepter = threading.Thread(target=self._accept_loop, name=f"sim-tcp-{self.port}", daemon=True)
+        self.connections_served = 0
+
+    @property
+    def resource(self) -> str:
+        return f"TCPIP::{self.host}::{self.port}::SOCKET"
+
+    def start(self) -> TcpServer:
+        self._accepter.start()
+        return self
+
+    def __enter__(self) -> TcpServer:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._accepter.is_alive():
+            self._accepter.join()
+        self._listener.close()
+        with self._lock:
+            clients = list(self._clients.items())
+        for _, conn in clients:
+            with contextlib.suppress(OSError):
+                conn.shutdown(socket.SHUT_RDWR)
+        for thread, _ in clients:
+            thread.join()
+
+    @property
+    def active_connections(self) -> int:
+        with self._lock:
+            return len(self._clients)
+
+    def _accept_loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                conn, peer = self._listener.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            conn.settimeout(POLL_S)
+            thread = threading.Thread(target=self._serve, args=(conn, peer), daemon=True)
+            with self._lock:
+                self._clients[thread] = conn
+                self.connections_served += 1
+            thread.name = f"sim-tcp-client-{self.connections_served}"
+            thread.start()
+
+    def _serve(self, conn: socket.socket, peer: object) -> None:
+        session = Session(self.analyzer, self.faults)
+        log.debug("client %s connected", peer)
+        try:
+            while not self._stop.is_set() and not session.closed:
+                try:
+                    data = conn.recv(65536)
+                except TimeoutError:
+                    continue
+                if not data:
+                    break
+                for chunk in session.feed(data):
+                    if chunk.delay_s and self._stop.wait(chunk.delay_s):
+                        return
+                    if chunk.data:
+                        self._send(conn, chunk.data)
+                    if chunk.close:
+                        break
+        except OSError as exc:  # the client vanished mid-transfer: its problem, not ours
+            log.debug("client %s: %s", peer, exc)
+        finally:
+            try:
+                conn.close()
+            finally:
+                with self._lock:
+                    self._clients.pop(threading.current_thread(), None)
+            log.debug("client %s closed", peer)
+
+    def _send(self, conn: socket.socket, data: bytes) -> None:
+        view = memoryview(data)
+        deadline = time.monotonic() + 30.0  # a client that stops reading is gone
+        while view:
+            if self._stop.is_set() or time.monotonic() > deadline:
+                raise OSError("client stopped reading")
+            try:
+                sent = conn.send(view)
+            except TimeoutError:
+                continue
+            view = view[sent:]
