@@ -25,19 +25,31 @@ def load_recorded_hits(path: Path, accepted_only: bool = False) -> list[Recorded
         raise UserError(f"{path}: no such run file")
     try:
         with h5py.File(path, "r") as f:
-            if "entry/hits" not in f:
+            if not isinstance(f.get("entry/hits"), h5py.Group):
                 raise UserError(f"{path}: not a run (no /entry/hits group)")
             hits = f["entry/hits"]
-            for name in ("force", "response", "time"):
-                if name not in hits:
-                    raise UserError(f"{path}: /entry/hits/{name} is missing")
-            force = np.asarray(hits["force"][()], dtype=float)
-            response = np.asarray(hits["response"][()], dtype=float)
-            time_s = np.asarray(hits["time"][()], dtype=float)
-            accepted = np.asarray(hits["accepted"][()], dtype=bool) if "accepted" in hits else None
-            overload = np.asarray(hits["overload"][()], dtype=bool) if "overload" in hits else None
+
+            def read(name: str, dtype: type, required: bool = True) -> np.ndarray | None:
+                node = hits.get(name)
+                if node is None and not required:
+                    return None
+                if not isinstance(node, h5py.Dataset):
+                    raise UserError(f"{path}: /entry/hits/{name} is missing or not a dataset")
+                try:
+                    return np.asarray(node[()], dtype=dtype)
+                except (TypeError, ValueError) as exc:
+                    raise UserError(f"{path}: /entry/hits/{name} is not numeric ({exc})") from None
+
+            force = read("force", float)
+            response = read("response", float)
+            time_s = read("time", float)
+            accepted = read("accepted", bool, required=False)
+            overload = read("overload", bool, required=False)
     except OSError as exc:
         raise UserError(f"{path}: not a readable HDF5 file ({exc})") from None
+    assert force is not None
+    assert response is not None
+    assert time_s is not None
     if force.ndim != 2 or force.shape != response.shape or force.shape[1] != RECORD_SAMPLES:
         raise UserError(
             f"{path}: force and response must both be n_hits x {RECORD_SAMPLES}, "
@@ -50,6 +62,11 @@ def load_recorded_hits(path: Path, accepted_only: bool = False) -> list[Recorded
         raise UserError(f"{path}: /entry/hits/time is not evenly spaced")
     if not (np.all(np.isfinite(force)) and np.all(np.isfinite(response))):
         raise UserError(f"{path}: the recorded hits hold non-finite values")
+    n_hits = force.shape[0]
+    if accepted is not None and accepted.shape != (n_hits,):
+        raise UserError(f"{path}: /entry/hits/accepted must hold {n_hits} flags, got shape {accepted.shape}")
+    if overload is not None and overload.shape != (n_hits, 2):
+        raise UserError(f"{path}: /entry/hits/overload must be {n_hits} x 2, got shape {overload.shape}")
     sample_rate_hz = 1.0 / float(steps.mean())
     out = []
     for i in range(force.shape[0]):

@@ -93,16 +93,24 @@ def serve(
         from sims.prologix import PrologixPty
 
         server = PrologixPty(analyzer, gpib_address, faults).start()
-        resource = server.resource
-        where = f"Prologix GPIB-USB emulation on {server.port}, analyzer at GPIB address {gpib_address}"
+        resource = f"PROLOGIX::{server.port}::{gpib_address}"
+        where = (
+            f"Prologix GPIB-USB emulation on {server.port} (pyserial, or pyvisa-py as {server.resource}), "
+            f"analyzer at GPIB address {gpib_address}"
+        )
     else:
         from sims.tcp_server import TcpServer
 
         try:
-            if not ipaddress.ip_address(host).is_loopback:
-                console.print(f"[yellow]warning:[/] serving on {host}, reachable from other machines")
+            address = ipaddress.ip_address(host)
         except ValueError:
             raise UserError(f"--host {host!r} is not an IP address", exit_code=2) from None
+        if address.version != 4:
+            raise UserError(
+                "--host must be an IPv4 address: VISA resource names have no IPv6 form", exit_code=2
+            )
+        if not address.is_loopback:
+            console.print(f"[yellow]warning:[/] serving on {host}, reachable from other machines")
         try:
             server = TcpServer(analyzer, host, 5025 if tcp is None else tcp, faults).start()
         except OSError as exc:
@@ -112,16 +120,16 @@ def serve(
         resource = server.resource
         where = f"TCP {server.host}:{server.port}"
 
-    console.print(f"Simulated HP 35660A ({what}, time scale {time_scale:g}) on {where}")
-    if faults:
-        console.print(f"Faults on every connection: {', '.join(faults)}")
-    console.print("Ctrl-C stops it.")
-    # The resource alone on stdout, flushed: scripts read it to connect.
-    print(resource, flush=True)
-
     stop = threading.Event()
+    # The handler and the try come before the resource line: a script that reads
+    # the line and stops the server at once must still get a clean stop.
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:
+        console.print(f"Simulated HP 35660A ({what}, time scale {time_scale:g}) on {where}")
+        if faults:
+            console.print(f"Faults on every connection: {', '.join(faults)}")
+        console.print("Ctrl-C stops it.")
+        print(resource, flush=True)  # alone on stdout: scripts read it to connect
         while not stop.wait(0.2):
             pass
     except KeyboardInterrupt:

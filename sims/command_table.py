@@ -171,6 +171,9 @@ COMMANDS: tuple[Command, ...] = (
     _action("CLER", "proj", "clear the error queue"),
     _query("OVLD?", "proj", "overload of the last record: ch1,ch2 as 0/1"),
     _query("AVG?", "proj", "number of hits in the average"),
+    _query("AVMD?", "proj", "averaging mode: STBL or AVOF"),
+    _query("AU1?", "proj", "autorange of channel 1: 1 on, 0 off (a range setting turns it off)"),
+    _query("AU2?", "proj", "autorange of channel 2"),
 )
 
 BY_MNEMONIC: dict[str, Command] = {c.mnemonic: c for c in COMMANDS}

@@ -91,4 +91,4 @@ def ascii_lines(values: np.ndarray) -> bytes:
 
 
 def line(text: str) -> bytes:
-    return text.encode("ascii") + CRLF
+    return text.encode("ascii", errors="replace") + CRLF

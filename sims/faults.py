@@ -77,7 +77,10 @@ def parse_fault(spec: str) -> Fault:
             elif key == "after":
                 fault.after = int(value)
             elif key in fault.params:
-                fault.params[key] = float(value)
+                number = float(value)
+                if not math.isfinite(number):
+                    raise ValueError("not finite")
+                fault.params[key] = number
             else:
                 raise ValueError(
                     f"fault {name} has no option {key!r}; options: count, after"

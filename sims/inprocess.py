@@ -26,10 +26,12 @@ class InProcessConnection:
         if self._closed:
             raise ConnectionResetError("the simulated analyzer closed the connection")
         chunks = self.session.feed(data) + self.session.end_of_message()
-        now = time.monotonic()
+        ready = max(time.monotonic(), self._out[-1][1] if self._out else 0.0)
         for chunk in chunks:
+            # A slow instrument answers one reply after the other: delays add up.
+            ready += chunk.delay_s
             if chunk.data:
-                self._out.append((bytearray(chunk.data), now + chunk.delay_s))
+                self._out.append((bytearray(chunk.data), ready))
             if chunk.close:
                 self._drop_pending = True
 

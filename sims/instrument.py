@@ -133,18 +133,19 @@ class Analyzer:
             self._accept(record, done_at)
 
     def _autorange(self, record: Record) -> bool:
-        """Up-range an overloaded channel that has autorange on; True if the record is dropped."""
+        """Up-range an overloaded channel that has autorange on; True if the record is
+        dropped for a new one. At the top range there is nowhere to go: the
+        overloaded record stays, flagged."""
         dropped = False
         for ch in (1, 2):
             if record.overload[ch - 1] and self.settings.channel("autorange", ch):
                 current = float(self.settings.channel("range", ch))  # type: ignore[arg-type]
-                wanted = (
-                    max(current * 1.2, record.peak_v[ch - 1] * 1.2)
-                    if math.isfinite(record.peak_v[ch - 1])
-                    else current * 2
-                )
-                setattr(self.settings, f"range{ch}_v", coerce_range(min(wanted, RANGES_V[-1])))
-                dropped = True
+                peak = record.peak_v[ch - 1]
+                wanted = max(current, peak) * 1.2 if math.isfinite(peak) else current * 2
+                new = coerce_range(min(wanted, RANGES_V[-1]))
+                if new > current:
+                    setattr(self.settings, f"range{ch}_v", new)
+                    dropped = True
         return dropped
 
     def _accept(self, record: Record, at: float) -> None:
@@ -207,7 +208,10 @@ class Analyzer:
     def start(self, never_hit: bool = False) -> None:
         """STRT; ``never_hit`` arms a hammer that never strikes (the trigger-timeout fault)."""
         with self.lock:
-            self._start(never_hit)
+            try:
+                self._start(never_hit)
+            except CommandError as exc:
+                self.push_error(exc.code, exc.detail)
 
     def enter_hardware_fault(self) -> None:
         with self.lock:
@@ -304,7 +308,7 @@ class Analyzer:
             elif arg.kind in ("integer", "flag"):
                 token = text.strip().upper()
                 token = {"ON": "1", "OFF": "0"}.get(token, token) if arg.kind == "flag" else token
-                if not token.lstrip("+-").isdigit():
+                if not (token[1:] if token[:1] in "+-" else token).isdigit():
                     raise ArgumentError(f"not an integer: {text.strip()!r}", 3)
                 value = int(token)
             else:
@@ -325,13 +329,13 @@ class Analyzer:
                     value / 2 if baseband else min(max(s.center_hz, value / 2), MAX_SPAN_HZ - value / 2)
                 )
                 self._check_delay()
-                self._reset_measurement_data()
+                self._reset_measurement()  # new geometry: the measurement starts over
                 return
             if name == "center_hz":
                 value = check_center(value, s.span_hz)  # type: ignore[arg-type]
                 s.center_hz = value
                 self._check_delay()
-                self._reset_measurement_data()
+                self._reset_measurement()  # new geometry: the measurement starts over
                 return
             if name in ("range1_v", "range2_v"):
                 value = coerce_range(value)  # type: ignore[arg-type]
@@ -376,6 +380,10 @@ class Analyzer:
             return Reply(line(f"{int(over[0])},{int(over[1])}"))
         if m == "AVG?":
             return Reply(line(str(self.average.count)))
+        if m == "AVMD?":
+            return Reply(line(s.averaging))
+        if m in ("AU1?", "AU2?"):
+            return Reply(line(str(s.channel("autorange", int(m[2])))))
         if m in ("DSAN", "DSAS"):
             state = s.state_commands()
             return Reply(binary_block(state.encode("ascii")), True) if m == "DSAN" else Reply(line(state))

@@ -125,8 +125,8 @@ class PoleResidueSystem:
         q = self.poles - 1j * w_c
         for start, width, peak in zip(pulses.start_s, pulses.width_s, pulses.peak, strict=True):
             a = np.pi / width
-            s = (t - start)[..., None]  # time since the pulse began, (..., 1)
-            sc = np.clip(s, 0.0, width)
+            s = np.maximum(t - start, 0.0)[..., None]  # time since the pulse began, (..., 1)
+            sc = np.minimum(s, width)
             # sin(a s) e^(-j w_c (t0 + s)) = sum over +-: +-e^(-j w_c t0) / 2j * e^((+-j a - j w_c) s)
             coef = peak * np.exp(-1j * w_c * start) / 2j
             state = np.zeros(np.broadcast_shapes(s.shape, q.shape), dtype=complex)
@@ -137,7 +137,7 @@ class PoleResidueSystem:
                 # by zero; nudge it, the response is continuous in p.
                 denom = np.where(np.abs(denom) < 1e-9 * a, 1e-9 * a, denom)
                 with np.errstate(over="ignore", invalid="ignore"):
-                    term = (np.exp(kappa * sc + q * (s - sc)) - np.exp(q * np.maximum(s, 0.0))) / denom
+                    term = (np.exp(kappa * sc + q * (s - sc)) - np.exp(q * s)) / denom
                 state += sign * coef * term
             state = np.where(s > 0, state, 0.0)
             out += (state * self.residues).sum(axis=-1)

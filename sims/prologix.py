@@ -52,6 +52,9 @@ class PrologixPty:
         self.faults = tuple(faults)
         self._master, self._slave = os.openpty()
         tty.setraw(self._slave)
+        # Never block on the master: a host that stops reading must not be able to
+        # wedge this thread (and with it close() and Ctrl-C).
+        os.set_blocking(self._master, False)
         self.port = os.ttyname(self._slave)
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"sim-prologix-{self.port}", daemon=True)
@@ -103,6 +106,8 @@ class PrologixPty:
                 continue
             try:
                 data = os.read(self._master, 65536)
+            except BlockingIOError:
+                continue
             except OSError:  # no host has the port open right now
                 time.sleep(POLL_S)
                 continue
@@ -134,10 +139,15 @@ class PrologixPty:
             self._read("eoi")
 
     def _queue(self, chunks: list[Chunk]) -> None:
-        now = time.monotonic()
+        ready = max(time.monotonic(), self._outbox[-1][1] if self._outbox else 0.0)
         for chunk in chunks:
+            ready += chunk.delay_s  # replies come one after the other: delays add up
             if chunk.data:
-                self._outbox.append((chunk.data, now + chunk.delay_s))
+                self._outbox.append((chunk.data, ready))
+            if chunk.close:
+                # A serial line cannot be closed by the far end: the transfer just
+                # stops short, and the instrument listens again, as on a new link.
+                self.session = Session(self.analyzer, self.faults)
 
     def _command(self, text: str) -> None:
         name, _, arg = text.partition(" ")
@@ -223,7 +233,10 @@ class PrologixPty:
         while view and not self._stop.is_set() and time.monotonic() < deadline:
             _, ready, _ = select.select([], [self._master], [], POLL_S)
             if ready:
-                view = view[os.write(self._master, view[:4096]) :]
+                try:
+                    view = view[os.write(self._master, view[:4096]) :]
+                except BlockingIOError:
+                    continue
 
 
 def _take_line(buffer: bytes) -> tuple[bytes | None, int]:

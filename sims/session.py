@@ -93,7 +93,8 @@ class Session:
 
     def message(self, raw: bytes) -> list[Chunk]:
         """One complete message: commands separated by ``;``."""
-        text = raw.decode("ascii", errors="replace")
+        # Bytes that are not ASCII become '?': they must not reach a reply undecodable.
+        text = raw.decode("ascii", errors="replace").replace("\ufffd", "?")
         out: list[Chunk] = []
         for part in text.replace("\r", "").split(";"):
             part = part.strip()

@@ -127,7 +127,7 @@ class AnalyzerSettings:
 def coerce_span(value_hz: float) -> float:
     """The smallest offered span at or above ``value_hz``; ValueError outside the offer."""
     if not (math.isfinite(value_hz) and SPANS_HZ[-1] * (1 - 1e-9) <= value_hz <= MAX_SPAN_HZ * (1 + 1e-9)):
-        raise ValueError(f"span must be {SPANS_HZ[-1]:.6g} Hz to {MAX_SPAN_HZ:g} Hz")
+        raise ValueError(f"span must be {SPANS_HZ[-1]:.8g} Hz to {MAX_SPAN_HZ:g} Hz")
     return min(s for s in SPANS_HZ if s >= value_hz * (1 - 1e-9))
 
 
