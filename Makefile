@@ -21,6 +21,7 @@ $(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
 
 demo: $(VENV)/.installed-run
 	$(BIN)/daq model
+	$(BIN)/daq demo
 
 test: lint
 	$(BIN)/python -m pytest
@@ -35,6 +36,7 @@ format: $(VENV)/.installed-dev
 
 bench: $(VENV)/.installed-run
 	$(BIN)/python bench/bench_model.py
+	$(BIN)/python bench/bench_driver.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis

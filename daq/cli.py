@@ -18,9 +18,12 @@ import typer
 from typer._click import exceptions as click_exc
 
 from daq import __version__
+from daq import talk_command as talk
+from daq.demo_command import demo
 from daq.errors import UserError
 from daq.model_command import model
 from daq.sim_command import sim_app
+from drivers.errors import DriverError
 
 app = typer.Typer(
     name="daq",
@@ -45,10 +48,17 @@ def _root(
         typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit."),
     ] = False,
     verbose: Annotated[
-        int, typer.Option("--verbose", "-v", count=True, help="More log output (-v info, -vv debug).")
+        int,
+        typer.Option(
+            "--verbose",
+            "-v",
+            count=True,
+            help="Log to stderr: -v retries and progress, -vv every byte on the wire.",
+        ),
     ] = 0,
 ) -> None:
-    level = logging.WARNING if verbose == 0 else logging.INFO if verbose == 1 else logging.DEBUG
+    # Quiet by default: a failure is reported once, as one line, by main().
+    level = logging.CRITICAL if verbose == 0 else logging.INFO if verbose == 1 else logging.DEBUG
     logging.basicConfig(
         level=level, stream=sys.stderr, format="%(asctime)s %(name)s %(levelname)s %(message)s"
     )
@@ -56,6 +66,11 @@ def _root(
 
 app.command(name="model")(model)
 app.add_typer(sim_app, name="sim")
+app.command(name="instruments")(talk.instruments)
+app.command(name="identify")(talk.identify)
+app.command(name="send")(talk.send)
+app.command(name="query")(talk.query)
+app.command(name="demo")(demo)
 
 
 def _fail(message: str, exit_code: int) -> int:
@@ -84,6 +99,8 @@ def main(argv: list[str] | None = None) -> int:
         return _fail("aborted", 130)
     except UserError as exc:
         return _fail(str(exc), exc.exit_code)
+    except DriverError as exc:
+        return _fail(str(exc), 1)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
     except BrokenPipeError:

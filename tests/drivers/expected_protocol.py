@@ -1,0 +1,54 @@
+"""A transport that checks the exact bytes the driver sends and plays scripted replies,
+in the spirit of PyMeasure's ``expected_protocol``."""
+
+from __future__ import annotations
+
+from drivers.errors import InstrumentTimeout
+from drivers.transport import Transport
+
+
+class ExpectedProtocol(Transport):
+    """``steps``: (bytes the driver must write, bytes the instrument replies or None)."""
+
+    def __init__(self, steps: list[tuple[bytes, bytes | None]]) -> None:
+        super().__init__("EXPECTED", timeout_s=1.0, lock_file=False)
+        self.steps = list(steps)
+        self.position = 0
+        self.pending = bytearray()
+        self.open()
+
+    def _open(self) -> None:
+        pass
+
+    def _close(self) -> None:
+        pass
+
+    def _write(self, message: bytes) -> None:
+        assert self.position < len(self.steps), f"unexpected extra write {message!r}"
+        expected, reply = self.steps[self.position]
+        assert message == expected, f"step {self.position}: sent {message!r}, expected {expected!r}"
+        assert not self.pending, f"unread reply {bytes(self.pending)!r} before {message!r}"
+        self.position += 1
+        if reply is not None:
+            self.pending += reply
+
+    def _read_line(self) -> bytes:
+        if b"\n" not in self.pending:
+            raise InstrumentTimeout("no scripted reply line")
+        line, _, rest = bytes(self.pending).partition(b"\n")
+        self.pending = bytearray(rest)
+        return line.rstrip(b"\r")
+
+    def _read_exact(self, count: int) -> bytes:
+        if len(self.pending) < count:
+            raise InstrumentTimeout("no scripted reply bytes")
+        data = bytes(self.pending[:count])
+        del self.pending[:count]
+        return data
+
+    def _clear(self) -> None:
+        self.pending.clear()
+
+    def done(self) -> None:
+        assert self.position == len(self.steps), f"only {self.position} of {len(self.steps)} steps happened"
+        assert not self.pending, f"unread reply {bytes(self.pending)!r}"
