@@ -51,6 +51,12 @@ def serve(
         Path | None, typer.Option(help="Serve the hits of this recorded run (HDF5) instead of physics.")
     ] = None,
     loop: Annotated[bool, typer.Option(help="With --replay: start over after the last hit.")] = False,
+    hammer: Annotated[
+        str | None,
+        typer.Option(
+            help="The simulated hammer, e.g. peak_force_n=3,pulse_width_s=0.001,double_hit_probability=0.2."
+        ),
+    ] = None,
 ) -> None:
     """Serve the simulated analyzer until Ctrl-C; prints the resource to connect to."""
     from rich.console import Console
@@ -85,6 +91,13 @@ def serve(
     else:
         source = PhysicsSource(scenario.value, seed=seed)
         source.set_noise(noise)
+        if hammer:
+            from sims.hammer import adjusted
+
+            try:
+                source.hammer = adjusted(source.hammer, hammer)
+            except ValueError as exc:
+                raise UserError(f"--hammer: {exc}", exit_code=2) from None
         what = f"scenario {scenario.value}, seed {seed}{'' if noise else ', no noise'}"
     analyzer = Analyzer(source, time_scale=time_scale)
 

@@ -46,18 +46,22 @@ class Transport(ABC):
     # ------------------------------------------------------------- lifecycle
     def open(self) -> None:
         with self.lock:
-            if self.is_open:
-                return
+            if not self.is_open:
+                self._open_locked()
+                wire_log.debug("%s: opened", self.resource)
+
+    def _open_locked(self) -> None:
+        """Take the lock file (a no-op if held) and open; a failed open frees the lock,
+        since close() will not run for a transport that is not open."""
+        if self._file_lock is not None:
+            self._file_lock.acquire()
+        try:
+            self._open()
+        except BaseException:
             if self._file_lock is not None:
-                self._file_lock.acquire()
-            try:
-                self._open()
-            except BaseException:
-                if self._file_lock is not None:
-                    self._file_lock.release()
-                raise
-            self.is_open = True
-            wire_log.debug("%s: opened", self.resource)
+                self._file_lock.release()
+            raise
+        self.is_open = True
 
     def close(self) -> None:
         with self.lock:
@@ -81,16 +85,7 @@ class Transport(ABC):
                 except Exception as exc:  # a broken link may not close cleanly
                     wire_log.debug("%s: close while reconnecting: %s", self.resource, exc)
                 self.is_open = False
-            if self._file_lock is not None:
-                self._file_lock.acquire()
-            try:
-                self._open()
-            except BaseException:
-                # Not open, so close() will not run: the lock must not outlive us here.
-                if self._file_lock is not None:
-                    self._file_lock.release()
-                raise
-            self.is_open = True
+            self._open_locked()
 
     def __enter__(self) -> Transport:
         self.open()

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,6 +33,8 @@ class HammerModel:
     def __post_init__(self) -> None:
         if not (self.peak_force_n > 0 and self.pulse_width_s > 0 and 0 <= self.double_hit_probability <= 1):
             raise ValueError("hammer: peak force and pulse width must be positive, probability in 0..1")
+        if not 0 <= self.rel_spread <= 1:
+            raise ValueError("hammer: rel_spread must be 0..1")
         if not (0 <= self.wait_s[0] <= self.wait_s[1]):
             raise ValueError("hammer: wait_s must be (low, high) with 0 <= low <= high")
 
@@ -65,3 +68,26 @@ def draw_hit(hammer: HammerModel, rng: np.random.Generator, earliest_s: float = 
         widths.append(width)
         peaks.append(peak * float(rng.uniform(*hammer.double_hit_ratio)))
     return Hit(wait, HalfSinePulses(np.array(starts), np.array(widths), np.array(peaks)))
+
+
+#: What ``SIM:HAMMER`` and ``daq sim serve --hammer`` may change.
+ADJUSTABLE = ("peak_force_n", "pulse_width_s", "double_hit_probability", "rel_spread")
+
+
+def adjusted(hammer: HammerModel, spec: str) -> HammerModel:
+    """``hammer`` with ``key=value,...`` changes applied; ValueError names a bad one."""
+    changes = {}
+    for pair in spec.split(","):
+        key, sep, value = pair.partition("=")
+        key = key.strip().lower()
+        if key not in ADJUSTABLE or not sep:
+            raise ValueError(
+                f"hammer settings are key=value with keys {', '.join(ADJUSTABLE)}; got {pair.strip()!r}"
+            )
+        try:
+            changes[key] = float(value)
+        except ValueError:
+            raise ValueError(f"hammer setting {key}: {value.strip()!r} is not a number") from None
+        if not math.isfinite(changes[key]):
+            raise ValueError(f"hammer setting {key} must be finite")
+    return replace(hammer, **changes)

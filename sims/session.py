@@ -22,9 +22,10 @@ Simulator control travels in-band, in a namespace no instrument command uses:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from sims.faults import Fault, garbage_bytes, parse_fault
+from sims.hammer import adjusted
 from sims.instrument import Analyzer, Reply
 from sims.sources import PhysicsSource
 
@@ -174,14 +175,7 @@ class Session:
             elif head == "SIM:SCEN":
                 analyzer.source = PhysicsSource(arg.lower(), source.hammer, source.noise, source.seed)
             elif head == "SIM:HAMMER":
-                changes = {}
-                for pair in arg.split(","):
-                    key, _, value = pair.partition("=")
-                    key = key.strip().lower()
-                    if key not in ("peak_force_n", "pulse_width_s", "double_hit_probability", "rel_spread"):
-                        raise ValueError(f"unknown hammer setting {key!r}")
-                    changes[key] = float(value)
-                source.hammer = replace(source.hammer, **changes)
+                source.hammer = adjusted(source.hammer, arg)
             else:
                 raise ValueError(f"unknown simulator command {head}")
         except ValueError as exc:

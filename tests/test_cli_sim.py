@@ -292,3 +292,11 @@ def test_sim_commands_lists_every_mnemonic():
     expected = {c.mnemonic for c in COMMANDS}
     expected |= {c.mnemonic + "?" for c in COMMANDS if c.kind == "setting"}
     assert listed == expected
+
+
+@pytest.mark.timeout(30)
+def test_serve_hammer_option_is_validated():
+    from cli_helpers import assert_one_line_error, run_daq
+
+    assert_one_line_error(run_daq("sim", "serve", "--tcp", "0", "--hammer", "peak=3"), "--hammer")
+    assert_one_line_error(run_daq("sim", "serve", "--tcp", "0", "--hammer", "peak_force_n=-1"), "positive")
