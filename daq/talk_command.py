@@ -82,9 +82,10 @@ def query(
 ) -> None:
     """Send a query and print the reply; DDAN dumps are decoded."""
     with _open(resource, timeout) as dsa:
-        head = command.strip().upper()
-        if head == "DDAN":
-            _print_trace(dsa.fetch_active_trace(), as_json)
+        from drivers.commands import replies
+
+        if replies(command) == ["block"] and command.strip().split(";")[-1].strip().upper() == "DDAN":
+            _print_trace(dsa.dump_trace(command), as_json)
             return
         try:
             print(dsa.query(command))

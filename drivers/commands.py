@@ -25,10 +25,13 @@ class Mnemonic:
     #: Safe to send again after a failed transfer (a setting, a query); False for
     #: commands whose repetition changes the outcome (ACPT, RJCT).
     idempotent: bool = True
+    #: What the instrument sends back: nothing, one line, many lines or an #A block.
+    reply: str = "none"
 
 
 def _m(text: str, source: str, meaning: str, idempotent: bool = True) -> Mnemonic:
-    return Mnemonic(text, source, meaning, idempotent)
+    reply = "line" if text.endswith("?") or text == "SMSD" else "none"
+    return Mnemonic(text, source, meaning, idempotent, reply)
 
 
 COMMANDS: dict[str, Mnemonic] = {
@@ -84,10 +87,10 @@ COMMANDS: dict[str, Mnemonic] = {
         _m("COHR", "proj", "display: coherence"),
         _m("DISP?", "proj", "display function of the active trace"),
         _m("TRC?", "proj", "active trace"),
-        _m("DDAN", "3562A", "dump the active trace, binary #A block"),
-        _m("DDAS", "3562A", "dump the active trace, ASCII"),
-        _m("DSAN", "3562A", "dump the state, binary"),
-        _m("DSAS", "3562A", "dump the state, ASCII"),
+        Mnemonic("DDAN", "3562A", "dump the active trace, binary #A block", reply="block"),
+        Mnemonic("DDAS", "3562A", "dump the active trace, ASCII, one value per line", reply="lines"),
+        Mnemonic("DSAN", "3562A", "dump the state, binary #A block", reply="block"),
+        Mnemonic("DSAS", "3562A", "dump the state, one ASCII line", reply="line"),
         _m("STA?", "proj", "status bits"),
         _m("ERR?", "proj", 'oldest error: code,"message"'),
         _m("CLER", "proj", "clear the error queue"),
@@ -134,3 +137,21 @@ def command(mnemonic: str, *args: object) -> bytes:
     for arg in args:
         parts.append(number(arg) if isinstance(arg, float) else str(arg))
     return " ".join(parts).encode("ascii")
+
+
+def replies(text: str) -> list[str]:
+    """The reply kind of each command in a message that answers (``FRS?`` -> line).
+
+    A setting's query form (``FRS?``) answers a line; a mnemonic the table does
+    not know is taken to answer a line if it ends with ``?``.
+    """
+    kinds = []
+    for part in text.split(";"):
+        head = part.strip().split(" ")[0].upper()
+        if not head:
+            continue
+        entry = COMMANDS.get(head)
+        kind = entry.reply if entry is not None else ("line" if head.endswith("?") else "none")
+        if kind != "none":
+            kinds.append(kind)
+    return kinds

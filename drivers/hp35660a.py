@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import TypeVar
 
 from drivers.blocks import decode_values, parse_block_header
-from drivers.commands import COMMANDS, STATUS_BITS, command
+from drivers.commands import COMMANDS, STATUS_BITS, command, replies
 from drivers.errors import ConnectionLost, DriverError, InstrumentError, InstrumentTimeout, ProtocolError
 from drivers.settings import ChannelSetup, ImpactSettings, Window
 from drivers.trace import HEADER_LENGTH, Trace
@@ -28,6 +28,8 @@ T = TypeVar("T")
 
 #: How long a technician may take to hit once the analyzer is armed, s (default).
 HIT_ALLOWANCE_S = 60.0
+#: How long to wait for ERR? after a timeout before calling the instrument silent, s.
+PROBE_TIMEOUT_S = 0.5
 #: The 35660A's record: 1024 real points at baseband, 512 complex in zoom; 401 lines.
 TIME_POINTS = {False: 1024, True: 512}
 SPECTRUM_LINES = 401
@@ -65,6 +67,7 @@ class HP35660A:
         self.retries = retries
         self.hit_allowance_s = hit_allowance_s
         self._record_length_s: float | None = None
+        self._recovery_error: DriverError | None = None
 
     @classmethod
     def open(
@@ -72,7 +75,12 @@ class HP35660A:
     ) -> HP35660A:
         from drivers.resources import open_transport
 
-        return cls(open_transport(resource, timeout_s, lock_file), **kwargs)  # type: ignore[arg-type]
+        transport = open_transport(resource, timeout_s, lock_file)
+        try:
+            return cls(transport, **kwargs)  # type: ignore[arg-type]
+        except BaseException:
+            transport.close()  # a bad argument must not leave the link (and its lock) held
+            raise
 
     def close(self) -> None:
         self.transport.close()
@@ -85,42 +93,60 @@ class HP35660A:
 
     # ------------------------------------------------------------ exchanges
     def _exchange(self, what: str, action: Callable[[], T], repeatable: bool = True) -> T:
-        last: DriverError | None = None
-        for attempt in range(self.retries + 1):
-            try:
-                with self.transport.lock:
+        # The lock covers the retries and the recovery too: between a timed-out
+        # attempt and its clean-up no other thread may read the late reply.
+        with self.transport.lock:
+            last: DriverError | None = None
+            silent = False
+            self._recovery_error = None
+            for attempt in range(self.retries + 1):
+                try:
                     return action()
-            except (InstrumentTimeout, ProtocolError, ConnectionLost) as exc:
-                last = exc
-                if not repeatable or attempt == self.retries:
-                    break
-                log.warning("%s: %s; recovering, attempt %d of %d", what, exc, attempt + 2, self.retries + 1)
-                self._recover(exc)
-                if isinstance(exc, InstrumentTimeout) and what != "ERR?":
-                    # An instrument refuses a query by not answering it; its error
-                    # queue says why, and repeating the query would not help.
-                    self._raise_queued_error()
-        assert last is not None
-        # Leave the link clean for whoever talks next: a late or partial reply of
-        # this failed exchange must never be read as the answer to another.
-        self._recover(last)
-        if repeatable and self.retries:
-            last.args = (f"{last.args[0]} (after {self.retries + 1} attempts)",)
-        raise last
+                except (InstrumentTimeout, ProtocolError, ConnectionLost) as exc:
+                    last = exc
+                    if not repeatable or attempt == self.retries:
+                        break
+                    log.warning(
+                        "%s: %s; recovering, attempt %d of %d", what, exc, attempt + 2, self.retries + 1
+                    )
+                    self._recover(exc)
+                    if (
+                        isinstance(exc, InstrumentTimeout)
+                        and what != "ERR?"
+                        and not self._instrument_answers()
+                    ):
+                        silent = True  # another attempt would only wait out the timeout again
+                        break
+            assert last is not None
+            # Leave the link clean for whoever talks next: a late or partial reply of
+            # this failed exchange must never be read as the answer to another.
+            self._recover(last)
+            if isinstance(last, ConnectionLost) and self._recovery_error is not None:
+                raise self._recovery_error  # "connection refused" says more than "not open"
+            if silent:
+                last.args = (f"{last.args[0]} (the instrument answers nothing, not even ERR?)",)
+            elif repeatable and self.retries:
+                last.args = (f"{last.args[0]} (after {attempt + 1} attempt{'s' if attempt else ''})",)
+            raise last
 
-    def _raise_queued_error(self) -> None:
-        """One plain ERR? (no retries of its own): if the instrument queued an error,
-        raise it; if it cannot even answer that, let the caller's retry go ahead."""
+    def _instrument_answers(self) -> bool:
+        """After a timeout: ask ERR? with a short timeout. An instrument refuses a
+        query by not answering it, and says why in its error queue: raise that.
+        False if it does not even answer this."""
+        saved = self.transport.timeout_s
+        self.transport.timeout_s = min(PROBE_TIMEOUT_S, saved)
         try:
-            with self.transport.lock:
-                self.transport.write(b"ERR?")
-                reply = _decode_line(self.transport.read_line(), "ERR?")
+            self.transport.write(b"ERR?")
+            reply = _decode_line(self.transport.read_line(), "ERR?")
         except DriverError as exc:
             self._recover(exc)
-            return
+            return False
+        finally:
+            self.transport.timeout_s = saved
         code, _, message = reply.partition(",")
         if code.strip().isdigit() and int(code) != 0:
             raise InstrumentError(int(code), message.strip().strip('"'))
+        return True
 
     def _recover(self, exc: DriverError) -> None:
         try:
@@ -130,16 +156,23 @@ class HP35660A:
                 self.transport.clear()
         except DriverError as again:
             log.warning("recovery failed: %s", again)
+            self._recovery_error = again
 
     def send(self, text: str) -> None:
-        """Send a command as typed (no reply expected)."""
+        """Send a command as typed; it must not be one that answers (use ``query``)."""
         data = _ascii(text)
+        if answering := replies(text):
+            raise ValueError(f"{text!r} answers ({answering[0]}): use query, or a fetch for a dump")
         repeatable = _repeatable(text)
         self._exchange(text, lambda: self.transport.write(data), repeatable)
 
     def query(self, text: str) -> str:
-        """Send a query and return its one-line reply, without CR LF."""
+        """Send a message whose one reply is one line; return it without CR LF."""
         data = _ascii(text)
+        kinds = replies(text)
+        if kinds != ["line"]:
+            what = "no reply" if not kinds else f"replies {' + '.join(kinds)}"
+            raise ValueError(f"{text!r} {what}: query takes a message with one one-line reply")
 
         def ask() -> str:
             self.transport.write(data)
@@ -211,13 +244,21 @@ class HP35660A:
     def configure(self, settings: ImpactSettings) -> ImpactSettings:
         """Apply ``settings`` and return them as the analyzer holds them (span and
         ranges rounded up to what it offers)."""
-        self.check_errors()  # stale errors must not be blamed on these settings
+        self.send("CLER")  # errors left by earlier commands must not be blamed on these settings
         messages = settings.commands()
         for message in messages[:3]:  # up to the span
             self.send(message.decode())
         self.check_errors()
-        # The analyzer rounds the span up; the baseband center follows the span it chose.
-        for message in settings.commands(actual_span_hz=self.query_values("FRS?", 1)[0])[3:]:
+        # The analyzer rounds the span up; the baseband center follows the span it chose,
+        # and the pre-trigger must fit the record of that span.
+        actual_span = self.query_values("FRS?", 1)[0]
+        if settings.pre_trigger_s > 400.0 / actual_span * (1 + 1e-9):
+            record = 400.0 / actual_span
+            raise ValueError(
+                f"pre-trigger {settings.pre_trigger_s:g} s is longer than the {record:g} s record "
+                f"of the {actual_span:g} Hz span the analyzer chose"
+            )
+        for message in settings.commands(actual_span_hz=actual_span)[3:]:
             self.send(message.decode())
         self.check_errors()
         actual = self.read_settings()
@@ -356,6 +397,12 @@ class HP35660A:
     def fetch_active_trace(self) -> Trace:
         """Dump the active trace as the analyzer shows it (DDAN), changing nothing."""
         return self._dump(b"DDAN", "DDAN", None)
+
+    def dump_trace(self, message: str) -> Trace:
+        """Send ``message``, which must end in DDAN (e.g. ``TRCB;COHR;DDAN``), and decode the dump."""
+        if replies(message) != ["block"] or message.strip().split(";")[-1].strip().upper() != "DDAN":
+            raise ValueError(f"{message!r} must end with DDAN and ask nothing else")
+        return self._dump(_ascii(message), message.strip(), None)
 
     def _dump(self, message: bytes, name: str, function: str | None) -> Trace:
         def dump() -> Trace:

@@ -6,6 +6,7 @@ holding process dies, so a crash never leaves an instrument locked.
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import hashlib
 import os
@@ -13,17 +14,15 @@ import re
 import tempfile
 from pathlib import Path
 
-from drivers.errors import ResourceBusy
+from drivers.errors import ConnectionFailed, ResourceBusy
 
 
 def lock_directory() -> Path:
-    """$DAQ_LOCK_DIR, else $XDG_RUNTIME_DIR/daq-locks, else <tmp>/daq-locks-<uid>."""
+    """$DAQ_LOCK_DIR, else <tmp>/daq-locks: one directory for every user of the
+    machine, so that two technicians cannot drive one instrument at once."""
     if os.environ.get("DAQ_LOCK_DIR"):
         return Path(os.environ["DAQ_LOCK_DIR"])
-    runtime = os.environ.get("XDG_RUNTIME_DIR")
-    if runtime and Path(runtime).is_dir():
-        return Path(runtime) / "daq-locks"
-    return Path(tempfile.gettempdir()) / f"daq-locks-{os.getuid()}"
+    return Path(tempfile.gettempdir()) / "daq-locks"
 
 
 def lock_path(resource: str) -> Path:
@@ -46,18 +45,35 @@ class ResourceLock:
     def acquire(self) -> None:
         if self._fd is not None:
             return
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fd = self._open_file()
+        except OSError as exc:
+            raise ConnectionFailed(
+                f"cannot create the lock file {self.path}: {exc.strerror or exc}"
+            ) from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "unknown"
             os.close(fd)
+            where = "this process" if holder == str(os.getpid()) else f"another process (pid {holder})"
             shared = f" (it shares {self.key})" if self.key != self.label else ""
-            raise ResourceBusy(f"{self.label} is in use by another process (pid {holder}){shared}") from None
+            raise ResourceBusy(f"{self.label} is in use by {where}{shared}") from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         self._fd = fd
+
+    def _open_file(self) -> int:
+        directory = self.path.parent
+        if not directory.is_dir():
+            directory.mkdir(parents=True, exist_ok=True)
+            # Sticky and writable by all, like /tmp: every user's locks live here.
+            with contextlib.suppress(OSError):
+                os.chmod(directory, 0o1777)
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
+        with contextlib.suppress(OSError):  # another user's file: keep its mode
+            os.fchmod(fd, 0o666)
+        return fd
 
     def release(self) -> None:
         if self._fd is None:

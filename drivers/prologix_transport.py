@@ -57,6 +57,7 @@ class PrologixTransport(Transport):
         self._serial = None
         self._talking = False  # ++read eoi already sent for the current reply
         self._read_sent = 0.0
+        self._heard = True  # a byte arrived since the last ++read
 
     # ------------------------------------------------------------- lifecycle
     def _open(self) -> None:
@@ -128,6 +129,7 @@ class PrologixTransport(Transport):
             self._controller("++read eoi")
             self._talking = True
             self._read_sent = time.monotonic()
+            self._heard = False
 
     def _keep_asking(self) -> None:
         """The adapter gives up a read after ++read_tmo_ms; a slower instrument is
@@ -135,12 +137,15 @@ class PrologixTransport(Transport):
         if time.monotonic() - self._read_sent > READ_TMO_MS / 1000 + 0.05:
             self._controller("++read eoi")
             self._read_sent = time.monotonic()
+            self._heard = False
 
     def _read_some(self, size: int) -> bytes:
         import serial
 
         try:
-            return self._port().read(size)
+            data = self._port().read(size)
+            self._heard = self._heard or bool(data)
+            return data
         except (serial.SerialException, OSError) as exc:
             raise ConnectionLost(f"{self.port}: read failed ({exc})") from None
 
@@ -163,7 +168,9 @@ class PrologixTransport(Transport):
 
         try:
             # Returns at the LF or after the port's short timeout, whichever first.
-            return self._port().read_until(b"\n", MAX_LINE_BYTES)
+            data = self._port().read_until(b"\n", MAX_LINE_BYTES)
+            self._heard = self._heard or bool(data)
+            return data
         except (serial.SerialException, OSError) as exc:
             raise ConnectionLost(f"{self.port}: read failed ({exc})") from None
 
@@ -186,14 +193,34 @@ class PrologixTransport(Transport):
         return bytes(data)
 
     def _clear(self) -> None:
-        """Selected device clear, then drop whatever the adapter still holds."""
+        """Selected device clear, then drop whatever the adapter still holds.
+
+        An adapter still serving an earlier ``++read`` passes on what the instrument
+        says until its read timeout ends: wait that out first, or a late reply would
+        arrive after the drain and answer the next query.
+        """
+        import serial
+
         self._talking = False
+        if not self._heard:  # nothing came since the last ++read: it may still be waiting
+            in_flight_until = self._read_sent + READ_TMO_MS / 1000 + 0.1
+            time.sleep(max(0.0, in_flight_until - time.monotonic()))
         self._controller("++clr")
         port = self._port()
+        give_up = time.monotonic() + max(1.0, self.timeout_s)
         quiet_until = time.monotonic() + 0.1
-        while time.monotonic() < quiet_until:
-            if port.in_waiting:
-                port.reset_input_buffer()
-                quiet_until = time.monotonic() + 0.1
-            else:
-                time.sleep(0.01)
+        try:
+            while time.monotonic() < quiet_until:
+                if time.monotonic() > give_up:
+                    raise ConnectionLost(f"{self.port}: the adapter does not stop sending")
+                if port.in_waiting:
+                    port.reset_input_buffer()
+                    quiet_until = time.monotonic() + 0.1
+                else:
+                    time.sleep(0.01)
+        except (serial.SerialException, OSError) as exc:
+            raise ConnectionLost(f"{self.port}: {exc}") from None
+
+    def _apply_timeout(self) -> None:
+        if self._serial is not None:
+            self._serial.write_timeout = self.timeout_s

@@ -7,6 +7,7 @@ and m/s^2 for the accelerometer (channel 2).
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -103,8 +104,9 @@ class ImpactSettings:
             raise ValueError("trigger_level_eu must be finite")
         if not (math.isfinite(self.pre_trigger_s) and 0 <= self.pre_trigger_s <= self.record_length_s):
             raise ValueError(f"pre_trigger_s must be 0..{self.record_length_s:g} s (one record)")
-        if not (isinstance(self.averages, int) and 1 <= self.averages <= 9999):
+        if not (isinstance(self.averages, numbers.Integral) and 1 <= self.averages <= 9999):
             raise ValueError(f"averages must be an integer 1..9999, got {self.averages!r}")
+        object.__setattr__(self, "averages", int(self.averages))
 
     @property
     def record_length_s(self) -> float:

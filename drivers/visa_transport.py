@@ -23,25 +23,24 @@ class VisaTransport(Transport):
     def __init__(
         self, resource: str, timeout_s: float = 5.0, backend: str = "@py", lock_file: bool = True
     ) -> None:
+        resource = _normalise(resource)
         super().__init__(resource, timeout_s, lock_file, lock_key=_lock_key(resource))
         self.backend = backend
-        self._rm = None
         self._inst = None
 
     @property
     def is_socket(self) -> bool:
-        return self.resource.upper().endswith("::SOCKET")
+        return self.resource.endswith("::SOCKET")
 
     def _open(self) -> None:
         import pyvisa
 
         try:
-            self._rm = pyvisa.ResourceManager(self.backend)
-            self._inst = self._rm.open_resource(self.resource, open_timeout=int(self.timeout_s * 1000))
-        except (pyvisa.errors.VisaIOError, ValueError, OSError) as exc:
-            self._release()
-            raise ConnectionFailed(f"cannot open {self.resource}: {_reason(exc)}") from None
-        except Exception as exc:  # pyvisa raises assorted types for unknown resource names
+            # pyvisa hands out one ResourceManager per library: it is shared with every
+            # other instrument in this process and is never closed here.
+            rm = pyvisa.ResourceManager(self.backend)
+            self._inst = rm.open_resource(self.resource, open_timeout=int(self.timeout_s * 1000))
+        except Exception as exc:  # pyvisa raises assorted types for bad or absent resources
             self._release()
             raise ConnectionFailed(f"cannot open {self.resource}: {_reason(exc)}") from None
         self._inst.read_termination = "\n"
@@ -64,20 +63,18 @@ class VisaTransport(Transport):
             error = exc.errno or -1
         if error:
             self._release()
-            raise ConnectionFailed(
-                f"cannot open {self.resource}: {os.strerror(error) if error > 0 else 'not connected'}"
-            )
+            reason = os.strerror(error) if error > 0 else "not connected"
+            raise ConnectionFailed(f"cannot open {self.resource}: {reason}")
 
     def _apply_timeout(self) -> None:
         if self._inst is not None:
             self._inst.timeout = int(self.timeout_s * 1000)
 
     def _release(self) -> None:
-        for thing in (self._inst, self._rm):
-            if thing is not None:
-                with contextlib.suppress(Exception):  # a broken session may not close cleanly
-                    thing.close()
-        self._inst = self._rm = None
+        if self._inst is not None:
+            with contextlib.suppress(Exception):  # a broken session may not close cleanly
+                self._inst.close()
+        self._inst = None
 
     def _close(self) -> None:
         self._release()
@@ -87,54 +84,74 @@ class VisaTransport(Transport):
             raise ConnectionLost(f"{self.resource} is not open")
         return self._inst
 
-    def _write(self, message: bytes) -> None:
+    def _call(self, what: str, action):
         import pyvisa
 
         try:
-            self._session().write_raw(message + b"\n")
+            return action(self._session())
         except pyvisa.errors.VisaIOError as exc:
-            raise _translate(exc, self.resource, "write") from None
-        except OSError as exc:
-            raise ConnectionLost(f"{self.resource}: write failed ({exc})") from None
+            raise _translate(exc, self.resource, what) from None
+        except (pyvisa.errors.Error, OSError) as exc:  # an invalid session, a dead socket
+            raise ConnectionLost(f"{self.resource}: {what} failed ({_reason(exc)})") from None
+
+    def _write(self, message: bytes) -> None:
+        self._call("write", lambda inst: inst.write_raw(message + b"\n"))
 
     def _read_line(self) -> bytes:
-        import pyvisa
-
-        try:
-            data = self._session().read_raw(MAX_LINE_BYTES)
-        except pyvisa.errors.VisaIOError as exc:
-            raise _translate(exc, self.resource, "read") from None
-        except OSError as exc:
-            raise ConnectionLost(f"{self.resource}: read failed ({exc})") from None
-        return data.rstrip(b"\r\n")
+        return self._call("read", lambda inst: inst.read_raw(MAX_LINE_BYTES)).rstrip(b"\r\n")
 
     def _read_exact(self, count: int) -> bytes:
-        import pyvisa
-
-        try:
-            return bytes(self._session().read_bytes(count, break_on_termchar=False))
-        except pyvisa.errors.VisaIOError as exc:
-            raise _translate(exc, self.resource, f"read of {count} bytes") from None
-        except OSError as exc:
-            raise ConnectionLost(f"{self.resource}: read failed ({exc})") from None
+        return bytes(
+            self._call(f"read of {count} bytes", lambda inst: inst.read_bytes(count, break_on_termchar=False))
+        )
 
     def _clear(self) -> None:
-        import pyvisa
-
         if self.is_socket:
-            # A raw socket has no device clear; a fresh connection is the clean slate
-            # (late replies of the old one can never be read as new ones).
+            # A raw socket has no device clear. A fresh connection drops what the old
+            # one still carried; what the instrument itself still holds (a LAN
+            # gateway keeps it) is drained until the line stays quiet.
             self.reconnect()
+            self._call("drain", lambda inst: inst.clear())
             return
         try:
-            self._session().clear()
-        except pyvisa.errors.VisaIOError as exc:
-            from pyvisa import constants
+            self._call("device clear", lambda inst: inst.clear())
+        except NotSupported:
+            self.reconnect()  # serial ports and some gateways have no device clear
 
-            if exc.error_code == constants.StatusCode.error_nonsupported_operation:
-                self.reconnect()  # serial and some gateways have no device clear
-                return
-            raise _translate(exc, self.resource, "device clear") from None
+
+def _normalise(resource: str) -> str:
+    """Upper-case the resource class (pyvisa rejects ``::socket``), strip blanks."""
+    parts = resource.strip().split("::")
+    if parts and parts[-1].upper() in ("INSTR", "SOCKET", "INTFC", "BACKPLANE", "RAW"):
+        parts[-1] = parts[-1].upper()
+    return "::".join(parts)
+
+
+def _lock_key(resource: str) -> str:
+    """The physical link behind a VISA name, so that every spelling of one
+    instrument shares one lock: ``TCPIP0::localhost::5025::SOCKET`` and
+    ``TCPIP::127.0.0.1::5025::SOCKET`` are one socket; ``GPIB::11`` and
+    ``GPIB0::11::INSTR`` one address; ``ASRL/dev/ttyUSB0::INSTR`` and a Prologix on
+    /dev/ttyUSB0 one serial port."""
+    from pyvisa import rname
+
+    try:
+        parsed = rname.parse_resource_name(resource)
+    except Exception:  # not a VISA name we know; the open will say so
+        return resource.upper()
+    kind = type(parsed).__name__
+    if kind == "TCPIPSocket":
+        try:
+            host = socket.gethostbyname(parsed.host_address)
+        except OSError:
+            host = parsed.host_address.lower()
+        return f"TCPIP::{host}::{int(parsed.port)}::SOCKET"
+    if kind == "GPIBInstr":
+        secondary = f"::{parsed.secondary_address}" if parsed.secondary_address else ""
+        return f"GPIB{parsed.board or 0}::{int(parsed.primary_address)}{secondary}"
+    if kind == "ASRLInstr" and parsed.board.startswith("/"):
+        return f"SERIAL::{os.path.realpath(parsed.board)}"
+    return str(parsed).upper()
 
 
 def _reason(exc: BaseException) -> str:
@@ -148,17 +165,10 @@ def _translate(exc: Exception, resource: str, what: str) -> Exception:
     code = getattr(exc, "error_code", None)
     if code == constants.StatusCode.error_timeout:
         return InstrumentTimeout(f"{resource}: {what} timed out")
-    if code in (constants.StatusCode.error_connection_lost, constants.StatusCode.error_io):
-        return ConnectionLost(f"{resource}: {what} failed, link lost ({_reason(exc)})")
+    if code == constants.StatusCode.error_nonsupported_operation:
+        return NotSupported(f"{resource}: {what} is not supported")
     return ConnectionLost(f"{resource}: {what} failed ({_reason(exc)})")
 
 
-def _lock_key(resource: str) -> str:
-    """The physical link behind a VISA name: ``ASRL/dev/ttyUSB0::INSTR`` and a
-    Prologix on /dev/ttyUSB0 share one serial port; other names compare without case."""
-    upper = resource.strip().upper()
-    if upper.startswith("ASRL") and "::" in resource:
-        port = resource.strip()[4:].split("::")[0]
-        if port.startswith("/"):
-            return f"SERIAL::{os.path.realpath(port)}"
-    return upper
+class NotSupported(ConnectionLost):
+    """The link cannot do this (a device clear on a serial port)."""

@@ -208,6 +208,7 @@ def acquire(
     noise_v = (
         (noise.force_rms_n * sens[0], noise.acceleration_rms_m_s2 * sens[1]) if noise.enabled else (0.0, 0.0)
     )
+    fired = 0.0
     if settings.trigger_source == "FREE":
         t_first, start_s = 0.0, 0.0
     else:
@@ -222,6 +223,10 @@ def acquire(
     channels, overload, peaks = [], [], []
     for ch in range(2):
         volts = chains.filtered[ch].respond(hit.pulses, times, shift)
+        if shift:
+            # The zoom oscillator's phase counts from the trigger, so that every hit's
+            # record (and linear spectrum) has the same phase and a vector average holds.
+            volts = volts * np.exp(2j * np.pi * shift * fired)
         if noise_v[ch] > 0:
             if settings.zoom:
                 volts = volts + rng.normal(0.0, noise_v[ch] / math.sqrt(2), (n, 2)) @ np.array([1.0, 1j])

@@ -21,6 +21,7 @@ import random
 from dataclasses import dataclass, field
 
 FAULTS = ("slow", "no_hit", "truncate", "garbage", "drop", "error")
+MAX_GARBAGE_BYTES = 65536
 _DEFAULT_COUNT = {"slow": math.inf}
 _PARAMS = {
     "slow": {"delay": 0.5},
@@ -97,6 +98,8 @@ def parse_fault(spec: str) -> Fault:
         raise ValueError("keep must be at least 0 and below 1")
     if fault.params.get("delay", 0.0) < 0:
         raise ValueError("delay must not be negative")
+    if not 0 <= fault.params.get("nbytes", 0.0) <= MAX_GARBAGE_BYTES:
+        raise ValueError(f"nbytes must be 0..{MAX_GARBAGE_BYTES}")
     return fault
 
 

@@ -121,6 +121,8 @@ class PrologixPty:
                     self._handle(line)
                 except OSError as exc:
                     log.debug("pty write failed: %s", exc)
+                except Exception:  # one bad line must not silence the adapter for good
+                    log.exception("Prologix emulation: line %r", line[:80])
 
     def _handle(self, line: bytes) -> None:
         if line.startswith(b"++"):
@@ -177,7 +179,9 @@ class PrologixPty:
         elif name == "ver":
             self._write(VERSION.encode() + b"\r\n")
         elif name == "read":
-            self._read(arg.lower())
+            until = arg.lower()
+            if until in ("", "eoi") or (until.isdigit() and int(until) <= 255):
+                self._read(until)
         elif name == "clr":
             if self.address == self.gpib_address:
                 self._outbox.clear()

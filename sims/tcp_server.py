@@ -107,7 +107,7 @@ class TcpServer:
                 if not data:
                     break
                 for chunk in session.feed(data):
-                    if chunk.delay_s and self._stop.wait(chunk.delay_s):
+                    if chunk.delay_s and not self._hold(conn, chunk.delay_s):
                         return
                     if chunk.data:
                         self._send(conn, chunk.data)
@@ -122,6 +122,20 @@ class TcpServer:
                 with self._lock:
                     self._clients.pop(threading.current_thread(), None)
             log.debug("client %s closed", peer)
+
+    def _hold(self, conn: socket.socket, delay_s: float) -> bool:
+        """Wait out a slow reply; False if the server closes or the client leaves
+        meanwhile (its thread and socket are not kept for a reply nobody reads)."""
+        deadline = time.monotonic() + delay_s
+        while (left := deadline - time.monotonic()) > 0:
+            if self._stop.wait(min(POLL_S, left)):
+                return False
+            try:
+                if conn.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b"":
+                    return False
+            except (BlockingIOError, TimeoutError):
+                pass
+        return True
 
     def _send(self, conn: socket.socket, data: bytes) -> None:
         view = memoryview(data)

@@ -112,3 +112,11 @@ def test_instruments_lists_local_resources_without_noise(lock_dir):
     assert "Serial ports" in result.stdout
     assert "sim" in result.stdout
     assert "not searched for" in result.stdout
+
+
+@pytest.mark.timeout(30)
+def test_send_refuses_a_query_and_query_decodes_a_selected_dump(lock_dir):
+    assert_one_line_error(run_daq("send", "-r", "sim", "ID?"), "use query")
+    result = run_daq("query", "-r", "sim", "TRCB;COHR;DDAN", "--timeout", "1")
+    # No data yet: the instrument's own reason, promptly and in one line.
+    assert_one_line_error(result, "instrument error 5: No data available: COHR")
