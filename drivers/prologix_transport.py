@@ -82,9 +82,16 @@ class PrologixTransport(Transport):
 
     def _verify_controller(self) -> None:
         """Ask the adapter its version: proves a Prologix is on this port."""
+        deadline = time.monotonic() + min(self.timeout_s, 2.0)
+        line = b""
         try:
             self._controller("++ver")
-            line = self._readline_raw(deadline=time.monotonic() + min(self.timeout_s, 2.0), reissue=False)
+            # A reply an earlier (killed) session asked for may still be on its way:
+            # skip a few lines before the adapter's own answer.
+            for _ in range(4):
+                line = self._readline_raw(deadline=deadline, reissue=False)
+                if b"Prologix" in line:
+                    break
         except DriverError as exc:
             self._close()
             raise ConnectionFailed(f"no Prologix controller answers on {self.port} ({exc})") from None

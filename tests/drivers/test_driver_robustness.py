@@ -181,3 +181,17 @@ def test_unusable_lock_directory_is_a_clear_error(tmp_path, monkeypatch):
         pytest.raises(ConnectionFailed, match="cannot create the lock file"),
     ):
         HP35660A.open(server.resource)
+
+
+@pytest.mark.timeout(30)
+def test_prologix_open_skips_a_reply_left_by_a_killed_session():
+    import serial
+
+    with PrologixPty(_analyzer(), 11) as pty:
+        # A session asks for a reply and dies before reading it.
+        # The reply is slow: it is still on its way when the next session opens.
+        with serial.Serial(pty.port, timeout=0.2) as port:
+            port.write(b"SIM:FAULT slow,count=1,delay=0.4\n++auto 1\nFRS?\n")
+        with HP35660A.open(f"PROLOGIX::{pty.port}::11", timeout_s=1.0) as dsa:
+            assert dsa.identify() == "HP35660A"
+            assert dsa.query("FRS?") == "+1.024000000E+05"
