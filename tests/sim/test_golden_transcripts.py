@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from wire import ask
 
 from sims.command_table import COMMANDS, ERRORS
 from sims.instrument import Analyzer
@@ -78,15 +79,6 @@ def make_bench(kind: str, make_analyzer, clock: FakeClock) -> Analyzer:
     if kind == "clock":
         return Analyzer(ReplaySource([DELTA_HIT], loop=True), time_scale=1.0, clock=clock)
     raise ValueError(kind)
-
-
-def ask(conn, text: str) -> bytes:
-    """Send one message; every byte the analyzer replies (b"" for none)."""
-    conn.write(text.encode("ascii") + b"\n")
-    try:
-        return conn.read(timeout_s=0.0)
-    except TimeoutError:
-        return b""
 
 
 # --------------------------------------------------------------------------- expected dumps

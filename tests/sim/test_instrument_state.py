@@ -17,6 +17,7 @@ import struct
 
 import numpy as np
 import pytest
+from wire import ask
 
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
@@ -39,15 +40,6 @@ class FakeClock:
 
 def lines(*texts: str) -> bytes:
     return b"".join(t.encode("ascii") + CRLF for t in texts)
-
-
-def ask(conn, text: str) -> bytes:
-    """Send one message; every byte the analyzer replies (b"" for none)."""
-    conn.write(text.encode("ascii") + b"\n")
-    try:
-        return conn.read(timeout_s=0.0)
-    except TimeoutError:
-        return b""
 
 
 def num(value: float) -> bytes:

@@ -36,3 +36,12 @@ def decode_ascii_trace(data: bytes) -> np.ndarray:
     lines = data.split(b"\r\n")
     assert lines[-1] == b""
     return np.array([float(x) for x in lines[:-1]])
+
+
+def ask(conn, text: str) -> bytes:
+    """Send one message; every byte the analyzer replies (b"" for none)."""
+    conn.write(text.encode("ascii") + b"\n")
+    try:
+        return conn.read(timeout_s=0.0)
+    except TimeoutError:
+        return b""
