@@ -3,7 +3,6 @@ built-in simulator (resource ``sim``, ``sim:seed`` or ``sim:realistic``)."""
 
 from __future__ import annotations
 
-from drivers.errors import DriverError
 from drivers.hp35660a import HP35660A
 from drivers.loopback import LoopbackTransport
 
@@ -28,6 +27,3 @@ def open_analyzer(resource: str, timeout_s: float = 5.0, seed: int = 0, time_sca
         transport.open()
         return HP35660A(transport)
     return HP35660A.open(resource, timeout_s=timeout_s)
-
-
-__all__ = ["SIM_RESOURCES", "DriverError", "is_simulated", "open_analyzer"]

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from typing import TypeVar
 
 from drivers.blocks import decode_values, parse_block_header
-from drivers.commands import COMMANDS, STATUS_BITS, command, replies
+from drivers.commands import COMMANDS, STATUS_BITS, replies
 from drivers.errors import ConnectionLost, DriverError, InstrumentError, InstrumentTimeout, ProtocolError
 from drivers.settings import ChannelSetup, ImpactSettings, Window
-from drivers.trace import HEADER_LENGTH, Trace
+from drivers.trace import Trace
 from drivers.transport import Transport
 
 log = logging.getLogger(__name__)
@@ -471,6 +471,3 @@ def _decode_line(raw: bytes, command_text: str) -> str:
     if any(ch < " " for ch in text):
         raise ProtocolError(command_text, "control characters in the reply", raw)
     return text
-
-
-__all__ = ["HEADER_LENGTH", "HP35660A", "ImpactSettings", "Status", "command"]
