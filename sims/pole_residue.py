@@ -12,6 +12,12 @@ simulation never arise.
 
 Series connections combine by partial fractions (poles of the two parts must be
 distinct, which a structure and an electronic filter always are in practice).
+
+A system may also have poles in the right half-plane: read as a stable two-sided
+system (the region of convergence holds the imaginary axis), those terms are
+anti-causal, r / (s - p) <-> -r e^(p t) for t < 0. That is how a zero-phase
+filter H(s) H(-s) is written: it answers before its input as much as after, as a
+linear-phase digital filter does once its bulk delay is removed.
 """
 
 from __future__ import annotations
@@ -108,11 +114,32 @@ class PoleResidueSystem:
         return PoleResidueSystem(self.poles, self.residues * factor, self.direct * factor)
 
     def respond(self, pulses: HalfSinePulses, times_s: np.ndarray, shift_hz: float = 0.0) -> np.ndarray:
-        """Exact output at ``times_s`` (any shape, s) to the pulses, starting from rest.
+        """Exact output at ``times_s`` (any shape, s) to the pulses.
 
-        Returns real values of the shape of ``times_s``; with ``shift_hz`` = f_c, the
-        complex output mixed down by f_c, y(t) e^(-j 2 pi f_c t), as a zoom
-        analyzer's digital local oscillator does (filter it afterwards).
+        Poles in the left half-plane act causally (from rest before the pulses),
+        poles in the right half-plane anti-causally (at rest after the pulses); see
+        the module's docstring. Returns real values of the shape of ``times_s``; with
+        ``shift_hz`` = f_c, the complex output mixed down by f_c.
+        """
+        t = np.asarray(times_s, dtype=float)
+        ahead = self.poles.real > 0
+        causal = PoleResidueSystem(self.poles[~ahead], self.residues[~ahead], self.direct)
+        out = causal._respond_causal(pulses, t, shift_hz)
+        if ahead.any():
+            # Time reversal turns the anti-causal part into a causal one: with
+            # u'(t) = u(-t), y(t) = (g' * u')(-t) where g' has poles -p and residues
+            # -r; the reversed half-sine pulses are half-sine pulses again, and the
+            # mixing e^(-j w_c t) is the reversed system's mixing by -f_c at -t.
+            mirrored = PoleResidueSystem(-self.poles[ahead], -self.residues[ahead], 0.0)
+            reversed_pulses = HalfSinePulses(-(pulses.start_s + pulses.width_s), pulses.width_s, pulses.peak)
+            out = out + mirrored._respond_causal(reversed_pulses, -t, -shift_hz)
+        return out
+
+    def _respond_causal(self, pulses: HalfSinePulses, times_s: np.ndarray, shift_hz: float) -> np.ndarray:
+        """``respond`` for a system whose poles all act causally.
+
+        With ``shift_hz`` = f_c the output is mixed down by f_c, y(t) e^(-j 2 pi f_c t),
+        as a zoom analyzer's digital local oscillator does (filter it afterwards).
 
         Each pulse is A sin(a s) = sum_m c_m e^(k_m s) on 0 <= s <= w (s = t - t0,
         a = pi / w), so each pole's state is a sum of exponentials in closed form:
