@@ -1,6 +1,6 @@
 """Binary blocks of floating-point values: HP ``#A`` blocks and IEEE 488.2 blocks.
 
-* HP (3562A family, DESIGN.md section 4): ``#A``, a 2-byte big-endian byte count,
+* HP (3562A family, docs/instrument.md): ``#A``, a 2-byte big-endian byte count,
   then the payload.
 * IEEE 488.2 definite length: ``#``, one digit n (1-9), n digits of byte count,
   then the payload.
@@ -14,7 +14,9 @@ is not whole values, non-finite values, a wrong number of points.
 
 from __future__ import annotations
 
+import math
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -131,3 +133,34 @@ def encode_block(values: np.ndarray, kind: str = "A", dtype: str = ">f8") -> byt
     if kind == "indefinite":
         return b"#0" + payload + b"\n"
     raise ValueError(f"unknown block kind {kind!r}")
+
+
+def read_ascii_dump(read_line: Callable[[], bytes], command: str, max_values: int) -> np.ndarray:
+    """An HP ASCII dump (DDAS, DSAS), read line by line: ``#I``, then the count of
+    values, then that many values, one per line (docs/instrument.md).
+
+    The sources do not say whether the count shares the ``#I`` line, so both are
+    taken. ``max_values`` bounds the count, so that a garbled count line cannot make
+    the driver wait for thousands of lines. Returns float64 (n,).
+    """
+    head = read_line().strip()
+    if not head.startswith(b"#I"):
+        raise ProtocolError(command, "expected an ASCII dump starting with '#I'", head)
+    count_text = head[2:].strip() or read_line().strip()
+    count = _ascii_number(count_text, command, "the count")
+    if count != int(count) or not 0 <= count <= max_values:
+        raise ProtocolError(command, f"the count must be a whole number 0..{max_values}", count_text)
+    values = np.empty(int(count))
+    for i in range(int(count)):
+        values[i] = _ascii_number(read_line().strip(), command, f"value {i}")
+    return values
+
+
+def _ascii_number(text: bytes, command: str, what: str) -> float:
+    try:
+        value = float(text.decode("ascii"))
+    except (UnicodeDecodeError, ValueError):
+        raise ProtocolError(command, f"{what} of the ASCII dump is not a number", text) from None
+    if not math.isfinite(value):
+        raise ProtocolError(command, f"{what} of the ASCII dump is not finite", text)
+    return value

@@ -1,4 +1,4 @@
-"""The driver's command table for the HP 35660A (DESIGN.md section 4), in one place.
+"""The driver's command table for the HP 35660A (docs/instrument.md), in one place.
 
 No public copy of the 35660A programming manual exists, so the driver speaks the
 mnemonic dialect of its documented sibling, the HP 3562A. Every entry names its
@@ -8,99 +8,174 @@ source so that a technician with the real manual can correct this table alone:
 * ``proj``: a project choice where no source was found, to be confirmed on a real
   35660A (per-channel windows, ranges, sensitivities, trigger, preview, queries).
 
-The simulator keeps an independent copy (sims/command_table.py); golden byte
-transcripts in the tests pin both to the same bytes.
+Each entry carries its whole grammar, PyMeasure-style: the kind of argument, the
+dimension and unit suffix of a quantity, the range the driver lets through, the
+choices, the read-back query and what that query answers. The bytes of every
+setting (``command``) and the parse of every read-back (``parse_reply``) are
+generated from it, so correcting a mnemonic, a suffix or a choice is one edit
+here. The simulator keeps an independent copy (sims/command_table.py);
+``grammar()`` exposes ours for the test that compares the two.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+from drivers.record import MAX_SPAN_HZ
+
+Kind = Literal["action", "setting", "query"]
+ArgumentKind = Literal["quantity", "integer", "flag", "choice"]
+#: What a reply line holds: free text, a number (SI), an integer, 0/1, one of the choices.
+ReplyKind = Literal["none", "text", "number", "integer", "flag", "choice", "values", "block", "lines"]
+
+#: The unit suffix the driver writes after a quantity of each dimension (SI, so the
+#: number is sent as the driver holds it). Names as in sims/units.py.
+UNIT_SUFFIX = {"frequency": "HZ", "time": "S", "voltage": "V"}
+
+WINDOWS = ("UNIF", "HANN", "FLAT", "FORC", "EXPO")
+TRIGGER_SOURCES = ("CH1", "CH2", "FREE")
+SLOPES = ("POS", "NEG")
+AVERAGING_MODES = ("STBL", "AVOF")
+TRACES = ("A", "B")
+#: Our display mnemonics; their codes in a dump header are in drivers/trace.py.
+DISPLAY_FUNCTIONS = ("TIM1", "TIM2", "LSP1", "LSP2", "PSP1", "PSP2", "FRSP", "COHR")
+
+
+@dataclass(frozen=True)
+class Argument:
+    """What a setting takes. ``low``/``high`` bound the value (inclusive, SI) for
+    quantities and integers; ``choices`` the words of a choice."""
+
+    kind: ArgumentKind
+    dimension: str | None = None
+    low: float = -math.inf
+    high: float = math.inf
+    choices: tuple[str, ...] = ()
+
+    @property
+    def suffix(self) -> str | None:
+        return UNIT_SUFFIX[self.dimension] if self.dimension else None
 
 
 @dataclass(frozen=True)
 class Mnemonic:
     text: str
+    kind: Kind
     source: str
     meaning: str
+    argument: Argument | None = None
     #: Safe to send again after a failed transfer (a setting, a query); False for
     #: commands whose repetition changes the outcome (ACPT, RJCT).
     idempotent: bool = True
-    #: What the instrument sends back: nothing, one line, many lines or an #A block.
-    reply: str = "none"
+    #: What the instrument sends back for this mnemonic itself (a query), or for its
+    #: read-back query (a setting, ``readback``): see ReplyKind.
+    reply: ReplyKind = "none"
+    reply_choices: tuple[str, ...] = field(default=())
+
+    @property
+    def readback(self) -> str | None:
+        """The query that reads a setting back: its mnemonic plus ``?``."""
+        return self.text + "?" if self.kind == "setting" else None
 
 
-def _m(text: str, source: str, meaning: str, idempotent: bool = True) -> Mnemonic:
-    reply = "line" if text.endswith("?") or text == "SMSD" else "none"
-    return Mnemonic(text, source, meaning, idempotent, reply)
+def _action(text: str, source: str, meaning: str, idempotent: bool = True) -> Mnemonic:
+    return Mnemonic(text, "action", source, meaning, idempotent=idempotent)
 
 
-COMMANDS: dict[str, Mnemonic] = {
-    m.text: m
-    for m in (
-        _m("ID?", "3562A", "identify; the 35660A replies HP35660A"),
-        _m("RST", "3562A", "preset"),
-        _m("LCL", "3562A", "go to local"),
-        _m("STRT", "3562A", "start a measurement (clears the average, arms)"),
-        _m("PAUS", "3562A", "pause"),
-        _m("CONT", "3562A", "continue"),
-        _m("SMSD", "3562A", "measurement done? 1 or 0"),
-        _m("ACPT", "proj", "preview: accept the pending hit", idempotent=False),
-        _m("RJCT", "proj", "preview: reject the pending hit", idempotent=False),
-        _m("FRS", "3562A", "frequency span, e.g. FRS 200 HZ"),
-        _m("CF", "proj", "center frequency (span/2 = baseband)"),
-        _m("NAVG", "3562A", "number of averages"),
-        _m("STBL", "3562A", "stable (mean) averaging"),
-        _m("AVOF", "3562A", "averaging off"),
-        _m("PRVW", "proj", "hit preview on/off"),
-        _m("FRQR", "3562A", "frequency response measurement"),
-        _m("LNRS", "3562A", "linear resolution"),
-        _m("UNIF", "3562A", "uniform window, both channels"),
-        _m("HANN", "3562A", "Hanning window, both channels"),
-        _m("FLAT", "3562A", "flat top window, both channels"),
-        _m("WIN1", "proj", "channel 1 window: UNIF HANN FLAT FORC EXPO"),
-        _m("WIN2", "proj", "channel 2 window"),
-        _m("FWD1", "proj", "channel 1 force window width"),
-        _m("FWD2", "proj", "channel 2 force window width"),
-        _m("EXD1", "proj", "channel 1 exponential window time constant"),
-        _m("EXD2", "proj", "channel 2 exponential window time constant"),
-        _m("RNG1", "proj", "channel 1 input range, V peak"),
-        _m("RNG2", "proj", "channel 2 input range, V peak"),
-        _m("AU1", "3562A", "autorange channel 1"),
-        _m("AU2", "proj", "autorange channel 2"),
-        _m("C1AC", "3562A", "channel 1 AC (1) or DC (0) coupling"),
-        _m("C2AC", "proj", "channel 2 AC (1) or DC (0) coupling"),
-        _m("SNS1", "proj", "channel 1 sensitivity, V per N"),
-        _m("SNS2", "proj", "channel 2 sensitivity, V per m/s^2"),
-        _m("TSRC", "proj", "trigger source: CH1 CH2 FREE"),
-        _m("TLVL", "proj", "trigger level, V"),
-        _m("TSLP", "proj", "trigger slope: POS NEG"),
-        _m("TDLY", "proj", "trigger delay, negative = pre-trigger"),
-        _m("TRCA", "proj", "trace A active"),
-        _m("TRCB", "proj", "trace B active"),
-        _m("TIM1", "proj", "display: channel 1 time record"),
-        _m("TIM2", "proj", "display: channel 2 time record"),
-        _m("LSP1", "proj", "display: channel 1 linear spectrum"),
-        _m("LSP2", "proj", "display: channel 2 linear spectrum"),
-        _m("PSP1", "3562A", "display: channel 1 power spectrum"),
-        _m("PSP2", "proj", "display: channel 2 power spectrum"),
-        _m("FRSP", "proj", "display: frequency response ch2/ch1"),
-        _m("COHR", "proj", "display: coherence"),
-        _m("DISP?", "proj", "display function of the active trace"),
-        _m("TRC?", "proj", "active trace"),
-        Mnemonic("DDAN", "3562A", "dump the active trace, binary #A block", reply="block"),
-        Mnemonic("DDAS", "3562A", "dump the active trace, ASCII, one value per line", reply="lines"),
-        Mnemonic("DSAN", "3562A", "dump the state, binary #A block", reply="block"),
-        Mnemonic("DSAS", "3562A", "dump the state, one ASCII line", reply="line"),
-        _m("STA?", "proj", "status bits"),
-        _m("ERR?", "proj", 'oldest error: code,"message"'),
-        _m("CLER", "proj", "clear the error queue"),
-        _m("OVLD?", "proj", "overload of the last record: ch1,ch2"),
-        _m("AVG?", "proj", "hits in the average"),
-        _m("AVMD?", "proj", "averaging mode: STBL or AVOF"),
-        _m("AU1?", "proj", "autorange of channel 1 on (1) or off (0)"),
-        _m("AU2?", "proj", "autorange of channel 2 on (1) or off (0)"),
-    )
-}
+def _setting(text: str, source: str, meaning: str, argument: Argument) -> Mnemonic:
+    reply = {"quantity": "number"}.get(argument.kind, argument.kind)
+    return Mnemonic(text, "setting", source, meaning, argument, reply=reply, reply_choices=argument.choices)  # type: ignore[arg-type]
+
+
+def _query(text: str, source: str, meaning: str, reply: ReplyKind, choices: tuple[str, ...] = ()) -> Mnemonic:
+    return Mnemonic(text, "query", source, meaning, reply=reply, reply_choices=choices)
+
+
+def _quantity(dimension: str, low: float, high: float) -> Argument:
+    return Argument("quantity", dimension, low, high)
+
+
+_FLAG = Argument("flag", low=0, high=1)
+#: Window parameters, s: from a microsecond to beyond any record (400 / 0.195 Hz).
+_WINDOW_TIME = _quantity("time", 1e-6, 1e4)
+_SENSITIVITY = _quantity("voltage", 1e-6, 10.0)
+_RANGE = _quantity("voltage", 1e-6, 100.0)
+
+_TABLE: tuple[Mnemonic, ...] = (
+    _query("ID?", "3562A", "identify; the 35660A replies HP35660A", "text"),
+    _action("RST", "3562A", "preset"),
+    _action("LCL", "3562A", "go to local"),
+    _action("STRT", "3562A", "start a measurement (clears the average, arms)"),
+    _action("PAUS", "3562A", "pause"),
+    _action("CONT", "3562A", "continue"),
+    _query("SMSD", "3562A", "measurement done? 1 or 0", "flag"),
+    _action("ACPT", "proj", "preview: accept the pending hit", idempotent=False),
+    _action("RJCT", "proj", "preview: reject the pending hit", idempotent=False),
+    _setting(
+        "FRS",
+        "3562A",
+        "frequency span, Hz (rounded up to 102.4 kHz / 2^n)",
+        _quantity("frequency", 1e-3, MAX_SPAN_HZ),
+    ),
+    _setting(
+        "CF", "proj", "center frequency, Hz (span/2 = baseband)", _quantity("frequency", 0.0, MAX_SPAN_HZ)
+    ),
+    _setting("NAVG", "3562A", "number of averages", Argument("integer", low=1, high=9999)),
+    _action("STBL", "3562A", "stable (mean) averaging"),
+    _action("AVOF", "3562A", "averaging off"),
+    _setting("PRVW", "proj", "hit preview on (1) or off (0)", _FLAG),
+    _action("FRQR", "3562A", "frequency response measurement"),
+    _action("LNRS", "3562A", "linear resolution"),
+    _action("UNIF", "3562A", "uniform window, both channels"),
+    _action("HANN", "3562A", "Hanning window, both channels"),
+    _action("FLAT", "3562A", "flat top window, both channels"),
+    _setting("WIN1", "proj", "channel 1 window", Argument("choice", choices=WINDOWS)),
+    _setting("WIN2", "proj", "channel 2 window", Argument("choice", choices=WINDOWS)),
+    _setting("FWD1", "proj", "channel 1 force window width, s", _WINDOW_TIME),
+    _setting("FWD2", "proj", "channel 2 force window width, s", _WINDOW_TIME),
+    _setting("EXD1", "proj", "channel 1 exponential window time constant, s", _WINDOW_TIME),
+    _setting("EXD2", "proj", "channel 2 exponential window time constant, s", _WINDOW_TIME),
+    _setting("RNG1", "proj", "channel 1 input range, V peak", _RANGE),
+    _setting("RNG2", "proj", "channel 2 input range, V peak", _RANGE),
+    _action("AU1", "3562A", "autorange channel 1"),
+    _action("AU2", "proj", "autorange channel 2"),
+    _setting("C1AC", "3562A", "channel 1 AC (1) or DC (0) coupling", _FLAG),
+    _setting("C2AC", "proj", "channel 2 AC (1) or DC (0) coupling", _FLAG),
+    _setting("SNS1", "proj", "channel 1 sensitivity, V per N", _SENSITIVITY),
+    _setting("SNS2", "proj", "channel 2 sensitivity, V per m/s^2", _SENSITIVITY),
+    _setting("TSRC", "proj", "trigger source", Argument("choice", choices=TRIGGER_SOURCES)),
+    _setting("TLVL", "proj", "trigger level, V", _quantity("voltage", -100.0, 100.0)),
+    _setting("TSLP", "proj", "trigger slope", Argument("choice", choices=SLOPES)),
+    _setting("TDLY", "proj", "trigger delay, s; negative = pre-trigger", _quantity("time", -1e4, 1e4)),
+    _action("TRCA", "proj", "trace A active"),
+    _action("TRCB", "proj", "trace B active"),
+    _action("TIM1", "proj", "display: channel 1 time record"),
+    _action("TIM2", "proj", "display: channel 2 time record"),
+    _action("LSP1", "proj", "display: channel 1 linear spectrum"),
+    _action("LSP2", "proj", "display: channel 2 linear spectrum"),
+    _action("PSP1", "3562A", "display: channel 1 power spectrum"),
+    _action("PSP2", "proj", "display: channel 2 power spectrum"),
+    _action("FRSP", "proj", "display: frequency response ch2/ch1"),
+    _action("COHR", "proj", "display: coherence"),
+    _query("DISP?", "proj", "display function of the active trace", "choice", DISPLAY_FUNCTIONS),
+    _query("TRC?", "proj", "active trace", "choice", TRACES),
+    _query("DDAN", "3562A", "dump the active trace: #A block, 66-value header + data", "block"),
+    _query("DDAS", "3562A", "dump the active trace: #I, count line, one value per line", "lines"),
+    _query("DSAN", "3562A", "dump the state: #A block of 96 float64 (drivers/state.py)", "block"),
+    _query("DSAS", "3562A", "dump the state: #I, count line (96), one value per line", "lines"),
+    _query("STA?", "proj", "status bits (STATUS_BITS)", "integer"),
+    _query("ERR?", "proj", 'pop the oldest error: code,"message"', "text"),
+    _action("CLER", "proj", "clear the error queue"),
+    _query("OVLD?", "proj", "overload of the last record: ch1,ch2", "values"),
+    _query("AVG?", "proj", "hits in the average", "integer"),
+    _query("AVMD?", "proj", "averaging mode", "choice", AVERAGING_MODES),
+    _query("AU1?", "proj", "autorange of channel 1 on (1) or off (0)", "flag"),
+    _query("AU2?", "proj", "autorange of channel 2 on (1) or off (0)", "flag"),
+)
+
+COMMANDS: dict[str, Mnemonic] = {m.text: m for m in _TABLE}
 
 #: STA? bits (proj).
 STATUS_BITS = {
@@ -114,44 +189,150 @@ STATUS_BITS = {
     "paused": 128,
 }
 
-#: Display-function codes in header word 0, y-unit codes in word 9, x-unit codes in word 10 (proj).
-DISPLAY_CODES = {1: "TIM1", 2: "TIM2", 3: "LSP1", 4: "LSP2", 5: "PSP1", 6: "PSP2", 7: "FRSP", 8: "COHR"}
-Y_UNITS = {0: "V", 1: "N", 2: "m/s^2", 3: "(m/s^2)/N", 4: "", 5: "N^2", 6: "(m/s^2)^2"}
-X_UNITS = {0: "s", 1: "Hz"}
 
-UNIT_SUFFIX = {"frequency": "HZ", "time": "S", "voltage": "V"}
+def grammar() -> dict[str, dict]:
+    """Every mnemonic's grammar, for the test that compares it with the simulator's
+    table: settings under their mnemonic (without ``?``), queries as sent."""
+    out: dict[str, dict] = {}
+    for m in _TABLE:
+        arg = m.argument
+        out[m.text] = {
+            "kind": m.kind,
+            "source": m.source,
+            "argument": arg.kind if arg else None,
+            "dimension": arg.dimension if arg else None,
+            "choices": arg.choices if arg else (),
+            "readback": m.readback,
+        }
+    return out
 
 
 def number(value: float) -> str:
-    """A numeric argument: enough digits to round-trip what the instrument resolves."""
-    text = f"{float(value):.12g}"
-    return text
+    """A numeric argument: 12 significant digits, more than the analyzer resolves,
+    and never ``-0`` (which an instrument may refuse)."""
+    return f"{float(value) + 0.0:.12g}"
 
 
-def command(mnemonic: str, *args: object) -> bytes:
-    """``command("FRS", 200.0, "HZ")`` -> b"FRS 200 HZ"; the mnemonic must be in the table."""
-    base = mnemonic[:-1] if mnemonic.endswith("?") and mnemonic not in COMMANDS else mnemonic
-    if base not in COMMANDS:
+def _entry(mnemonic: str, kind: Kind | None = None) -> Mnemonic:
+    entry = COMMANDS.get(mnemonic)
+    if entry is None:
         raise KeyError(f"{mnemonic} is not in the driver's command table")
-    parts = [mnemonic]
-    for arg in args:
-        parts.append(number(arg) if isinstance(arg, float) else str(arg))
-    return " ".join(parts).encode("ascii")
+    if kind is not None and entry.kind != kind:
+        raise ValueError(f"{mnemonic} is a {entry.kind}, not a {kind}")
+    return entry
+
+
+def command(mnemonic: str, value: object = None) -> bytes:
+    """The message for one table entry: ``command("FRS", 200.0)`` -> b"FRS 200 HZ",
+    ``command("STBL")`` -> b"STBL". The value is checked against the entry's
+    grammar (ValueError naming the mnemonic); units are SI."""
+    entry = _entry(mnemonic)
+    arg = entry.argument
+    if arg is None:
+        if value is not None:
+            raise ValueError(f"{mnemonic} takes no argument, got {value!r}")
+        return mnemonic.encode("ascii")
+    return f"{mnemonic} {_format_argument(mnemonic, arg, value)}".encode("ascii")
+
+
+def _format_argument(mnemonic: str, arg: Argument, value: object) -> str:
+    if arg.kind == "choice":
+        text = str(value)
+        if text not in arg.choices:
+            raise ValueError(f"{mnemonic} takes one of {', '.join(arg.choices)}, got {value!r}")
+        return text
+    if isinstance(value, bool) or arg.kind == "flag":
+        if value not in (0, 1, True, False):
+            raise ValueError(f"{mnemonic} takes 0 or 1, got {value!r}")
+        return str(int(value))  # type: ignore[call-overload]
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ValueError(f"{mnemonic} takes a number, got {value!r}") from None
+    if arg.kind == "integer" and x != int(x):
+        raise ValueError(f"{mnemonic} takes an integer, got {value!r}")
+    if not (math.isfinite(x) and arg.low <= x <= arg.high):
+        unit = f" {arg.suffix}" if arg.suffix else ""
+        raise ValueError(f"{mnemonic} takes {arg.low:g} to {arg.high:g}{unit}, got {value!r}")
+    if arg.kind == "integer":
+        return str(int(x))
+    return f"{number(x)} {arg.suffix}"
+
+
+def parse_reply(query: str, reply: str) -> float | int | bool | str:
+    """The reply line of a one-line query, typed by the table: a setting's read-back
+    (``FRS?`` -> float, SI) or a query (``AVMD?`` -> "STBL"). ValueError with the
+    reason when the reply does not fit; the driver turns it into a ProtocolError."""
+    entry = _reply_entry(query)
+    kind, choices = entry.reply, entry.reply_choices
+    text = reply.strip()
+    if kind == "text":
+        return text
+    if kind == "choice":
+        if text not in choices:
+            raise ValueError(f"expected one of {', '.join(choices)}")
+        return text
+    if kind == "flag":
+        if text not in ("0", "1"):
+            raise ValueError("expected 0 or 1")
+        return text == "1"
+    try:
+        x = float(text)
+    except ValueError:
+        raise ValueError("expected a number") from None
+    if not math.isfinite(x):
+        raise ValueError("expected a finite number")
+    if kind == "integer":
+        if x != int(x):
+            raise ValueError("expected an integer")
+        return int(x)
+    if kind == "number":
+        return x
+    raise ValueError(f"{query} does not answer one line")
+
+
+def _reply_entry(query: str) -> Mnemonic:
+    """The entry that says what ``query`` answers: a query's own, or the setting
+    whose read-back it is (``FRS?``)."""
+    entry = COMMANDS.get(query)
+    if entry is not None and entry.kind == "query":
+        return entry
+    if query.endswith("?"):
+        setting = COMMANDS.get(query[:-1])
+        if setting is not None and setting.kind == "setting":
+            return setting
+    raise KeyError(f"{query} is not a query of the driver's command table")
+
+
+def ascii_message(text: str) -> bytes:
+    """``text`` as the bytes of one message: ASCII, one line, not empty."""
+    try:
+        data = text.strip().encode("ascii")
+    except UnicodeEncodeError:
+        raise ValueError(f"commands are ASCII: {text!r}") from None
+    if not data or b"\n" in data or b"\r" in data:
+        raise ValueError("one command line, not empty")
+    return data
 
 
 def replies(text: str) -> list[str]:
     """The reply kind of each command in a message that answers (``FRS?`` -> line).
 
-    A setting's query form (``FRS?``) answers a line; a mnemonic the table does
-    not know is taken to answer a line if it ends with ``?``.
+    ``line`` for any one-line reply, ``block`` for #A blocks, ``lines`` for ASCII
+    dumps. A setting's query form answers a line; a mnemonic the table does not
+    know is taken to answer a line if it ends with ``?``.
     """
     kinds = []
     for part in text.split(";"):
         head = part.strip().split(" ")[0].upper()
         if not head:
             continue
-        entry = COMMANDS.get(head)
-        kind = entry.reply if entry is not None else ("line" if head.endswith("?") else "none")
+        try:
+            kind: str = _reply_entry(head).reply
+        except KeyError:
+            kind = "line" if head.endswith("?") else "none"
+        if kind not in ("none", "block", "lines"):
+            kind = "line"
         if kind != "none":
             kinds.append(kind)
     return kinds

@@ -16,7 +16,14 @@ class ConnectionLost(DriverError):
 
 
 class InstrumentTimeout(DriverError):
-    """The instrument did not answer in time."""
+    """The instrument did not answer in time.
+
+    ``instrument_answers``: True if it answered the driver's probe (ID?) after the
+    timeout, so it lives and may have refused the exchange (the reason is then in
+    its error queue, for ``errors()``); False if it answers nothing; None if not probed.
+    """
+
+    instrument_answers: bool | None = None
 
 
 class ResourceBusy(DriverError):

@@ -16,11 +16,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
-from drivers.blocks import decode_values, parse_block_header
-from drivers.commands import COMMANDS, STATUS_BITS, replies
+from drivers.commands import COMMANDS, STATUS_BITS, ascii_message, command, parse_reply, replies
+from drivers.dumps import DumpsMixin
 from drivers.errors import ConnectionLost, DriverError, InstrumentError, InstrumentTimeout, ProtocolError
+from drivers.record import record_length_s
 from drivers.settings import ChannelSetup, ImpactSettings, Window
-from drivers.trace import Trace
 from drivers.transport import Transport
 
 log = logging.getLogger(__name__)
@@ -28,11 +28,11 @@ T = TypeVar("T")
 
 #: How long a technician may take to hit once the analyzer is armed, s (default).
 HIT_ALLOWANCE_S = 60.0
-#: How long to wait for ERR? after a timeout before calling the instrument silent, s.
+#: After a timeout, the query that tells a live instrument from a silent one: it
+#: changes nothing, and leaves the error queue to whoever asks ERR?.
+PROBE = "ID?"
+#: How long to wait for the probe's reply before calling the instrument silent, s.
 PROBE_TIMEOUT_S = 0.5
-#: The 35660A's record: 1024 real points at baseband, 512 complex in zoom; 401 lines.
-TIME_POINTS = {False: 1024, True: 512}
-SPECTRUM_LINES = 401
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class Status:
         return ", ".join(names) or "idle"
 
 
-class HP35660A:
+class HP35660A(DumpsMixin):
     """Drive an HP 35660A through a ``Transport``.
 
     retries : extra attempts for an exchange that failed but may be repeated.
@@ -97,7 +97,7 @@ class HP35660A:
         # attempt and its clean-up no other thread may read the late reply.
         with self.transport.lock:
             last: DriverError | None = None
-            silent = False
+            silent = alive = False
             self._recovery_error = None
             for attempt in range(self.retries + 1):
                 try:
@@ -110,13 +110,11 @@ class HP35660A:
                         "%s: %s; recovering, attempt %d of %d", what, exc, attempt + 2, self.retries + 1
                     )
                     self._recover(exc)
-                    if (
-                        isinstance(exc, InstrumentTimeout)
-                        and what != "ERR?"
-                        and not self._instrument_answers()
-                    ):
-                        silent = True  # another attempt would only wait out the timeout again
-                        break
+                    if isinstance(exc, InstrumentTimeout):
+                        alive = self._instrument_answers()
+                        if not alive:
+                            silent = True  # another attempt would only wait out the timeout again
+                            break
             assert last is not None
             # Leave the link clean for whoever talks next: a late or partial reply of
             # this failed exchange must never be read as the answer to another.
@@ -124,28 +122,31 @@ class HP35660A:
             if isinstance(last, ConnectionLost) and self._recovery_error is not None:
                 raise self._recovery_error  # "connection refused" says more than "not open"
             if silent:
-                last.args = (f"{last.args[0]} (the instrument answers nothing, not even ERR?)",)
+                last.instrument_answers = False  # type: ignore[attr-defined]
+                last.args = (f"{last.args[0]} (the instrument answers nothing, not even {PROBE})",)
             elif repeatable and self.retries:
-                last.args = (f"{last.args[0]} (after {attempt + 1} attempt{'s' if attempt else ''})",)
+                # An instrument that answers the probe but not this may have refused it:
+                # the reason is in its error queue, left there for errors().
+                hint = f"; it answers {PROBE}, errors() may say why" if alive else ""
+                if isinstance(last, InstrumentTimeout):
+                    last.instrument_answers = alive
+                last.args = (f"{last.args[0]} (after {attempt + 1} attempt{'s' if attempt else ''}{hint})",)
             raise last
 
     def _instrument_answers(self) -> bool:
-        """After a timeout: ask ERR? with a short timeout. An instrument refuses a
-        query by not answering it, and says why in its error queue: raise that.
-        False if it does not even answer this."""
+        """After a timeout: does the instrument answer the probe (ID?) within a short
+        timeout? Only that: an error it queued for the failed exchange stays queued
+        for ``errors()``; popping it here would lose it and blame this exchange."""
         saved = self.transport.timeout_s
         self.transport.timeout_s = min(PROBE_TIMEOUT_S, saved)
         try:
-            self.transport.write(b"ERR?")
-            reply = _decode_line(self.transport.read_line(), "ERR?")
+            self.transport.write(PROBE.encode("ascii"))
+            _decode_line(self.transport.read_line(), PROBE)
         except DriverError as exc:
             self._recover(exc)
             return False
         finally:
             self.transport.timeout_s = saved
-        code, _, message = reply.partition(",")
-        if code.strip().isdigit() and int(code) != 0:
-            raise InstrumentError(int(code), message.strip().strip('"'))
         return True
 
     def _recover(self, exc: DriverError) -> None:
@@ -160,7 +161,7 @@ class HP35660A:
 
     def send(self, text: str) -> None:
         """Send a command as typed; it must not be one that answers (use ``query``)."""
-        data = _ascii(text)
+        data = ascii_message(text)
         if answering := replies(text):
             raise ValueError(f"{text!r} answers ({answering[0]}): use query, or a fetch for a dump")
         repeatable = _repeatable(text)
@@ -168,7 +169,7 @@ class HP35660A:
 
     def query(self, text: str) -> str:
         """Send a message whose one reply is one line; return it without CR LF."""
-        data = _ascii(text)
+        data = ascii_message(text)
         kinds = replies(text)
         if kinds != ["line"]:
             what = "no reply" if not kinds else f"replies {' + '.join(kinds)}"
@@ -193,15 +194,23 @@ class HP35660A:
             raise ProtocolError(text, "non-finite number in the reply", reply.encode())
         return values
 
-    def _read_block(self, name: str) -> bytes:
-        head = self.transport.read_exact(4)
-        header = parse_block_header(head, name)
-        if header.payload_bytes is None or header.kind != "A":
-            raise ProtocolError(name, "expected an #A block", head)
+    def read(self, mnemonic: str) -> float | int | bool | str:
+        """A setting read back (``read("FRS")`` asks FRS?) or a one-line query
+        (``read("AVMD?")``), typed by the command table: float (SI), int, bool or str."""
+        entry = COMMANDS.get(mnemonic)
+        if entry is None:
+            raise KeyError(f"{mnemonic} is not in the driver's command table")
+        query = entry.readback or mnemonic
+        reply = self.query(query)
         try:
-            return self.transport.read_exact(header.payload_bytes)
-        except InstrumentTimeout as exc:
-            raise ProtocolError(name, f"truncated block: {exc}", head) from None
+            return parse_reply(query, reply)
+        except ValueError as exc:
+            raise ProtocolError(query, str(exc), reply.encode()) from None
+
+    def set(self, mnemonic: str, value: object = None) -> None:
+        """Send one table entry with its argument, spelled by the table:
+        ``set("FRS", 200.0)`` sends ``FRS 200 HZ``."""
+        self.send(command(mnemonic, value).decode("ascii"))
 
     # ------------------------------------------------------------ instrument
     def identify(self) -> str:
@@ -213,10 +222,10 @@ class HP35660A:
         self._record_length_s = None
 
     def status(self) -> Status:
-        reply = self.query("STA?")
-        if not reply.isdigit() or int(reply) > 255:
-            raise ProtocolError("STA?", "expected a status byte", reply.encode())
-        return Status(int(reply))
+        bits = self.read("STA?")
+        if not 0 <= bits <= 255:  # type: ignore[operator]
+            raise ProtocolError("STA?", "expected a status byte", str(bits).encode())
+        return Status(int(bits))
 
     def errors(self) -> list[tuple[int, str]]:
         """Drain the instrument's error queue, oldest first."""
@@ -251,9 +260,9 @@ class HP35660A:
         self.check_errors()
         # The analyzer rounds the span up; the baseband center follows the span it chose,
         # and the pre-trigger must fit the record of that span.
-        actual_span = self.query_values("FRS?", 1)[0]
-        if settings.pre_trigger_s > 400.0 / actual_span * (1 + 1e-9):
-            record = 400.0 / actual_span
+        actual_span = float(self.read("FRS"))
+        record = record_length_s(actual_span)
+        if settings.pre_trigger_s > record * (1 + 1e-9):
             raise ValueError(
                 f"pre-trigger {settings.pre_trigger_s:g} s is longer than the {record:g} s record "
                 f"of the {actual_span:g} Hz span the analyzer chose"
@@ -268,36 +277,25 @@ class HP35660A:
     def read_settings(self) -> ImpactSettings:
         """The impact-test settings the analyzer holds now."""
 
-        def number(q: str) -> float:
-            return self.query_values(q, 1)[0]
-
-        def choice(q: str, allowed: tuple[str, ...]) -> str:
-            reply = self.query(q)
-            if reply not in allowed:
-                raise ProtocolError(q, f"expected one of {', '.join(allowed)}", reply.encode())
-            return reply
-
-        def flag(q: str) -> bool:
-            return bool(choice(q, ("0", "1")) == "1")
-
-        span = number("FRS?")
-        center = number("CF?")
+        # The order of the queries is the golden transcripts' (tests/drivers/test_protocol.py).
+        span = float(self.read("FRS"))
+        center = float(self.read("CF"))
         channels = []
         for ch in (1, 2):
             channels.append(
                 ChannelSetup(
-                    window=Window(choice(f"WIN{ch}?", tuple(w.value for w in Window))),
-                    sensitivity_v_per_eu=number(f"SNS{ch}?"),
-                    range_v=None if flag(f"AU{ch}?") else number(f"RNG{ch}?"),
-                    force_width_s=number(f"FWD{ch}?"),
-                    exp_decay_s=number(f"EXD{ch}?"),
-                    ac_coupled=flag(f"C{ch}AC?"),
+                    window=Window(self.read(f"WIN{ch}")),
+                    sensitivity_v_per_eu=float(self.read(f"SNS{ch}")),
+                    range_v=None if self.read(f"AU{ch}?") else float(self.read(f"RNG{ch}")),
+                    force_width_s=float(self.read(f"FWD{ch}")),
+                    exp_decay_s=float(self.read(f"EXD{ch}")),
+                    ac_coupled=bool(self.read(f"C{ch}AC")),
                 )
             )
-        source = choice("TSRC?", ("CH1", "CH2", "FREE"))
-        level_v = number("TLVL?")
+        source = str(self.read("TSRC"))
+        level_v = float(self.read("TLVL"))
         trigger_channel = channels[1] if source == "CH2" else channels[0]
-        averaging = choice("AVMD?", ("STBL", "AVOF"))
+        averaging = self.read("AVMD?")
         settings = ImpactSettings(
             span_hz=span,
             center_hz=None if math.isclose(center, span / 2, rel_tol=1e-9) else center,
@@ -305,10 +303,10 @@ class HP35660A:
             accelerometer=channels[1],
             trigger_source=source,
             trigger_level_eu=level_v / trigger_channel.sensitivity_v_per_eu,
-            trigger_slope=choice("TSLP?", ("POS", "NEG")),
-            pre_trigger_s=max(0.0, -number("TDLY?")),
-            averages=1 if averaging == "AVOF" else int(number("NAVG?")),
-            preview=flag("PRVW?"),
+            trigger_slope=str(self.read("TSLP")),
+            pre_trigger_s=max(0.0, -float(self.read("TDLY"))),
+            averages=1 if averaging == "AVOF" else int(self.read("NAVG")),
+            preview=bool(self.read("PRVW")),
         )
         self._record_length_s = settings.record_length_s
         return settings
@@ -316,7 +314,7 @@ class HP35660A:
     # ------------------------------------------------------------ measuring
     def _record_length(self) -> float:
         if self._record_length_s is None:
-            self._record_length_s = 400.0 / self.query_values("FRS?", 1)[0]
+            self._record_length_s = record_length_s(float(self.read("FRS")))
         return self._record_length_s
 
     def start(self) -> None:
@@ -341,10 +339,7 @@ class HP35660A:
             self.check_errors()
 
     def averages_done(self) -> int:
-        reply = self.query("AVG?")
-        if not reply.isdigit():
-            raise ProtocolError("AVG?", "expected a count", reply.encode())
-        return int(reply)
+        return int(self.read("AVG?"))
 
     def wait_for(self, done: Callable[[Status], bool], what: str, timeout_s: float | None = None) -> Status:
         """Poll the status until ``done(status)``; the default timeout is the hit
@@ -386,72 +381,6 @@ class HP35660A:
             else n * (self.hit_allowance_s + 2 * self._record_length()) + 1.0
         )
         return self.wait_for(lambda s: s.done, "waiting for the measurement to finish", timeout)
-
-    # ------------------------------------------------------------ data
-    def fetch_trace(self, function: str) -> Trace:
-        """Select ``function`` on trace A and dump it in binary (DDAN)."""
-        if function not in ("TIM1", "TIM2", "LSP1", "LSP2", "PSP1", "PSP2", "FRSP", "COHR"):
-            raise ValueError(f"unknown display function {function!r}")
-        return self._dump(b"TRCA;" + function.encode() + b";DDAN", f"DDAN of {function}", function)
-
-    def fetch_active_trace(self) -> Trace:
-        """Dump the active trace as the analyzer shows it (DDAN), changing nothing."""
-        return self._dump(b"DDAN", "DDAN", None)
-
-    def dump_trace(self, message: str) -> Trace:
-        """Send ``message``, which must end in DDAN (e.g. ``TRCB;COHR;DDAN``), and decode the dump."""
-        if replies(message) != ["block"] or message.strip().split(";")[-1].strip().upper() != "DDAN":
-            raise ValueError(f"{message!r} must end with DDAN and ask nothing else")
-        return self._dump(_ascii(message), message.strip(), None)
-
-    def _dump(self, message: bytes, name: str, function: str | None) -> Trace:
-        def dump() -> Trace:
-            self.transport.write(message)
-            payload = self._read_block(name)
-            trace = Trace.from_values(decode_values(payload, name), name)
-            self._check_shape(trace, function or trace.header.display_function, name)
-            return trace
-
-        return self._exchange(name, dump)
-
-    @staticmethod
-    def _check_shape(trace: Trace, function: str, name: str) -> None:
-        h = trace.header
-        if h.display_function != function:
-            raise ProtocolError(name, f"asked for {function}, the dump holds {h.display_function}")
-        if function.startswith("TIM"):
-            if not h.time_domain or h.n_points != TIME_POINTS[h.complex_data]:
-                raise ProtocolError(
-                    name, f"a time record has 1024 real or 512 complex points, got {h.n_points}"
-                )
-        elif h.time_domain or h.n_points != SPECTRUM_LINES:
-            raise ProtocolError(name, f"a spectrum has {SPECTRUM_LINES} lines, got {h.n_points}")
-
-    def fetch_time_records(self) -> tuple[Trace, Trace]:
-        """(force N, acceleration m/s^2) of the last hit: 1024 real points, or 512 complex in zoom."""
-        return self.fetch_trace("TIM1"), self.fetch_trace("TIM2")
-
-    def fetch_linear_spectra(self) -> tuple[Trace, Trace]:
-        """Averaged peak linear spectra of both channels, 401 complex lines."""
-        return self.fetch_trace("LSP1"), self.fetch_trace("LSP2")
-
-    def fetch_frf(self) -> Trace:
-        """The averaged frequency response ch2/ch1 (H1), 401 complex lines, (m/s^2)/N."""
-        return self.fetch_trace("FRSP")
-
-    def fetch_coherence(self) -> Trace:
-        """The coherence of the average, 401 real lines."""
-        return self.fetch_trace("COHR")
-
-
-def _ascii(text: str) -> bytes:
-    try:
-        data = text.strip().encode("ascii")
-    except UnicodeEncodeError:
-        raise ValueError(f"commands are ASCII: {text!r}") from None
-    if not data or b"\n" in data or b"\r" in data:
-        raise ValueError("one command line, not empty")
-    return data
 
 
 def _repeatable(text: str) -> bool:

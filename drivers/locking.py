@@ -2,15 +2,25 @@
 
 ``flock`` on a file named after the resource: the kernel releases it when the
 holding process dies, so a crash never leaves an instrument locked.
+
+The files live in a directory of the user's own (``lock_directory``): a directory
+shared by every user, such as ``/tmp/daq-locks``, could be created by another
+user first, who could then plant a symlink named like a lock file and have our
+open truncate the file it points to. So the directory is created 0700, refused
+unless it is ours and writable by nobody else, and lock files are opened without
+following symlinks and without truncating. Two users still cannot drive one
+GPIB bus at once: the bus itself (its device file) is theirs to share through
+group permissions, not through these files.
 """
 
 from __future__ import annotations
 
-import contextlib
+import errno
 import fcntl
 import hashlib
 import os
 import re
+import stat
 import tempfile
 from pathlib import Path
 
@@ -18,17 +28,43 @@ from drivers.errors import ConnectionFailed, ResourceBusy
 
 
 def lock_directory() -> Path:
-    """$DAQ_LOCK_DIR, else <tmp>/daq-locks: one directory for every user of the
-    machine, so that two technicians cannot drive one instrument at once."""
+    """$DAQ_LOCK_DIR, else $XDG_RUNTIME_DIR/daq-locks, else <tmp>/daq-locks-<uid>:
+    a directory of this user's, never one shared with other users."""
     if os.environ.get("DAQ_LOCK_DIR"):
         return Path(os.environ["DAQ_LOCK_DIR"])
-    return Path(tempfile.gettempdir()) / "daq-locks"
+    if os.environ.get("XDG_RUNTIME_DIR"):
+        return Path(os.environ["XDG_RUNTIME_DIR"]) / "daq-locks"
+    return Path(tempfile.gettempdir()) / f"daq-locks-{os.getuid()}"
 
 
 def lock_path(resource: str) -> Path:
     readable = re.sub(r"[^A-Za-z0-9]+", "_", resource).strip("_")[:60]
     digest = hashlib.sha1(resource.encode()).hexdigest()[:10]
     return lock_directory() / f"{readable}-{digest}.lock"
+
+
+def check_lock_directory(directory: Path) -> None:
+    """Create ``directory`` (0700) if absent; refuse one that is not a real
+    directory of ours, or that others may write to (ConnectionFailed, saying why)."""
+    try:
+        directory.mkdir(mode=0o700, parents=True, exist_ok=True)
+        info = os.lstat(directory)
+    except OSError as exc:
+        raise ConnectionFailed(
+            f"cannot create the lock directory {directory}: {exc.strerror or exc}"
+        ) from None
+    if not stat.S_ISDIR(info.st_mode):
+        raise ConnectionFailed(f"lock directory {directory} is not a directory (a symlink or a file)")
+    if info.st_uid != os.getuid():
+        raise ConnectionFailed(
+            f"lock directory {directory} belongs to uid {info.st_uid}, not to us (uid {os.getuid()}): "
+            "refused, another user could plant files in it; set DAQ_LOCK_DIR to a directory of yours"
+        )
+    if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        raise ConnectionFailed(
+            f"lock directory {directory} is writable by others (mode {stat.S_IMODE(info.st_mode):04o}): "
+            f"refused; chmod 700 {directory}"
+        )
 
 
 class ResourceLock:
@@ -45,12 +81,17 @@ class ResourceLock:
     def acquire(self) -> None:
         if self._fd is not None:
             return
+        check_lock_directory(self.path.parent)
         try:
-            fd = self._open_file()
+            # No O_TRUNC: the holder's pid must survive a refused attempt. O_NOFOLLOW:
+            # a symlink in the lock file's place is refused (ELOOP), never followed.
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
         except OSError as exc:
-            raise ConnectionFailed(
-                f"cannot create the lock file {self.path}: {exc.strerror or exc}"
-            ) from None
+            reason = "it is a symlink" if exc.errno == errno.ELOOP else exc.strerror or exc
+            raise ConnectionFailed(f"cannot create the lock file {self.path}: {reason}") from None
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            os.close(fd)
+            raise ConnectionFailed(f"lock file {self.path} is not a regular file: refused")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -59,21 +100,10 @@ class ResourceLock:
             where = "this process" if holder == str(os.getpid()) else f"another process (pid {holder})"
             shared = f" (it shares {self.key})" if self.key != self.label else ""
             raise ResourceBusy(f"{self.label} is in use by {where}{shared}") from None
+        # Ours now: the pid replaces whatever a dead holder left.
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         self._fd = fd
-
-    def _open_file(self) -> int:
-        directory = self.path.parent
-        if not directory.is_dir():
-            directory.mkdir(parents=True, exist_ok=True)
-            # Sticky and writable by all, like /tmp: every user's locks live here.
-            with contextlib.suppress(OSError):
-                os.chmod(directory, 0o1777)
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
-        with contextlib.suppress(OSError):  # another user's file: keep its mode
-            os.fchmod(fd, 0o666)
-        return fd
 
     def release(self) -> None:
         if self._fd is None:

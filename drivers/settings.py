@@ -8,20 +8,40 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 
-from drivers.commands import command
-
-RECORD_LINES = 400
+from drivers.commands import SLOPES, TRIGGER_SOURCES, WINDOWS, command
+from drivers.record import record_length_s
 
 
 class Window(StrEnum):
+    """The windows of WIN1/WIN2, as the table (WINDOWS) spells them."""
+
     UNIFORM = "UNIF"
     HANNING = "HANN"
     FLAT_TOP = "FLAT"
     FORCE = "FORC"
     EXPONENTIAL = "EXPO"
+
+
+if tuple(Window) != WINDOWS:  # an edit of the table must not leave this enum behind
+    raise ImportError(f"drivers.settings.Window {tuple(Window)} differs from the table's {WINDOWS}")
+
+
+#: Defaults that scale with the record (T = 400 / span), so that one setup suits
+#: every span. The analyzer's decimating filters spread a hammer pulse shorter than a
+#: sample over some ten samples on either side of it (docs/simulator.md,
+#: "Anti-alias filtering and decimation"); a fixed 20 ms pre-trigger or 50 ms force
+#: window is less than one sample at a 12.5 Hz span and cuts that spread off.
+#: - pre-trigger T/32 (32 samples): the pulse's spread before the trigger;
+#: - force window T/16 from the record's start: the pulse and its spread after it;
+#: - exponential decay T/6: the response falls to e^-6 = 0.25 % by the record's end.
+#: Measured (bench/sim_frf_accuracy.py): the simulated FRF is then the window-corrected
+#: model within 0.5 % from 3.125 Hz to 200 Hz spans, baseband and zoom.
+PRE_TRIGGER_PER_RECORD = 1 / 32
+FORCE_WIDTH_PER_RECORD = 1 / 16
+EXP_DECAY_PER_RECORD = 1 / 6
 
 
 def _positive(name: str, value: float) -> None:
@@ -35,15 +55,17 @@ class ChannelSetup:
 
     sensitivity_v_per_eu : V per N (hammer) or V per m/s^2 (accelerometer).
     range_v : full-scale peak input voltage; None = autorange.
-    force_width_s : width of the force window from the start of the record, s.
-    exp_decay_s : time constant of the exponential window, s.
+    force_width_s : width of the force window from the start of the record, s;
+        None = FORCE_WIDTH_PER_RECORD of the record (set by ImpactSettings).
+    exp_decay_s : time constant of the exponential window, s; None =
+        EXP_DECAY_PER_RECORD of the record (set by ImpactSettings).
     """
 
     window: Window
     sensitivity_v_per_eu: float
     range_v: float | None = 1.0
-    force_width_s: float = 0.05
-    exp_decay_s: float = 1.0
+    force_width_s: float | None = None
+    exp_decay_s: float | None = None
     ac_coupled: bool = False
 
     def __post_init__(self) -> None:
@@ -51,20 +73,32 @@ class ChannelSetup:
         _positive("sensitivity_v_per_eu", self.sensitivity_v_per_eu)
         if self.range_v is not None:
             _positive("range_v", self.range_v)
-        _positive("force_width_s", self.force_width_s)
-        _positive("exp_decay_s", self.exp_decay_s)
+        if self.force_width_s is not None:
+            _positive("force_width_s", self.force_width_s)
+        if self.exp_decay_s is not None:
+            _positive("exp_decay_s", self.exp_decay_s)
+
+    def for_record(self, record_s: float) -> ChannelSetup:
+        """This setup with the windows it leaves open sized to a record of ``record_s``."""
+        return replace(
+            self,
+            force_width_s=FORCE_WIDTH_PER_RECORD * record_s
+            if self.force_width_s is None
+            else self.force_width_s,
+            exp_decay_s=EXP_DECAY_PER_RECORD * record_s if self.exp_decay_s is None else self.exp_decay_s,
+        )
 
 
 def _hammer() -> ChannelSetup:
     # PCB 086C03-like hammer, 2.25 mV/N; the force window keeps the pulse only.
-    return ChannelSetup(Window.FORCE, 2.25e-3, range_v=0.02, force_width_s=0.05)
+    return ChannelSetup(Window.FORCE, 2.25e-3, range_v=0.02)
 
 
 def _accelerometer() -> ChannelSetup:
     # 10 mV/g = 1.02 mV/(m/s^2); a tap at the tip of the light beam peaks near
     # 1000 m/s^2 before the anti-alias filter, hence 1 V. An exponential window makes
     # the response decay within the record (it adds known damping: 1/exp_decay_s, rad/s).
-    return ChannelSetup(Window.EXPONENTIAL, 1.02e-3, range_v=1.0, exp_decay_s=0.5)
+    return ChannelSetup(Window.EXPONENTIAL, 1.02e-3, range_v=1.0)
 
 
 @dataclass(frozen=True)
@@ -74,7 +108,10 @@ class ImpactSettings:
     span_hz : frequency span (the analyzer rounds up to 102.4 kHz / 2^n).
     center_hz : None for baseband (0 to span); otherwise a zoom around it.
     trigger_level_eu : level in the trigger channel's unit (N for CH1).
-    pre_trigger_s : how much of the record comes before the trigger, s (<= one record).
+    pre_trigger_s : how much of the record comes before the trigger, s (<= one record);
+        None = PRE_TRIGGER_PER_RECORD of the record.
+    Window widths and the pre-trigger left as None are sized to the record on
+    construction, so every field of a constructed ImpactSettings holds a number.
     averages : hits averaged (stable averaging).
     preview : every hit waits to be accepted or rejected.
     """
@@ -86,7 +123,7 @@ class ImpactSettings:
     trigger_source: str = "CH1"
     trigger_level_eu: float = 1.0
     trigger_slope: str = "POS"
-    pre_trigger_s: float = 0.02
+    pre_trigger_s: float | None = None
     averages: int = 5
     preview: bool = True
 
@@ -96,12 +133,19 @@ class ImpactSettings:
             math.isfinite(self.center_hz) and self.center_hz >= self.span_hz / 2 * (1 - 1e-12)
         ):
             raise ValueError(f"center_hz must be at least span/2 = {self.span_hz / 2:g} Hz")
-        if self.trigger_source not in ("CH1", "CH2", "FREE"):
-            raise ValueError(f"trigger_source must be CH1, CH2 or FREE, got {self.trigger_source!r}")
-        if self.trigger_slope not in ("POS", "NEG"):
-            raise ValueError(f"trigger_slope must be POS or NEG, got {self.trigger_slope!r}")
+        if self.trigger_source not in TRIGGER_SOURCES:
+            raise ValueError(
+                f"trigger_source must be one of {', '.join(TRIGGER_SOURCES)}, got {self.trigger_source!r}"
+            )
+        if self.trigger_slope not in SLOPES:
+            raise ValueError(f"trigger_slope must be one of {', '.join(SLOPES)}, got {self.trigger_slope!r}")
         if not math.isfinite(self.trigger_level_eu):
             raise ValueError("trigger_level_eu must be finite")
+        record_s = self.record_length_s
+        object.__setattr__(self, "hammer", self.hammer.for_record(record_s))
+        object.__setattr__(self, "accelerometer", self.accelerometer.for_record(record_s))
+        if self.pre_trigger_s is None:
+            object.__setattr__(self, "pre_trigger_s", PRE_TRIGGER_PER_RECORD * record_s)
         if not (math.isfinite(self.pre_trigger_s) and 0 <= self.pre_trigger_s <= self.record_length_s):
             raise ValueError(f"pre_trigger_s must be 0..{self.record_length_s:g} s (one record)")
         if not (isinstance(self.averages, numbers.Integral) and 1 <= self.averages <= 9999):
@@ -110,8 +154,8 @@ class ImpactSettings:
 
     @property
     def record_length_s(self) -> float:
-        """Length of one time record: 400 lines / span."""
-        return RECORD_LINES / self.span_hz
+        """Length of one time record, s (drivers/record.py: 400 lines / span)."""
+        return record_length_s(self.span_hz)
 
     @property
     def trigger_level_v(self) -> float:
@@ -125,30 +169,29 @@ class ImpactSettings:
         102.4 kHz / 2^n); at baseband the center must be half of that one.
         """
         span = self.span_hz if actual_span_hz is None else actual_span_hz
+        # The table (drivers/commands.py) spells each message: mnemonic, argument, unit.
         out = [
             command("FRQR"),
             command("LNRS"),
-            command("FRS", float(self.span_hz), "HZ"),
-            command("CF", float(self.center_hz if self.center_hz is not None else span / 2), "HZ"),
+            command("FRS", self.span_hz),
+            command("CF", self.center_hz if self.center_hz is not None else span / 2),
         ]
         for ch, setup in ((1, self.hammer), (2, self.accelerometer)):
             out += [
                 command(f"WIN{ch}", setup.window.value),
-                command(f"FWD{ch}", float(setup.force_width_s), "S"),
-                command(f"EXD{ch}", float(setup.exp_decay_s), "S"),
-                command(f"SNS{ch}", float(setup.sensitivity_v_per_eu), "V"),
-                command(f"C{ch}AC", int(setup.ac_coupled)),
-                command(f"AU{ch}")
-                if setup.range_v is None
-                else command(f"RNG{ch}", float(setup.range_v), "V"),
+                command(f"FWD{ch}", setup.force_width_s),
+                command(f"EXD{ch}", setup.exp_decay_s),
+                command(f"SNS{ch}", setup.sensitivity_v_per_eu),
+                command(f"C{ch}AC", setup.ac_coupled),
+                command(f"AU{ch}") if setup.range_v is None else command(f"RNG{ch}", setup.range_v),
             ]
         out += [
             command("TSRC", self.trigger_source),
-            command("TLVL", float(self.trigger_level_v), "V"),
+            command("TLVL", self.trigger_level_v),
             command("TSLP", self.trigger_slope),
-            command("TDLY", -float(self.pre_trigger_s) + 0.0, "S"),  # + 0.0: never "-0"
+            command("TDLY", -self.pre_trigger_s),
             command("NAVG", self.averages),
             command("STBL"),
-            command("PRVW", int(self.preview)),
+            command("PRVW", self.preview),
         ]
         return out

@@ -1,11 +1,12 @@
 """A trace the analyzer dumped: its decoded 66-value header and its data.
 
-Header words (DESIGN.md section 4; codes ours where no source gives them, a
-two-way flag is 0 for the first-named option): 0 display function, 1 number of
-elements, 2 elements displayed, 3 number of averages, 4 channel (3 = ch2/ch1),
-5 overflow, 6 overlap %, 7 domain (0 time, 1 frequency), 8 peak/rms, 9 y units,
-10 x units, 35 float/integer, 36 complex/real (0 complex), 40 log/linear,
-43 measurement mode, 52/53 half the sample rate, 55 delta-x, 64 start x.
+Header words (docs/instrument.md; documented for the 3562A family unless marked
+proj): 0 display function (DISPLAY_CODES), 1 number of elements, 2 elements
+displayed, 3 number of averages, 4 channel (proj: 1, 2, 3 = ch2/ch1), 5 overflow,
+6 overlap %, 7 domain (0 time, 1 frequency), 8 peak/rms, 9 y units (proj codes:
+Y_UNITS), 10 x units (1 Hz, 4 s), 35 float/integer, 36 complex/real (0 complex),
+40 log/linear, 43 measurement mode, 52/53 half the sample rate, 55 delta x,
+64 start x (start frequency, or start time = trigger delay for a time record).
 """
 
 from __future__ import annotations
@@ -14,10 +15,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.commands import DISPLAY_CODES, X_UNITS, Y_UNITS
 from drivers.errors import ProtocolError
 
 HEADER_LENGTH = 66
+
+#: Header word 0: the documented display-function codes, under our display mnemonics
+#: (8 and 9 are the linear spectra, 6 and 7 the time records; 5 cross spectrum and
+#: 10 impulse response exist but the driver never selects them).
+DISPLAY_CODES = {1: "FRSP", 2: "PSP1", 3: "PSP2", 4: "COHR", 6: "TIM1", 7: "TIM2", 8: "LSP1", 9: "LSP2"}
+#: Header word 7 (documented).
+DOMAIN_TIME, DOMAIN_FREQUENCY = 0, 1
+#: Header word 10 (documented).
+X_UNITS = {1: "Hz", 4: "s"}
+#: Header word 9: the documents give no codes, these are ours (proj).
+Y_UNITS = {0: "V", 1: "N", 2: "m/s^2", 3: "(m/s^2)/N", 4: "", 5: "N^2", 6: "(m/s^2)^2"}
 
 
 def _code(values: np.ndarray, index: int, table: dict[int, str], what: str, command: str) -> str:
@@ -73,7 +84,8 @@ class TraceHeader:
             raise ProtocolError(
                 command, "header words 52 (half sample rate) and 55 (delta-x) must be positive"
             )
-        time_domain = not _flag(h, 7, "domain", command)
+        _flag(h, 7, "domain", command)  # checks the word is 0 or 1
+        time_domain = bool(h[7] == DOMAIN_TIME)
         x_units = _code(h, 10, X_UNITS, "x units", command)
         if (x_units == "s") != time_domain:
             raise ProtocolError(command, f"header: x units {x_units} do not fit the domain")

@@ -24,7 +24,8 @@ class VisaTransport(Transport):
         self, resource: str, timeout_s: float = 5.0, backend: str = "@py", lock_file: bool = True
     ) -> None:
         resource = _normalise(resource)
-        super().__init__(resource, timeout_s, lock_file, lock_key=_lock_key(resource))
+        # The lock key resolves a host name (DNS): only worth it when a lock is wanted.
+        super().__init__(resource, timeout_s, lock_file, lock_key=_lock_key(resource) if lock_file else None)
         self.backend = backend
         self._inst = None
 
@@ -46,19 +47,21 @@ class VisaTransport(Transport):
         self._inst.read_termination = "\n"
         self._inst.write_termination = "\n"
         self._apply_timeout()
-        if self.is_socket:
+        if self.is_socket and self.backend == "@py":
             self._check_connected()
 
     def _check_connected(self) -> None:
         """pyvisa-py's socket open reports success even when the connection was
         refused (its select sees the failed socket as ready); ask the socket."""
         try:
-            sock = self._inst.visalib.sessions[self._inst.session].interface
+            sock = pyvisa_py_socket(self._inst)
+        except RuntimeError:
+            self._release()
+            raise
+        try:
             error = sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
             if not error:
                 sock.getpeername()
-        except (AttributeError, KeyError, TypeError):
-            return  # not pyvisa-py's socket session: nothing to ask
         except OSError as exc:
             error = exc.errno or -1
         if error:
@@ -117,6 +120,24 @@ class VisaTransport(Transport):
             self._call("device clear", lambda inst: inst.clear())
         except NotSupported:
             self.reconnect()  # serial ports and some gateways have no device clear
+
+
+def pyvisa_py_socket(inst) -> socket.socket:
+    """The socket under a pyvisa-py TCPIP SOCKET resource.
+
+    pyvisa has no public way to reach it: this reads pyvisa-py's internal session
+    table (``visalib.sessions[session].interface``), the one place the driver does.
+    Anything else than a socket there raises RuntimeError, so that a pyvisa-py
+    release that changes the internal fails loudly (and its test with it) instead
+    of silently skipping the check of a refused connection.
+    """
+    try:
+        sock = inst.visalib.sessions[inst.session].interface
+    except (AttributeError, KeyError, TypeError) as exc:
+        raise RuntimeError(f"pyvisa-py's session table changed, cannot reach the socket: {exc!r}") from None
+    if not isinstance(sock, socket.socket):
+        raise RuntimeError(f"pyvisa-py's session interface is a {type(sock).__name__}, not a socket")
+    return sock
 
 
 def _normalise(resource: str) -> str:

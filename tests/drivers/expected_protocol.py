@@ -1,9 +1,15 @@
 """A transport that checks the exact bytes the driver sends and plays scripted replies,
-in the spirit of PyMeasure's ``expected_protocol``."""
+in the spirit of PyMeasure's ``expected_protocol``: used as a context manager, it
+also checks on exit that every scripted exchange happened and every reply was read,
+so a test whose driver skips an exchange fails."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 from drivers.errors import InstrumentTimeout
+from drivers.hp35660a import HP35660A
 from drivers.transport import Transport
 
 
@@ -49,6 +55,21 @@ class ExpectedProtocol(Transport):
     def _clear(self) -> None:
         self.pending.clear()
 
+    def __enter__(self) -> ExpectedProtocol:
+        return self
+
+    def __exit__(self, exc_type: object, *rest: object) -> None:
+        self.close()
+        if exc_type is None:  # an exception already says what went wrong
+            self.done()
+
     def done(self) -> None:
         assert self.position == len(self.steps), f"only {self.position} of {len(self.steps)} steps happened"
         assert not self.pending, f"unread reply {bytes(self.pending)!r}"
+
+
+@contextmanager
+def expected(steps: list[tuple[bytes, bytes | None]], **kwargs: object) -> Iterator[HP35660A]:
+    """A driver on a scripted transport; on leaving, every step must have happened."""
+    with ExpectedProtocol(steps) as transport:
+        yield HP35660A(transport, **kwargs)  # type: ignore[arg-type]

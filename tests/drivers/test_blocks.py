@@ -3,7 +3,7 @@
 Expected bytes are written by hand from the documented formats, never produced
 by drivers.blocks.encode_block:
 
-* HP ``#A`` (DESIGN.md section 4): ``#A``, a 2-byte big-endian byte count, the payload.
+* HP ``#A`` (docs/instrument.md): ``#A``, a 2-byte big-endian byte count, the payload.
 * IEEE 488.2 definite length: ``#``, one digit n, n digits of byte count, the payload.
 * IEEE 488.2 indefinite length: ``#0``, the payload, LF.
 
@@ -19,7 +19,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from drivers.blocks import parse_block
+from drivers.blocks import parse_block, read_ascii_dump
 from drivers.errors import ProtocolError
 from drivers.trace import Trace
 
@@ -352,14 +352,19 @@ def test_arbitrary_bytes_give_finite_values_or_protocol_error(data, dtype, expec
 
 # ------------------------------------------------------------------ traces
 HEADER = 66
-# Codes of drivers/commands.py (DESIGN.md section 4 leaves them to the project).
-DISPLAY = {1: "TIM1", 2: "TIM2", 3: "LSP1", 4: "LSP2", 5: "PSP1", 6: "PSP2", 7: "FRSP", 8: "COHR"}
+# Display-function codes of header word 0 as the 3562A family documents them
+# (docs/instrument.md), under our mnemonics; 5 (cross spectrum) and 10 (impulse
+# response) exist but the driver never asks for them.
+DISPLAY = {1: "FRSP", 2: "PSP1", 3: "PSP2", 4: "COHR", 6: "TIM1", 7: "TIM2", 8: "LSP1", 9: "LSP2"}
+# Header word 10 (documented) and word 7: 0 time, 1 frequency.
+X_UNITS = {1: "Hz", 4: "s"}
+# Header word 9: no documented codes, ours (proj).
 Y_UNITS = {0: "V", 1: "N", 2: "m/s^2", 3: "(m/s^2)/N", 4: "", 5: "N^2", 6: "(m/s^2)^2"}
 
 
 def trace_values(
     n_points: int = 4,
-    display: float = 7.0,
+    display: float = 1.0,
     y_units: float = 3.0,
     time_domain: bool = False,
     complex_data: bool = True,
@@ -375,7 +380,7 @@ def trace_values(
     h[4] = 3  # channel: ch2/ch1
     h[7] = 0.0 if time_domain else 1.0
     h[9] = y_units
-    h[10] = 0.0 if time_domain else 1.0  # x units: s or Hz
+    h[10] = 4.0 if time_domain else 1.0  # x units: s or Hz
     h[36] = 0.0 if complex_data else 1.0
     h[52] = h[53] = 256.0
     h[55] = 1 / 512 if time_domain else 0.5
@@ -399,7 +404,7 @@ def test_trace_header_decodes_by_hand():
 
 def test_real_time_trace_by_hand():
     trace = Trace.from_values(
-        trace_values(n_points=3, display=1, y_units=1, time_domain=True, complex_data=False), CMD
+        trace_values(n_points=3, display=6, y_units=1, time_domain=True, complex_data=False), CMD
     )
     assert trace.header.display_function == "TIM1"
     assert trace.header.x_units == "s"
@@ -411,12 +416,14 @@ def test_real_time_trace_by_hand():
     "words",
     [
         {"display": 0},
-        {"display": 9},
+        {"display": 5},  # cross spectrum: documented, but not a function the driver reads
+        {"display": 11},
         {"display": 7.5},
         {"y_units": 7},
         {"y_units": -1},
         {"w10": 2},  # x units
-        {"w10": 0},  # seconds on a frequency trace
+        {"w10": 0},  # the old project code for seconds
+        {"w10": 4},  # seconds on a frequency trace
         {"w5": 2},  # overflow flag
         {"w7": 0.5},  # domain flag
         {"w36": 3},  # complex/real flag
@@ -451,7 +458,7 @@ def test_trace_rejects_a_short_header():
 @FAST
 @given(word=st.sampled_from([0, 9, 10]), code=finite64)
 def test_trace_rejects_any_unknown_code(word, code):
-    known = {0: DISPLAY, 9: Y_UNITS, 10: {0: "s", 1: "Hz"}}[word]
+    known = {0: DISPLAY, 9: Y_UNITS, 10: X_UNITS}[word]
     if code in known:
         return
     with pytest.raises(ProtocolError, match=f"header word {word} "):
@@ -486,6 +493,8 @@ def test_trace_accepts_any_consistent_header(n_points, display, y_units, time_do
     trace = Trace.from_values(values, CMD)
     assert trace.header.display_function == DISPLAY[display]
     assert trace.header.y_units == Y_UNITS[y_units]
+    assert trace.header.x_units == ("s" if time_domain else "Hz")
+    assert trace.header.time_domain is time_domain
     assert trace.data.shape == (n_points,)
     body = values[HEADER:]
     expected = body[0::2] + 1j * body[1::2] if complex_data else body
@@ -500,3 +509,52 @@ def test_trace_of_arbitrary_finite_values_is_a_trace_or_a_protocol_error(values)
     except ProtocolError:
         return
     assert trace.data.shape == (trace.header.n_points,)
+
+
+# ------------------------------------------------------------------ ASCII dumps
+def lines_of(data: bytes):
+    """read_line over ``data``: one CR LF line per call, InstrumentTimeout at the end."""
+    from drivers.errors import InstrumentTimeout
+
+    pending = data.split(b"\r\n")
+
+    def read_line() -> bytes:
+        if len(pending) <= 1:
+            raise InstrumentTimeout("no more lines")
+        return pending.pop(0)
+
+    return read_line
+
+
+def test_ascii_dump_is_hash_i_then_the_count_then_the_values():
+    data = b"#I\r\n+3.0000000000000000E+00\r\n+1.5E+00\r\n-2.5E-03\r\n+4.0E+02\r\n"
+    assert read_ascii_dump(lines_of(data), "DDAS", 10).tolist() == [1.5, -2.5e-3, 400.0]
+
+
+def test_ascii_dump_count_on_the_hash_i_line_is_taken_too():
+    assert read_ascii_dump(lines_of(b"#I2\r\n1\r\n2\r\n"), "DDAS", 10).tolist() == [1.0, 2.0]
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (b"+3.0E+00\r\n1\r\n2\r\n3\r\n", "starting with '#I'"),  # today's DDAS: no #I
+        (b"#I\r\n2.5\r\n1\r\n2\r\n", "whole number"),
+        (b"#I\r\n11\r\n", "whole number 0..10"),
+        (b"#I\r\n-1\r\n", "whole number"),
+        (b"#I\r\nthree\r\n", "the count of the ASCII dump is not a number"),
+        (b"#I\r\n2\r\n1\r\nnan\r\n", "value 1 of the ASCII dump is not finite"),
+        (b"#I\r\n2\r\n1\r\nFRS 200 HZ\r\n", "value 1 of the ASCII dump is not a number"),
+    ],
+)
+def test_ascii_dump_refuses_what_is_not_one(data, message):
+    with pytest.raises(ProtocolError, match=message) as info:
+        read_ascii_dump(lines_of(data), "DDAS", 10)
+    assert str(info.value).startswith("DDAS: ")
+
+
+def test_ascii_dump_shorter_than_its_count_times_out():
+    from drivers.errors import InstrumentTimeout
+
+    with pytest.raises(InstrumentTimeout):
+        read_ascii_dump(lines_of(b"#I\r\n3\r\n1\r\n2\r\n"), "DDAS", 10)

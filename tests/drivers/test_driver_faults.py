@@ -159,7 +159,7 @@ def test_one_reply_slower_than_the_timeout_is_retried_and_succeeds(make_bench, k
 def test_replies_always_slower_than_the_timeout_end_in_a_timeout_and_the_driver_recovers(
     make_bench, kind, caplog
 ) -> None:
-    """Every reply is late: the driver's ERR? probe after the first timeout goes
+    """Every reply is late: the driver's ID? probe after the first timeout goes
     unanswered too, so it gives up at once (no point waiting out more timeouts),
     and leaves the link clean: the late replies never answer later queries."""
     bench = make_bench(kind, faults=["slow,delay=0.8,count=always"])
@@ -174,6 +174,22 @@ def test_replies_always_slower_than_the_timeout_end_in_a_timeout_and_the_driver_
         drv.send("SIM:FAULT CLEAR")
         assert drv.identify() == "HP35660A"
         assert drv.query("FRS?") == expected_span(bench.analyzer)
+
+
+@pytest.mark.timeout(10)
+@pytest.mark.parametrize("kind", TRANSPORTS)
+def test_a_slow_reply_does_not_pop_an_error_left_by_an_earlier_command(make_bench, kind, caplog) -> None:
+    """FOO is queued as an instrument error; FRS? is then answered late once. The
+    driver's recovery must tell a live instrument from a silent one without ERR?:
+    FRS? gets its own reply, and the FOO error is still queued for check_errors()."""
+    bench = make_bench(kind)
+    with opened(bench) as drv:
+        drv.send("FOO")
+        drv.send("SIM:FAULT slow,delay=1.0,count=1")
+        assert drv.query("FRS?") == expected_span(bench.analyzer)
+        assert len(recoveries(caplog)) == 1
+        assert [code for code, _ in bench.analyzer.errors] == [1]  # still queued
+        assert drv.errors() == [(1, "Undefined command: FOO")]
 
 
 # ================================================================== no_hit
@@ -279,9 +295,8 @@ def test_a_dropped_tcp_connection_is_reconnected_and_the_fetch_succeeds(make_ben
 @pytest.mark.timeout(10)
 def test_a_dropped_transfer_over_the_pty_behaves_as_a_truncated_one(make_bench, caplog) -> None:
     """sims/prologix.py: "drop over a serial line cannot close anything: it behaves as
-    a truncated transfer". FAILS today (see the report): the Session marks itself
-    closed, and the pty, which never makes a new Session, ignores every later message,
-    so the analyzer is deaf for good and the retry times out."""
+    a truncated transfer". Pins that the pty's session stays alive after a drop: the
+    retry gets the whole block, and later queries their own replies."""
     bench = make_bench("prologix")
     with opened(bench) as drv:
         drv.send("SIM:FAULT drop")
@@ -346,11 +361,11 @@ def test_a_hardware_fault_refuses_start_until_reset(make_bench, kind) -> None:
 def test_without_retries_the_first_fault_surfaces_and_the_next_exchange_is_clean(
     make_bench, kind, fault, action, error, caplog
 ) -> None:
-    """FAILS today for slow and for garbage on a fetch (see the report): nothing clears
-    the link after the last failed attempt, so what the failed exchange left on it is
-    read by the next one. slow: the timed-out ID?'s late reply comes in as the reply
-    to FRS? (wrong data, ``HP35660A``); garbage: the rest of the garbled block is read
-    as FRS?'s reply (a ProtocolError for an exchange that had nothing wrong)."""
+    """Pins that the link is cleared after the last failed attempt, so nothing the
+    failed exchange left on it is read by the next one. slow: the timed-out ID?'s
+    late reply must not come in as the reply to FRS? (wrong data, ``HP35660A``);
+    garbage: the rest of the garbled block must not be read as FRS?'s reply (a
+    ProtocolError for an exchange that had nothing wrong)."""
     bench = make_bench(kind)
     with opened(bench, retries=0) as drv:
         drv.send(f"SIM:FAULT {fault}")

@@ -102,19 +102,35 @@ def test_a_silent_instrument_costs_one_timeout_not_one_per_retry(kind):
             with pytest.raises(InstrumentTimeout):
                 dsa.identify()
             elapsed = time.monotonic() - t0
-    # One timeout, one short ERR? probe, the clean-ups: not (retries + 1) timeouts.
+    # One timeout, one short ID? probe, the clean-ups: not (retries + 1) timeouts.
     assert elapsed < 3.5, elapsed
 
 
 @pytest.mark.timeout(30)
 def test_query_and_send_refuse_messages_whose_replies_they_cannot_read():
     with TcpServer(_analyzer()) as server, HP35660A.open(server.resource, timeout_s=1.0) as dsa:
-        for message in ("DDAS", "DSAN", "DDAN", "ID?;FRS?", "RST"):
+        for message in ("DDAS", "DSAN", "DSAS", "DDAN", "ID?;FRS?", "RST"):
             with pytest.raises(ValueError, match="query takes a message with one one-line reply"):
                 dsa.query(message)
         with pytest.raises(ValueError, match="answers"):
             dsa.send("ID?")
-        assert dsa.query("DSAS").startswith("FRS 102400.0 HZ;")  # the state: one line
+        assert dsa.identify() == "HP35660A"  # and nothing left over
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("ascii", [False, True], ids=["DSAN", "DSAS"])
+def test_the_state_dump_is_96_values_with_the_preset_where_we_placed_it(ascii):
+    """DSAN/DSAS: 96 values (docs/instrument.md); our settings at the words of
+    drivers/state.py (proj). The preset (RST) values here come from the
+    simulator's documentation of its preset, not from the driver."""
+    with TcpServer(_analyzer()) as server, HP35660A.open(server.resource, timeout_s=2.0) as dsa:
+        dsa.send("FRS 200 HZ;NAVG 7;WIN1 FORC;TSLP NEG;TRCB")
+        state = dsa.read_state(ascii=ascii)
+        assert state.values.shape == (96,)
+        assert (state.span_hz, state.center_hz, state.n_averages) == (200.0, 100.0, 7)
+        assert (state.window1, state.window2) == ("FORC", "HANN")
+        assert (state.trigger_source, state.trigger_slope) == ("FREE", "NEG")
+        assert (state.active_trace, state.display_a, state.display_b) == ("B", "FRSP", "COHR")
         assert dsa.identify() == "HP35660A"  # and nothing left over
 
 
@@ -178,7 +194,7 @@ def test_unusable_lock_directory_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setenv("DAQ_LOCK_DIR", str(blocker))
     with (
         TcpServer(_analyzer()) as server,
-        pytest.raises(ConnectionFailed, match="cannot create the lock file"),
+        pytest.raises(ConnectionFailed, match="cannot create the lock directory"),
     ):
         HP35660A.open(server.resource)
 

@@ -1,46 +1,124 @@
-"""The exact bytes the driver sends for each operation (DESIGN.md section 4, the
-command table in drivers/commands.py), written out by hand."""
+"""The exact bytes the driver sends for each operation (docs/instrument.md, the
+command table in drivers/commands.py), written out by hand.
 
-import struct
+Every test runs its script in ``expected(...)``, which fails the test if an
+exchange of the script did not happen. The dumps are in test_protocol_dumps.py.
+"""
 
-import numpy as np
 import pytest
-from expected_protocol import ExpectedProtocol
+from expected_protocol import ExpectedProtocol, expected
 
-from drivers.errors import InstrumentError, ProtocolError
+from drivers.errors import ConnectionLost, InstrumentError, InstrumentTimeout, ProtocolError
 from drivers.hp35660a import HP35660A
 from drivers.settings import ChannelSetup, ImpactSettings, Window
 
 NO_ERROR = b'0,"No error"\r\n'
 
 
-def driver(steps, **kwargs):
-    transport = ExpectedProtocol(steps)
-    return HP35660A(transport, **kwargs), transport
-
-
 def test_identify_reset_status():
-    dsa, t = driver([(b"ID?", b"HP35660A\r\n"), (b"RST", None), (b"STA?", b"34\r\n")])
-    assert dsa.identify() == "HP35660A"
-    dsa.reset()
-    status = dsa.status()
+    with expected([(b"ID?", b"HP35660A\r\n"), (b"RST", None), (b"STA?", b"34\r\n")]) as dsa:
+        assert dsa.identify() == "HP35660A"
+        dsa.reset()
+        status = dsa.status()
     assert status.hit_pending
     assert status.waiting_for_trigger
     assert not status.done
-    t.done()
+
+
+def test_a_missing_exchange_fails_the_script():
+    script = [(b"ID?", b"HP35660A\r\n"), (b"RST", None)]
+    with pytest.raises(AssertionError, match="only 1 of 2 steps happened"), expected(script) as dsa:
+        dsa.identify()
 
 
 def test_errors_drain_the_queue_and_check_raises_the_oldest():
-    dsa, t = driver(
-        [
-            (b"ERR?", b'1,"Undefined command: FOO"\r\n'),
-            (b"ERR?", b'2,"Parameter out of range: FRS 1 MHZ"\r\n'),
-            (b"ERR?", NO_ERROR),
-        ]
-    )
-    with pytest.raises(InstrumentError, match=r"instrument error 1: Undefined command: FOO \(and 1 more\)"):
+    steps = [
+        (b"ERR?", b'1,"Undefined command: FOO"\r\n'),
+        (b"ERR?", b'2,"Parameter out of range: FRS 1 MHZ"\r\n'),
+        (b"ERR?", NO_ERROR),
+    ]
+    with (
+        expected(steps) as dsa,
+        pytest.raises(InstrumentError, match=r"instrument error 1: Undefined command: FOO \(and 1 more\)"),
+    ):
         dsa.check_errors()
-    t.done()
+
+
+def test_after_a_timeout_the_probe_is_id_and_the_error_queue_is_left_alone():
+    """FRS? goes unanswered once: the driver clears, asks ID? (answered: the
+    instrument is alive) and asks FRS? again. It never sends ERR?, which would pop
+    an error queued by someone else's command and blame this query for it."""
+    steps = [(b"FRS?", None), (b"ID?", b"HP35660A\r\n"), (b"FRS?", b"+2.000000000E+02\r\n")]
+    with expected(steps, retries=1) as dsa:
+        assert dsa.read("FRS") == 200.0
+
+
+def test_a_silent_instrument_is_reported_after_one_probe():
+    with (
+        expected([(b"FRS?", None), (b"ID?", None)], retries=3) as dsa,
+        pytest.raises(InstrumentTimeout, match=r"answers nothing, not even ID\?") as caught,
+    ):
+        dsa.query("FRS?")
+    assert caught.value.instrument_answers is False
+
+
+def test_set_and_read_spell_and_parse_by_the_table():
+    steps = [
+        (b"FRS 200 HZ", None),
+        (b"TDLY -0.02 S", None),
+        (b"RNG1 0.5 V", None),
+        (b"NAVG 12", None),
+        (b"PRVW 1", None),
+        (b"WIN2 HANN", None),
+        (b"FRS?", b"+2.000000000E+02\r\n"),
+        (b"NAVG?", b"12\r\n"),
+        (b"PRVW?", b"1\r\n"),
+        (b"WIN2?", b"HANN\r\n"),
+        (b"AVMD?", b"STBL\r\n"),
+    ]
+    with expected(steps) as dsa:
+        dsa.set("FRS", 200.0)
+        dsa.set("TDLY", -0.02)
+        dsa.set("RNG1", 0.5)
+        dsa.set("NAVG", 12)
+        dsa.set("PRVW", True)
+        dsa.set("WIN2", "HANN")
+        assert dsa.read("FRS") == 200.0
+        assert dsa.read("NAVG") == 12
+        assert dsa.read("PRVW") is True
+        assert dsa.read("WIN2") == "HANN"
+        assert dsa.read("AVMD?") == "STBL"
+
+
+@pytest.mark.parametrize(
+    ("mnemonic", "value", "message"),
+    [
+        ("WIN1", "BOXCAR", "WIN1 takes one of UNIF, HANN, FLAT, FORC, EXPO"),
+        ("NAVG", 2.5, "NAVG takes an integer"),
+        ("NAVG", 0, "NAVG takes 1 to 9999"),
+        ("FRS", 200e3, "FRS takes 0.001 to 102400 HZ"),
+        ("FRS", float("nan"), "FRS takes"),
+        ("FRS", "wide", "FRS takes a number"),
+        ("C1AC", 2, "C1AC takes 0 or 1"),
+        ("STBL", 1, "STBL takes no argument"),
+    ],
+)
+def test_bad_arguments_are_refused_before_anything_is_sent(mnemonic, value, message):
+    with expected([]) as dsa, pytest.raises(ValueError, match=message):
+        dsa.set(mnemonic, value)
+
+
+@pytest.mark.parametrize(
+    ("mnemonic", "reply", "reason"),
+    [("AVMD?", b"MEAN", "expected one of STBL, AVOF"), ("NAVG", b"2.5", "integer"), ("PRVW", b"2", "0 or 1")],
+)
+def test_a_reply_the_table_does_not_allow_is_a_protocol_error(mnemonic, reply, reason):
+    query = mnemonic if mnemonic.endswith("?") else mnemonic + "?"
+    with (
+        expected([(query.encode(), reply + b"\r\n")], retries=0) as dsa,
+        pytest.raises(ProtocolError, match=reason),
+    ):
+        dsa.read(mnemonic)
 
 
 DEFAULT_CONFIGURE = [
@@ -103,9 +181,8 @@ READ_BACK = [
 
 
 def test_configure_sends_every_setting_then_reads_them_back():
-    dsa, t = driver(DEFAULT_CONFIGURE + READ_BACK)
-    actual = dsa.configure(ImpactSettings())
-    t.done()
+    with expected(DEFAULT_CONFIGURE + READ_BACK) as dsa:
+        actual = dsa.configure(ImpactSettings())
     assert actual.span_hz == 200.0
     assert actual.center_hz is None
     assert actual.hammer.range_v == pytest.approx(10 ** (-33 / 20), rel=1e-9)  # 20 mV -> -33 dBV
@@ -128,133 +205,97 @@ def test_configure_autorange_zoom_and_ac_coupling():
         averages=1,
         preview=False,
     )
-    sent = [step[0] for step in DEFAULT_CONFIGURE if step[0] not in (b"CLER", b"ERR?", b"FRS?")]
-    expected = [*sent[:2], b"FRS 12.5 HZ", b"CF 36 HZ"]
-    expected += [b"WIN1 FORC", b"FWD1 0.05 S", b"EXD1 1 S", b"SNS1 0.00225 V", b"C1AC 1", b"AU1"]
-    expected += sent[10:16]
-    expected += [b"TSRC CH2", b"TLVL 0.0102 V", b"TSLP NEG", b"TDLY 0 S", b"NAVG 1", b"STBL", b"PRVW 0"]
-    assert settings.commands() == expected
+    sent = [
+        (b"CLER", None),
+        (b"FRQR", None),
+        (b"LNRS", None),
+        (b"FRS 12.5 HZ", None),
+        (b"ERR?", NO_ERROR),
+        (b"FRS?", b"+1.250000000E+01\r\n"),
+        (b"CF 36 HZ", None),
+        (b"WIN1 FORC", None),
+        (b"FWD1 0.05 S", None),
+        (b"EXD1 1 S", None),
+        (b"SNS1 0.00225 V", None),
+        (b"C1AC 1", None),
+        (b"AU1", None),
+        *DEFAULT_CONFIGURE[13:19],  # channel 2 as by default
+        (b"TSRC CH2", None),
+        (b"TLVL 0.0102 V", None),
+        (b"TSLP NEG", None),
+        (b"TDLY 0 S", None),
+        (b"NAVG 1", None),
+        (b"STBL", None),
+        (b"PRVW 0", None),
+        (b"ERR?", NO_ERROR),
+    ]
+    read_back = [
+        (b"FRS?", b"+1.250000000E+01\r\n"),
+        (b"CF?", b"+3.600000000E+01\r\n"),
+        (b"WIN1?", b"FORC\r\n"),
+        (b"SNS1?", b"+2.250000000E-03\r\n"),
+        (b"AU1?", b"1\r\n"),  # autorange: no RNG1? asked
+        (b"FWD1?", b"+5.000000000E-02\r\n"),
+        (b"EXD1?", b"+1.000000000E+00\r\n"),
+        (b"C1AC?", b"1\r\n"),
+        *READ_BACK[9:16],
+        (b"TSRC?", b"CH2\r\n"),
+        (b"TLVL?", b"+1.020000000E-02\r\n"),
+        (b"AVMD?", b"STBL\r\n"),
+        (b"TSLP?", b"NEG\r\n"),
+        (b"TDLY?", b"+0.000000000E+00\r\n"),
+        (b"NAVG?", b"1\r\n"),
+        (b"PRVW?", b"0\r\n"),
+    ]
+    with expected(sent + read_back) as dsa:
+        actual = dsa.configure(settings)
+    assert actual.center_hz == 36.0
+    assert actual.hammer.range_v is None
+    assert actual.hammer.ac_coupled is True
+    assert actual.trigger_source == "CH2"
+    assert actual.trigger_level_eu == pytest.approx(10.0)  # 10.2 mV at 1.02 mV per m/s^2
+    assert actual.trigger_slope == "NEG"
+    assert actual.pre_trigger_s == 0.0
+    assert actual.preview is False
 
 
 def test_configure_refused_by_the_instrument_raises():
     refused = b'2,"Parameter out of range: TDLY -0.02 S"\r\n'
     steps = [*DEFAULT_CONFIGURE[:-1], (b"ERR?", refused), (b"ERR?", NO_ERROR)]
-    dsa, t = driver(steps)
-    with pytest.raises(InstrumentError, match=r"instrument error 2: Parameter out of range: TDLY -0.02 S$"):
+    with (
+        expected(steps) as dsa,
+        pytest.raises(InstrumentError, match=r"instrument error 2: Parameter out of range: TDLY -0.02 S$"),
+    ):
         dsa.configure(ImpactSettings())
-    t.done()
 
 
 def test_start_accept_reject():
-    dsa, t = driver(
-        [
-            (b"FRS?", b"+2.000000000E+02\r\n"),
-            (b"STRT", None),
-            (b"STA?", b"2\r\n"),
-            (b"ACPT", None),
-            (b"STA?", b"2\r\n"),
-            (b"RJCT", None),
-            (b"STA?", b"2\r\n"),
-        ]
-    )
-    dsa.start()
-    dsa.accept()
-    dsa.reject()
-    t.done()
+    steps = [
+        (b"FRS?", b"+2.000000000E+02\r\n"),
+        (b"STRT", None),
+        (b"STA?", b"2\r\n"),
+        (b"ACPT", None),
+        (b"STA?", b"2\r\n"),
+        (b"RJCT", None),
+        (b"STA?", b"2\r\n"),
+    ]
+    with expected(steps) as dsa:
+        dsa.start()
+        dsa.accept()
+        dsa.reject()
 
 
 def test_start_refused_raises_the_instrument_error():
-    dsa, t = driver(
-        [
-            (b"FRS?", b"+2.000000000E+02\r\n"),
-            (b"STRT", None),
-            (b"STA?", b"16\r\n"),
-            (b"ERR?", b'7,"Hardware fault: input A/D converter does not respond"\r\n'),
-            (b"ERR?", NO_ERROR),
-        ]
-    )
-    with pytest.raises(InstrumentError) as info:
+    steps = [
+        (b"FRS?", b"+2.000000000E+02\r\n"),
+        (b"STRT", None),
+        (b"STA?", b"16\r\n"),
+        (b"ERR?", b'7,"Hardware fault: input A/D converter does not respond"\r\n'),
+        (b"ERR?", NO_ERROR),
+    ]
+    with expected(steps) as dsa, pytest.raises(InstrumentError) as info:
         dsa.start()
     assert info.value.code == 7
-    t.done()
-
-
-def _block(values):
-    payload = struct.pack(f">{len(values)}d", *values)
-    return b"#A" + struct.pack(">H", len(payload)) + payload
-
-
-def _header(function_code, n, channel, domain, y_units, complex_data, half_fs, delta, start, averages=1):
-    h = [0.0] * 66
-    h[0], h[1], h[2], h[3], h[4] = function_code, n, n, averages, channel
-    h[7], h[9], h[10], h[36], h[40] = domain, y_units, domain, 0.0 if complex_data else 1.0, 1.0
-    h[52] = h[53] = half_fs
-    h[55], h[64] = delta, start
-    return h
-
-
-def test_fetch_frf_sends_trace_select_and_dump_and_decodes_the_block():
-    lines = np.arange(401) * 0.5
-    data = []
-    for k in range(401):
-        data += [float(k), -float(k) / 2]
-    block = _block(_header(7, 401, 3, 1, 3, True, 256.0, 0.5, 0.0, averages=5) + data)
-    dsa, t = driver([(b"TRCA;FRSP;DDAN", block)])
-    frf = dsa.fetch_frf()
-    t.done()
-    assert frf.header.display_function == "FRSP"
-    assert frf.header.n_averages == 5
-    assert frf.header.y_units == "(m/s^2)/N"
-    np.testing.assert_array_equal(frf.x, lines)
-    np.testing.assert_array_equal(frf.data, np.arange(401) - 0.5j * np.arange(401))
-
-
-def test_fetch_time_records():
-    force = [float(k % 7) for k in range(1024)]
-    accel = [float(-k) for k in range(1024)]
-    steps = [
-        (b"TRCA;TIM1;DDAN", _block(_header(1, 1024, 1, 0, 1, False, 256.0, 1 / 512, -0.02) + force)),
-        (b"TRCA;TIM2;DDAN", _block(_header(2, 1024, 2, 0, 2, False, 256.0, 1 / 512, -0.02) + accel)),
-    ]
-    dsa, t = driver(steps)
-    f, a = dsa.fetch_time_records()
-    t.done()
-    assert f.header.sample_rate_hz == 512.0
-    assert f.header.y_units == "N"
-    assert a.header.y_units == "m/s^2"
-    assert f.x[0] == -0.02
-    np.testing.assert_array_equal(f.data, force)
-    np.testing.assert_array_equal(a.data, accel)
-
-
-def test_a_garbled_dump_is_retried_after_a_device_clear_then_reported():
-    good = _block(_header(8, 401, 3, 1, 4, False, 256.0, 0.5, 0.0) + [1.0] * 401)
-    dsa, t = driver([(b"TRCA;COHR;DDAN", b"\xff\xfe" + good), (b"TRCA;COHR;DDAN", good)], retries=1)
-    assert dsa.fetch_coherence().data.tolist() == [1.0] * 401
-    t.done()
-    dsa, t = driver([(b"TRCA;COHR;DDAN", b"garbage!"), (b"TRCA;COHR;DDAN", b"garbage!")], retries=1)
-    with pytest.raises(ProtocolError, match=r"DDAN of COHR: .*'#'.*\(after 2 attempts\)"):
-        dsa.fetch_coherence()
-
-
-@pytest.mark.parametrize(
-    ("header_change", "message"),
-    [
-        ({1: 400.0, 2: 400.0}, "401 lines"),
-        ({0: 3.0}, "holds LSP1"),
-        ({9: 42.0}, "unknown code"),
-        ({36: 0.5}, "0 or 1"),
-    ],
-)
-def test_inconsistent_dumps_are_protocol_errors(header_change, message):
-    h = _header(8, 401, 3, 1, 4, False, 256.0, 0.5, 0.0)
-    for index, value in header_change.items():
-        h[index] = value
-    n = int(h[1])
-    block = _block(h + [0.5] * n)
-    dsa, _ = driver([(b"TRCA;COHR;DDAN", block)], retries=0)
-    with pytest.raises(ProtocolError, match=message):
-        dsa.fetch_coherence()
 
 
 def test_accept_is_never_repeated():
@@ -262,13 +303,9 @@ def test_accept_is_never_repeated():
     # a hit in the average twice. The driver reports instead.
     class Failing(ExpectedProtocol):
         def _write(self, message):
-            from drivers.errors import ConnectionLost
-
             raise ConnectionLost("link lost")
 
     dsa = HP35660A(Failing([]), retries=3)
-    from drivers.errors import ConnectionLost
-
     with pytest.raises(ConnectionLost, match=r"link lost$"):
         dsa.accept()
 
@@ -284,3 +321,15 @@ def test_settings_validation():
         ChannelSetup(Window.FORCE, 0.0)
     with pytest.raises(ValueError, match="BOXCAR"):
         ChannelSetup("BOXCAR", 1.0)  # type: ignore[arg-type]
+
+
+def test_a_query_the_instrument_will_not_answer_points_to_its_error_queue():
+    """ID? is answered after each timed-out attempt: the instrument lives but does not
+    answer this query, so the error says where the reason is, without fetching it."""
+    steps = [(b"FRS?", None), (b"ID?", b"HP35660A\r\n"), (b"FRS?", None)]
+    with (
+        expected(steps, retries=1) as dsa,
+        pytest.raises(InstrumentTimeout, match=r"it answers ID\?, errors\(\)") as caught,
+    ):
+        dsa.query("FRS?")
+    assert caught.value.instrument_answers is True

@@ -168,8 +168,12 @@ def test_read_exact_a_binary_block(endpoint: Endpoint):
         payload = t.read_exact(TIM1_BYTES)
         assert len(payload) == TIM1_BYTES
         values = np.frombuffer(payload, dtype=">f8")
-        assert values[0] == 1.0  # display function TIM1
-        assert values[1] == 1024.0  # points
+        # Header words as documented (docs/instrument.md): 0 display function (6 input
+        # time ch1), 1 elements, 7 domain (0 time), 10 x units (4 s).
+        assert values[0] == 6.0
+        assert values[1] == 1024.0
+        assert values[7] == 0.0
+        assert values[10] == 4.0
         assert np.all(np.isfinite(values))
         # nothing stray after the block: the next reply is the next reply
         assert ask(t, b"ID?") == b"HP35660A"
