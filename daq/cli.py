@@ -3,6 +3,10 @@
 Every failure ends as one line on stderr and a non-zero exit status: 2 for bad
 usage, 1 for everything else the user can fix, 70 for a bug (with the traceback
 only when DAQ_DEBUG=1), 130 for Ctrl-C.
+
+Only typer's public API is used (typer.TyperException, Exit, Abort, Context):
+typer vendors click as the private typer._click, whose names may move in any
+release.
 """
 
 from __future__ import annotations
@@ -13,9 +17,6 @@ import sys
 from typing import Annotated
 
 import typer
-
-# typer 0.29 vendors click; its exception classes live here (pinned in pyproject).
-from typer._click import exceptions as click_exc
 
 from daq import __version__
 from daq import talk_command as talk
@@ -28,9 +29,13 @@ from drivers.errors import DriverError
 app = typer.Typer(
     name="daq",
     help="Impact testing of a cantilever beam with an HP 35660A: model, simulate, capture, analyse.",
-    no_args_is_help=True,
+    # A bare `daq` prints the help (see _root), as a bare `daq sim` does.
+    invoke_without_command=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    # Plain help: typer's rich panels give every flag, --help included, a <bool>
+    # metavar as if it took a value, and cannot be written to docs/cli.md as text.
+    rich_markup_mode=None,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
@@ -41,8 +46,27 @@ def _version(value: bool) -> None:
         raise typer.Exit()
 
 
+def _log_to_stderr(ctx: typer.Context, verbose: int) -> None:
+    # Quiet by default: a failure is reported once, as one line, by main(); the
+    # CRITICAL handler also keeps logging's last-resort handler from printing warnings.
+    root = logging.getLogger()
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(asctime)s %(name)s %(levelname)s %(message)s"))
+    old_level = root.level
+    root.addHandler(handler)
+    root.setLevel(logging.CRITICAL if verbose == 0 else logging.INFO if verbose == 1 else logging.DEBUG)
+
+    def restore() -> None:
+        # main() runs in-process in tests and scripts: leave logging as it was found.
+        root.removeHandler(handler)
+        root.setLevel(old_level)
+
+    ctx.call_on_close(restore)
+
+
 @app.callback()
 def _root(
+    ctx: typer.Context,
     version: Annotated[
         bool,
         typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit."),
@@ -53,15 +77,16 @@ def _root(
             "--verbose",
             "-v",
             count=True,
+            show_default=False,
             help="Log to stderr: -v retries and progress, -vv every byte on the wire.",
         ),
     ] = 0,
 ) -> None:
-    # Quiet by default: a failure is reported once, as one line, by main().
-    level = logging.CRITICAL if verbose == 0 else logging.INFO if verbose == 1 else logging.DEBUG
-    logging.basicConfig(
-        level=level, stream=sys.stderr, format="%(asctime)s %(name)s %(levelname)s %(message)s"
-    )
+    if ctx.invoked_subcommand is None:
+        # A bare `daq`: the help is the answer, not an error.
+        typer.echo(ctx.get_help())
+        raise typer.Exit()
+    _log_to_stderr(ctx, verbose)
 
 
 app.command(name="model")(model)
@@ -81,20 +106,27 @@ def _fail(message: str, exit_code: int) -> int:
     return exit_code
 
 
+def help_hint(exc: typer.TyperException) -> str:
+    """The hint " (see 'daq sim serve --help')" for a usage error about a command, else "".
+
+    typer exports no UsageError: its usage errors are TyperExceptions with exit
+    code 2 that keep the typer.Context of the command they are about in ``ctx``.
+    tests/test_cli_basics.py::test_usage_errors_point_at_the_commands_help
+    fails if a typer release drops that attribute.
+    """
+    path = getattr(getattr(exc, "ctx", None), "command_path", None)
+    return f" (see '{path} --help')" if isinstance(path, str) and path else ""
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `daq` console script; returns the exit status."""
     command = typer.main.get_command(app)
     try:
         result = command.main(args=argv, prog_name="daq", standalone_mode=False)
-    except click_exc.NoArgsIsHelpError:
-        # Bare `daq` (or a bare group): building this error printed the help
-        # already; the help is the answer, not an error.
-        return 0
-    except click_exc.UsageError as exc:
-        hint = f" (see '{exc.ctx.command_path} --help')" if exc.ctx else ""
-        return _fail(exc.format_message() + hint, 2)
-    except click_exc.ClickException as exc:
-        return _fail(exc.format_message(), exc.exit_code or 1)
+    except typer.TyperException as exc:
+        # Usage errors (exit code 2), bad files given to typer and the like.
+        code = exc.exit_code or 1
+        return _fail(exc.format_message() + (help_hint(exc) if code == 2 else ""), code)
     except typer.Abort:
         return _fail("aborted", 130)
     except UserError as exc:
@@ -111,4 +143,8 @@ def main(argv: list[str] | None = None) -> int:
         if os.environ.get("DAQ_DEBUG"):
             raise
         return _fail(f"internal error: {type(exc).__name__}: {exc} (set DAQ_DEBUG=1 for a traceback)", 70)
+    if result == 130:
+        # typer turns a Ctrl-C inside a command into a silent exit 130; nothing
+        # in daq exits 130 on purpose, so this is that Ctrl-C.
+        return _fail("interrupted", 130)
     return result if isinstance(result, int) else 0

@@ -13,15 +13,22 @@ from typing import Annotated
 import typer
 
 from daq.errors import UserError
+from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
 
 
 def demo(
-    hits: Annotated[int, typer.Option(help="Hits to average.")] = 5,
-    scenario: Annotated[str, typer.Option(help="seed or realistic.")] = "realistic",
-    seed: Annotated[int, typer.Option(help="Random seed of the simulated hammer and noise.")] = 1,
-    time_scale: Annotated[float, typer.Option(help="1 = real time; the default runs 20x faster.")] = 0.05,
+    hits: Annotated[int, typer.Option(metavar="<1-100>", help="Hits to average.")] = 5,
+    scenario: Annotated[Scenario, typer.Option(help=SCENARIO_HELP)] = Scenario.realistic,
+    seed: Annotated[int, typer.Option(help=SEED_HELP)] = 1,
+    time_scale: Annotated[float, typer.Option(metavar="<factor>", help=TIME_SCALE_HELP)] = 0.05,
 ) -> None:
-    """Run a simulated impact test end to end and compare its FRF peaks with the model."""
+    """Run a simulated impact test; compare it with the beam model.
+
+    Starts the simulated analyzer on 127.0.0.1 and drives it through pyvisa-py as
+    the lab's analyzer would be driven: configure an impact test, take the hits,
+    fetch the FRF and coherence. Prints the FRF peaks beside the exact beam's and
+    the Ritz model's natural frequencies.
+    """
     import numpy as np
     from rich.console import Console
     from rich.progress import Progress
@@ -36,16 +43,18 @@ def demo(
     from sims.sources import PhysicsSource
     from sims.tcp_server import TcpServer
 
-    if scenario not in SCENARIOS:
+    if scenario.value not in SCENARIOS:  # Scenario and sims' list must not drift apart
         raise UserError(f"--scenario must be one of {', '.join(SCENARIOS)}", exit_code=2)
     if not 1 <= hits <= 100:
         raise UserError("--hits must be 1..100", exit_code=2)
     if not time_scale >= 0:
         raise UserError("--time-scale must be >= 0", exit_code=2)
     console = Console()
-    analyzer = Analyzer(PhysicsSource(scenario, seed=seed), time_scale=time_scale)
+    analyzer = Analyzer(PhysicsSource(scenario.value, seed=seed), time_scale=time_scale)
     with TcpServer(analyzer) as server, HP35660A.open(server.resource, timeout_s=5.0) as dsa:
-        console.print(f"Simulated analyzer ({scenario} beam) at [bold]{server.resource}[/]: {dsa.identify()}")
+        console.print(
+            f"Simulated analyzer ({scenario.value} beam) at [bold]{server.resource}[/]: {dsa.identify()}"
+        )
         settings = dsa.configure(ImpactSettings(span_hz=200.0, averages=hits, preview=True))
         console.print(
             f"Span {settings.span_hz:g} Hz, {settings.record_length_s:g} s records, force window "

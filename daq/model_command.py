@@ -1,4 +1,4 @@
-"""`daq model`: the seed's Table 2 redone, and the modal damping of a damping matrix."""
+"""`daq model`: the seed's Table 2 redone, and the modal damping of a damping matrix (docs/method.md)."""
 
 from __future__ import annotations
 
@@ -21,29 +21,48 @@ class Section(StrEnum):
 def model(
     modes_n: Annotated[
         int,
-        typer.Option("--modes-n", "-n", help=f"Number N of Ritz admissible functions (1-{MAX_FUNCTIONS})."),
+        typer.Option(
+            "--modes-n",
+            "-n",
+            metavar="<N>",
+            help=f"Number N of Ritz admissible functions (1-{MAX_FUNCTIONS}).",
+        ),
     ] = 3,
     section: Annotated[
         Section,
         typer.Option(
-            help="A and I of the Ritz and damped models: tabulated (Table 1) or derived (b·h, b·h³/12)."
+            help="Area A and second moment I of the Ritz and damped models: tabulated (Table 1) "
+            "or derived from width b and height h (b·h, b·h³/12)."
         ),
     ] = Section.tabulated,
     damping: Annotated[
         Path | None,
         typer.Option(
-            help="Damping matrix file (.npy, .json or text rows), N s/m; default: the seed's eq (18).",
+            metavar="<file>",
+            help="Damping matrix in N s/m: .npy, .json or rows of numbers in text.  "
+            "[default: the seed's eq (18)]",
             dir_okay=False,
         ),
     ] = None,
     beam_file: Annotated[
         Path | None,
-        typer.Option("--beam", help="TOML/JSON beam properties (SI field names); default: Table 1."),
+        typer.Option(
+            "--beam",
+            metavar="<file>",
+            help="Beam properties, TOML or JSON, SI field names such as length_m.  [default: Table 1]",
+        ),
     ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the same as JSON.")] = False,
+    as_json: Annotated[
+        bool, typer.Option("--json", help="Print the report as JSON instead of tables.")
+    ] = False,
 ) -> None:
-    """Print the seed's Table 2 side by side with our models, and the modal damping of a
-    damping matrix."""
+    """Beam models beside the seed's Table 2, and modal damping.
+
+    Prints the seed paper's Table 2 (analytical and measured natural frequencies)
+    beside the exact beam and the Ritz model with N functions, then the natural
+    frequency and damping ratio of each mode of the damped model for a damping
+    matrix: the seed's eq (18) unless --damping names a file.
+    """
     if not 1 <= modes_n <= MAX_FUNCTIONS:
         raise UserError(f"--modes-n must be between 1 and {MAX_FUNCTIONS}, got {modes_n}", exit_code=2)
     # Imported here so that `daq --help` does not pay for scipy.

@@ -1,6 +1,6 @@
 """Reading the hits of a recorded run, for the simulator's replay mode.
 
-A run is an HDF5 file laid out as DESIGN.md section 6 proposes:
+A run is an HDF5 file laid out as docs/simulator.md (replay) describes:
 ``/entry/hits/force`` and ``/entry/hits/response`` (n_hits x n_samples, N and
 m/s^2), ``/entry/hits/time`` (n_samples, s, relative to the trigger), and
 optionally ``/entry/hits/accepted`` and ``/entry/hits/overload`` (n_hits x 2).

@@ -15,9 +15,19 @@ import typer
 from daq.errors import UserError
 
 sim_app = typer.Typer(
-    help="The simulated HP 35660A that tests, demos and new users run against.",
-    no_args_is_help=True,
+    help="Run the simulated HP 35660A, or list the commands it speaks.\n\n"
+    "The simulator is what tests, demos and new users run against when the lab's "
+    "analyzer is not at hand.",
+    invoke_without_command=True,
 )
+
+
+@sim_app.callback()
+def _sim(ctx: typer.Context) -> None:
+    if ctx.invoked_subcommand is None:
+        # A bare `daq sim`: the help is the answer, not an error.
+        typer.echo(ctx.get_help())
+        raise typer.Exit()
 
 
 class Scenario(StrEnum):
@@ -25,40 +35,74 @@ class Scenario(StrEnum):
     realistic = "realistic"
 
 
+# Shared with `daq demo`, so that the same option reads the same in both helps.
+SCENARIO_HELP = (
+    "The specimen simulated: seed (the paper's 3-function model and eq (18) damping) "
+    "or realistic (the exact beam, 6 lightly damped modes)."
+)
+SEED_HELP = "Random seed of the simulated hammer and noise: the same seed gives the same data."
+TIME_SCALE_HELP = (
+    "Speed of simulated time: 1 = real time (a hit every 0.5-2 s), 0.1 = ten times faster, 0 = instant."
+)
+
+
 @sim_app.command()
 def serve(
     tcp: Annotated[
-        int | None, typer.Option(help="Serve pyvisa-py's TCPIP SOCKET on this port (0: any free port).")
+        int | None,
+        typer.Option(
+            metavar="<port>",
+            help="Serve pyvisa-py's TCPIP SOCKET on this port; 0 picks a free one.  [default: 5025]",
+        ),
     ] = None,
     pty: Annotated[
-        bool, typer.Option("--pty", help="Serve a Prologix GPIB-USB emulation on a pseudo-terminal.")
+        bool,
+        typer.Option(
+            "--pty", help="Serve a Prologix GPIB-USB emulation on a pseudo-terminal instead of TCP."
+        ),
     ] = False,
     host: Annotated[
-        str, typer.Option(help="Address to bind (TCP); loopback unless you mean otherwise.")
+        str,
+        typer.Option(
+            metavar="<IPv4 address>",
+            help="Address to listen on (TCP). Any but loopback is reachable from other machines.",
+        ),
     ] = "127.0.0.1",
-    gpib_address: Annotated[int, typer.Option(help="The analyzer's GPIB address behind the Prologix.")] = 11,
-    scenario: Annotated[Scenario, typer.Option(help="The specimen the physics simulates.")] = Scenario.seed,
-    seed: Annotated[int, typer.Option(help="Random seed: same seed and commands, same data.")] = 0,
-    time_scale: Annotated[
-        float, typer.Option(help="1 = real time (a hit every 0.5-2 s), 0 = instant, 0.1 = ten times faster.")
-    ] = 1.0,
-    noise: Annotated[bool, typer.Option("--noise/--no-noise", help="Sensor noise.")] = True,
+    gpib_address: Annotated[
+        int,
+        typer.Option(metavar="<0-30>", help="With --pty: the analyzer's GPIB address behind the Prologix."),
+    ] = 11,
+    scenario: Annotated[Scenario, typer.Option(help=SCENARIO_HELP)] = Scenario.seed,
+    seed: Annotated[int, typer.Option(help=SEED_HELP)] = 0,
+    time_scale: Annotated[float, typer.Option(metavar="<factor>", help=TIME_SCALE_HELP)] = 1.0,
+    noise: Annotated[
+        bool, typer.Option("--noise/--no-noise", help="Add sensor noise to the signals.")
+    ] = True,
     fault: Annotated[
         list[str] | None,
-        typer.Option(help="Arm a fault on every connection, e.g. truncate or slow,delay=0.2 (repeatable)."),
+        typer.Option(
+            metavar="<spec>",
+            help="Arm a fault on every connection, e.g. truncate or slow,delay=0.2; repeatable.",
+        ),
     ] = None,
     replay: Annotated[
-        Path | None, typer.Option(help="Serve the hits of this recorded run (HDF5) instead of physics.")
+        Path | None,
+        typer.Option(metavar="<file>", help="Serve the hits of this recorded run (HDF5) instead of physics."),
     ] = None,
     loop: Annotated[bool, typer.Option(help="With --replay: start over after the last hit.")] = False,
     hammer: Annotated[
         str | None,
         typer.Option(
-            help="The simulated hammer, e.g. peak_force_n=3,pulse_width_s=0.001,double_hit_probability=0.2."
+            metavar="<key=value,...>",
+            help="Adjust the simulated hammer, e.g. peak_force_n=3,pulse_width_s=0.001.",
         ),
     ] = None,
 ) -> None:
-    """Serve the simulated analyzer until Ctrl-C; prints the resource to connect to."""
+    """Serve the simulated analyzer until Ctrl-C.
+
+    Prints the VISA resource to connect to, alone on stdout, for scripts to read;
+    the banner goes to stderr. SIGTERM stops it as Ctrl-C does.
+    """
     from rich.console import Console
 
     from sims.instrument import Analyzer
@@ -155,7 +199,11 @@ def serve(
 
 @sim_app.command()
 def commands() -> None:
-    """List the command set the simulated analyzer speaks, with each entry's source."""
+    """List the commands the simulated analyzer understands.
+
+    Each entry says where it comes from: seen in code driving an HP 3562A, or a
+    project choice still to be confirmed on a real 35660A.
+    """
     from rich.console import Console
     from rich.table import Table
 

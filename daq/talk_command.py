@@ -9,22 +9,30 @@ import typer
 
 from daq.errors import UserError
 
+# Optional for typer, so that a missing resource can say where else it may come from.
 ResourceOption = Annotated[
-    str,
+    str | None,
     typer.Option(
         "--resource",
         "-r",
         envvar="DAQ_RESOURCE",
-        help="GPIB0::11::INSTR, TCPIP::host::port::SOCKET, PROLOGIX::/dev/ttyUSB0::11, or sim "
-        "(the built-in simulator). Default: $DAQ_RESOURCE.",
+        show_envvar=True,
+        metavar="<resource>",
+        help="The analyzer: GPIB0::11::INSTR, TCPIP::<host>::<port>::SOCKET, "
+        "PROLOGIX::<serial port>::<GPIB address>, or sim (the built-in simulator). Needed, "
+        "here or in the environment.",
     ),
 ]
-TimeoutOption = Annotated[float, typer.Option("--timeout", help="Seconds to wait for each reply.")]
+TimeoutOption = Annotated[
+    float, typer.Option("--timeout", metavar="<seconds>", help="How long to wait for each reply.")
+]
 
 
-def _open(resource: str, timeout: float):
+def _open(resource: str | None, timeout: float):
     from daq.instrument import open_analyzer
 
+    if not resource:
+        raise UserError("no analyzer given: use --resource (-r) or set DAQ_RESOURCE", exit_code=2)
     if not timeout > 0:
         raise UserError("--timeout must be positive", exit_code=2)
     try:
@@ -34,7 +42,11 @@ def _open(resource: str, timeout: float):
 
 
 def instruments() -> None:
-    """List the VISA resources and serial ports this machine offers."""
+    """List the VISA resources and serial ports of this machine.
+
+    A Prologix GPIB-USB adapter shows as a serial port: reach the analyzer behind
+    it as PROLOGIX::<port>::<GPIB address>.
+    """
     from rich.console import Console
 
     from drivers.resources import list_resources
@@ -52,19 +64,25 @@ def instruments() -> None:
         console.print(f"[dim]note: {note}[/]")
 
 
-def identify(resource: ResourceOption, timeout: TimeoutOption = 5.0) -> None:
-    """Say what answers at a resource."""
+def identify(resource: ResourceOption = None, timeout: TimeoutOption = 5.0) -> None:
+    """Ask what answers at a resource (ID?) and print its reply."""
     with _open(resource, timeout) as dsa:
         print(f"{dsa.identify()} at {resource}")
 
 
 def send(
-    command: Annotated[str, typer.Argument(help="The command, e.g. 'FRS 200 HZ'.")],
-    resource: ResourceOption,
+    command: Annotated[str, typer.Argument(metavar="COMMAND", help="The command line, e.g. 'FRS 200 HZ'.")],
+    resource: ResourceOption = None,
     timeout: TimeoutOption = 5.0,
-    check: Annotated[bool, typer.Option(help="Ask the analyzer for errors afterwards.")] = True,
+    check: Annotated[
+        bool, typer.Option(help="Then ask the analyzer for errors and fail if it reports one.")
+    ] = True,
 ) -> None:
-    """Send one command line to the analyzer (several may be joined with ';')."""
+    """Send a command line that has no reply to the analyzer.
+
+    Several commands may be joined with ';'. A command that answers is refused:
+    use `daq query` for it.
+    """
     with _open(resource, timeout) as dsa:
         try:
             dsa.send(command)
@@ -75,22 +93,38 @@ def send(
 
 
 def query(
-    command: Annotated[str, typer.Argument(help="The query, e.g. 'FRS?', or DDAN for the active trace.")],
-    resource: ResourceOption,
+    command: Annotated[
+        str,
+        typer.Argument(metavar="QUERY", help="The query, e.g. 'FRS?', or DDAN for the active trace."),
+    ],
+    resource: ResourceOption = None,
     timeout: TimeoutOption = 5.0,
-    as_json: Annotated[bool, typer.Option("--json", help="DDAN: print the trace as JSON.")] = False,
+    as_json: Annotated[
+        bool, typer.Option("--json", help="For a DDAN dump: print the trace as JSON, not columns.")
+    ] = False,
 ) -> None:
-    """Send a query and print the reply; DDAN dumps are decoded."""
+    """Send a query and print the reply; DDAN dumps are decoded.
+
+    A DDAN dump prints as a header line and tab-separated columns: x and the value
+    (real and imaginary parts for a complex trace).
+    """
     with _open(resource, timeout) as dsa:
         from drivers.commands import replies
+        from drivers.errors import InstrumentTimeout
 
-        if replies(command) == ["block"] and command.strip().split(";")[-1].strip().upper() == "DDAN":
-            _print_trace(dsa.dump_trace(command), as_json)
-            return
         try:
+            if replies(command) == ["block"] and command.strip().split(";")[-1].strip().upper() == "DDAN":
+                _print_trace(dsa.dump_trace(command), as_json)
+                return
             print(dsa.query(command))
         except ValueError as exc:
             raise UserError(str(exc), exit_code=2) from None
+        except InstrumentTimeout as exc:
+            # An analyzer that refuses a query stays silent and says why in its error
+            # queue; the driver leaves the queue alone, so ask it here.
+            if getattr(exc, "instrument_answers", False):
+                dsa.check_errors()
+            raise
 
 
 def _print_trace(trace, as_json: bool) -> None:

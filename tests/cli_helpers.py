@@ -1,21 +1,63 @@
-"""Run the real `daq` console script in a subprocess."""
+"""Run `daq` as a user does: in-process through daq.cli.main, or as the real
+console script in a subprocess.
+
+In-process is the default for tests: a subprocess pays about a second of
+interpreter start-up and imports per call. Keep subprocesses for what only a
+real process shows: the console-script entry point, exit statuses as the shell
+sees them, signals, and servers that must outlive the call.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import io
+import logging
 import os
 import subprocess
 import sys
 from pathlib import Path
+from unittest import mock
+
+from daq.cli import main
 
 DAQ = Path(sys.executable).with_name("daq")
 
+#: What a technician's terminal would give the rich console; run_daq and invoke_daq agree.
+ENV = {"COLUMNS": "120", "NO_COLOR": "1"}
+
 
 def run_daq(*args: str, timeout: float = 60, **kwargs) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "COLUMNS": "120", "NO_COLOR": "1"}
+    """The real console script in a subprocess."""
+    env = {**os.environ, **ENV}
     env.pop("DAQ_DEBUG", None)
     return subprocess.run(
         [str(DAQ), *args], capture_output=True, text=True, timeout=timeout, env=env, **kwargs
     )
+
+
+def invoke_daq(*args: str, env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess[str]:
+    """daq.cli.main(args) in this process, with stdout and stderr captured.
+
+    ``env`` adds variables, or removes those given as None, for this call only.
+    Fails the test if the call leaves logging or the environment changed.
+    """
+    changes = {**ENV, "DAQ_DEBUG": None, **(env or {})}
+    root = logging.getLogger()
+    handlers, level = list(root.handlers), root.level
+    out, err = io.StringIO(), io.StringIO()
+    with mock.patch.dict(os.environ):
+        for name, value in changes.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+        before = dict(os.environ)
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            status = main(list(args))
+        assert dict(os.environ) == before, "daq changed the environment"
+    assert root.handlers == handlers, "daq left a logging handler behind"
+    assert root.level == level, "daq left the root logger's level changed"
+    return subprocess.CompletedProcess(["daq", *args], status, out.getvalue(), err.getvalue())
 
 
 def assert_one_line_error(result: subprocess.CompletedProcess[str], *fragments: str) -> None:

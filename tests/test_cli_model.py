@@ -1,8 +1,11 @@
+"""`daq model` as a technician runs it, in-process (daq.cli.main); tests/test_cli_basics.py
+runs the real console script."""
+
 import json
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, run_daq
+from cli_helpers import assert_one_line_error, invoke_daq
 from reference import (
     EQ18,
     EQ18_DAMPING_RATIOS,
@@ -17,14 +20,14 @@ from reference import (
 
 
 def _json(*args):
-    result = run_daq("model", "--json", *args)
+    result = invoke_daq("model", "--json", *args)
     assert result.returncode == 0, result.stderr
     assert result.stderr == ""
     return json.loads(result.stdout)
 
 
 def test_table_prints_every_column():
-    result = run_daq("model")
+    result = invoke_daq("model")
     assert result.returncode == 0, result.stderr
     out = result.stdout
     for value in (*RITZ_N3_HZ, *EXACT_TABULATED_HZ[:3], *EXACT_DERIVED_HZ, *EQ18_POLE_MAGNITUDE_HZ):
@@ -104,7 +107,7 @@ def test_damping_matrix_of_another_size_uses_that_ritz_size(tmp_path):
 def test_indefinite_matrix_is_flagged(tmp_path):
     path = tmp_path / "neg.txt"
     path.write_text("-1 0 0\n0 1 0\n0 0 1\n")
-    result = run_daq("model", "--damping", str(path))
+    result = invoke_daq("model", "--damping", str(path))
     assert result.returncode == 0
     assert "indefinite: the model can gain energy" in result.stdout
     assert "positive real part: unstable" in result.stdout
@@ -117,7 +120,7 @@ def test_indefinite_matrix_is_flagged(tmp_path):
 def test_semi_definite_matrix_is_not_called_unstable(tmp_path, matrix):
     path = tmp_path / "psd.txt"
     path.write_text(matrix)
-    result = run_daq("model", "--damping", str(path))
+    result = invoke_daq("model", "--damping", str(path))
     assert result.returncode == 0
     assert "positive semi-definite" in result.stdout
     assert "unstable" not in result.stdout
@@ -128,7 +131,7 @@ def test_semi_definite_matrix_is_not_called_unstable(tmp_path, matrix):
 def test_asymmetric_matrix_is_noted(tmp_path):
     path = tmp_path / "asym.txt"
     path.write_text("1 0.5 0\n0 1 0\n0 0 1\n")
-    result = run_daq("model", "--damping", str(path))
+    result = invoke_daq("model", "--damping", str(path))
     assert "not symmetric" in result.stdout
     assert _json("--damping", str(path))["damping"]["symmetric"] is False
 
@@ -152,7 +155,7 @@ def test_asymmetric_matrix_is_noted(tmp_path):
 def test_bad_damping_files_are_one_line_errors(tmp_path, name, content, fragment):
     path = tmp_path / name
     path.write_text(content, encoding="utf-8")
-    result = run_daq("model", "--damping", str(path))
+    result = invoke_daq("model", "--damping", str(path))
     if fragment is None:  # accepted
         assert result.returncode == 0, result.stderr
     else:
@@ -160,7 +163,7 @@ def test_bad_damping_files_are_one_line_errors(tmp_path, name, content, fragment
 
 
 def test_missing_damping_file(tmp_path):
-    assert_one_line_error(run_daq("model", "--damping", str(tmp_path / "nope.txt")), "no such file")
+    assert_one_line_error(invoke_daq("model", "--damping", str(tmp_path / "nope.txt")), "no such file")
 
 
 @pytest.mark.parametrize(
@@ -176,12 +179,12 @@ def test_missing_damping_file(tmp_path):
 def test_bad_npy_files(tmp_path, make, fragment):
     path = tmp_path / "r.npy"
     make(path)
-    assert_one_line_error(run_daq("model", "--damping", str(path)), fragment)
+    assert_one_line_error(invoke_daq("model", "--damping", str(path)), fragment)
 
 
 def test_not_a_regular_file(tmp_path):
-    assert_one_line_error(run_daq("model", "--damping", "/dev/zero"), "not a regular file")
-    assert_one_line_error(run_daq("model", "--damping", str(tmp_path)), "is a directory")
+    assert_one_line_error(invoke_daq("model", "--damping", "/dev/zero"), "not a regular file")
+    assert_one_line_error(invoke_daq("model", "--damping", str(tmp_path)), "is a directory")
 
 
 def test_beam_file_with_new_cross_section_derives_a_and_i(tmp_path):
@@ -219,13 +222,13 @@ def test_beam_file(tmp_path):
 def test_bad_beam_file(tmp_path, content, fragment):
     path = tmp_path / "beam.toml"
     path.write_text(content)
-    assert_one_line_error(run_daq("model", "--beam", str(path)), fragment)
+    assert_one_line_error(invoke_daq("model", "--beam", str(path)), fragment)
 
 
 @pytest.mark.parametrize(
     ("args", "fragment"), [(("--modes-n", "0"), "--modes-n"), (("--section", "x"), "--section")]
 )
 def test_bad_options(args, fragment):
-    result = run_daq("model", *args)
+    result = invoke_daq("model", *args)
     assert_one_line_error(result, fragment)
     assert result.returncode == 2

@@ -1,5 +1,7 @@
-"""`daq sim serve` and `daq sim commands` as a user runs them: the real console
-script in a subprocess, reached through pyvisa-py and pyserial on loopback."""
+"""`daq sim serve` and `daq sim commands` as a user runs them. A server that
+serves is the real console script in a subprocess (it must outlive the call and
+take signals), reached through pyvisa-py and pyserial on loopback; what fails
+before serving, and `daq sim commands`, run in-process (daq.cli.main)."""
 
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ import time
 import pytest
 import pyvisa
 import serial
-from cli_helpers import DAQ, assert_one_line_error, run_daq
+from cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq
 
 from sims.command_table import COMMANDS
 from sims.instrument import Analyzer
@@ -65,7 +67,7 @@ class Server:
     """A `daq sim serve` subprocess and the resource line it printed."""
 
     def __init__(self, *args: str, pythonpath: str | None = None) -> None:
-        env = {**os.environ, "COLUMNS": "120", "NO_COLOR": "1"}
+        env = {**os.environ, **ENV}
         env.pop("DAQ_DEBUG", None)
         if pythonpath is not None:
             env["PYTHONPATH"] = os.pathsep.join(filter(None, [pythonpath, env.get("PYTHONPATH")]))
@@ -264,7 +266,7 @@ def test_serve_with_scenario_seed_and_no_noise():
     ],
 )
 def test_serve_rejects_bad_options_in_one_line(args, fragment):
-    result = run_daq("sim", "serve", *args, timeout=20)
+    result = invoke_daq("sim", "serve", *args)
     assert_one_line_error(result, fragment)
     assert result.stdout == ""  # no resource was printed: nothing is served
 
@@ -273,7 +275,7 @@ def test_serve_on_a_port_in_use_fails_in_one_line():
     busy = socket.create_server(("127.0.0.1", 0))
     try:
         port = busy.getsockname()[1]
-        result = run_daq("sim", "serve", "--tcp", str(port), "--time-scale", "0", timeout=20)
+        result = invoke_daq("sim", "serve", "--tcp", str(port), "--time-scale", "0")
     finally:
         busy.close()
     assert_one_line_error(result, str(port))
@@ -282,7 +284,7 @@ def test_serve_on_a_port_in_use_fails_in_one_line():
 
 # --------------------------------------------------------------- commands
 def test_sim_commands_lists_every_mnemonic():
-    result = run_daq("sim", "commands", timeout=20)
+    result = invoke_daq("sim", "commands")
     assert result.returncode == 0, result.stderr
     listed = set()
     for line in result.stdout.splitlines():
@@ -294,9 +296,6 @@ def test_sim_commands_lists_every_mnemonic():
     assert listed == expected
 
 
-@pytest.mark.timeout(30)
 def test_serve_hammer_option_is_validated():
-    from cli_helpers import assert_one_line_error, run_daq
-
-    assert_one_line_error(run_daq("sim", "serve", "--tcp", "0", "--hammer", "peak=3"), "--hammer")
-    assert_one_line_error(run_daq("sim", "serve", "--tcp", "0", "--hammer", "peak_force_n=-1"), "positive")
+    assert_one_line_error(invoke_daq("sim", "serve", "--tcp", "0", "--hammer", "peak=3"), "--hammer")
+    assert_one_line_error(invoke_daq("sim", "serve", "--tcp", "0", "--hammer", "peak_force_n=-1"), "positive")

@@ -1,12 +1,15 @@
-"""daq instruments / identify / send / query, as a technician runs them."""
+"""daq instruments / identify / send / query, as a technician runs them, in-process
+(daq.cli.main); tests/test_cli_sim.py runs `daq sim serve` as a real process and
+reaches it the same way these tests reach the simulator here."""
 
 import json
-import os
-import signal
-import subprocess
 
 import pytest
-from cli_helpers import DAQ, assert_one_line_error, run_daq
+from cli_helpers import assert_one_line_error, invoke_daq
+
+from sims.instrument import Analyzer
+from sims.sources import PhysicsSource
+from sims.tcp_server import TcpServer
 
 
 @pytest.fixture
@@ -17,64 +20,56 @@ def lock_dir(tmp_path, monkeypatch):
 
 @pytest.fixture
 def sim_tcp(lock_dir):
-    """A simulator in its own process; yields its resource string."""
-    proc = subprocess.Popen(
-        [str(DAQ), "sim", "serve", "--tcp", "0", "--time-scale", "0"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-    )
-    try:
-        yield proc.stdout.readline().strip()
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        proc.wait(timeout=10)
-        proc.stdout.close()
+    """What `daq sim serve --tcp 0 --time-scale 0` serves, on a thread of this
+    process (no second of start-up); yields its resource string."""
+    with TcpServer(Analyzer(PhysicsSource("seed", seed=0), time_scale=0.0), "127.0.0.1", 0) as server:
+        yield server.resource
 
 
 @pytest.mark.timeout(30)
 def test_identify_the_built_in_simulator(lock_dir):
-    result = run_daq("identify", "--resource", "sim")
+    result = invoke_daq("identify", "--resource", "sim")
     assert result.returncode == 0, result.stderr
     assert result.stdout == "HP35660A at sim\n"
 
 
 @pytest.mark.timeout(30)
 def test_identify_send_query_over_tcp(sim_tcp):
-    assert run_daq("identify", "-r", sim_tcp).stdout == f"HP35660A at {sim_tcp}\n"
-    assert run_daq("send", "-r", sim_tcp, "FRS 200 HZ").returncode == 0
+    assert invoke_daq("identify", "-r", sim_tcp).stdout == f"HP35660A at {sim_tcp}\n"
+    assert invoke_daq("send", "-r", sim_tcp, "FRS 200 HZ").returncode == 0
     # Settings persist in the instrument between connections.
-    assert run_daq("query", "-r", sim_tcp, "FRS?").stdout == "+2.000000000E+02\n"
+    assert invoke_daq("query", "-r", sim_tcp, "FRS?").stdout == "+2.000000000E+02\n"
 
 
 @pytest.mark.timeout(30)
 def test_resource_from_the_environment(sim_tcp):
-    env = {**os.environ, "DAQ_RESOURCE": sim_tcp}
-    result = subprocess.run([str(DAQ), "identify"], capture_output=True, text=True, env=env, timeout=20)
+    result = invoke_daq("identify", env={"DAQ_RESOURCE": sim_tcp})
     assert result.stdout == f"HP35660A at {sim_tcp}\n"
 
 
 @pytest.mark.timeout(30)
 def test_query_ddan_decodes_the_trace(sim_tcp):
     setup = "FRS 200 HZ;TSRC CH1;TLVL 2 MV;TDLY -10 MS;RNG1 20 MV;RNG2 1 V;STRT;TIM1"
-    assert run_daq("send", "-r", sim_tcp, setup).returncode == 0
-    result = run_daq("query", "-r", sim_tcp, "DDAN")
+    assert invoke_daq("send", "-r", sim_tcp, setup).returncode == 0
+    result = invoke_daq("query", "-r", sim_tcp, "DDAN")
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[0].startswith("# TIM1: 1024 real points")
     assert len(lines) == 1 + 1024
     t0, _ = lines[1].split("\t")
     assert float(t0) == pytest.approx(-10 / 1000, abs=1 / 512)
-    data = json.loads(run_daq("query", "-r", sim_tcp, "DDAN", "--json").stdout)
+    data = json.loads(invoke_daq("query", "-r", sim_tcp, "DDAN", "--json").stdout)
     assert data["header"]["display_function"] == "TIM1"
     assert len(data["data"]) == 1024
 
 
 @pytest.mark.timeout(30)
 def test_instrument_errors_are_one_line(sim_tcp):
-    assert_one_line_error(run_daq("send", "-r", sim_tcp, "FOO"), "instrument error 1: Undefined command: FOO")
     assert_one_line_error(
-        run_daq("query", "-r", sim_tcp, "DDAN", "--timeout", "1"), "instrument error 5: No data available"
+        invoke_daq("send", "-r", sim_tcp, "FOO"), "instrument error 1: Undefined command: FOO"
+    )
+    assert_one_line_error(
+        invoke_daq("query", "-r", sim_tcp, "DDAN", "--timeout", "1"), "instrument error 5: No data available"
     )
 
 
@@ -90,22 +85,22 @@ def test_instrument_errors_are_one_line(sim_tcp):
     ],
 )
 def test_unreachable_or_wrong_resources_are_one_line(lock_dir, resource, fragment):
-    result = run_daq("identify", "--resource", resource, "--timeout", "1")
+    result = invoke_daq("identify", "--resource", resource, "--timeout", "1")
     assert_one_line_error(result, fragment)
 
 
 @pytest.mark.timeout(30)
 def test_missing_resource_and_bad_commands(lock_dir):
-    env = {k: v for k, v in os.environ.items() if k != "DAQ_RESOURCE"}
-    result = subprocess.run([str(DAQ), "identify"], capture_output=True, text=True, env=env, timeout=20)
-    assert_one_line_error(result, "--resource")
-    assert_one_line_error(run_daq("send", "-r", "sim", ""), "not empty")
-    assert_one_line_error(run_daq("query", "-r", "sim", "ID?", "--timeout", "0"), "--timeout")
+    result = invoke_daq("identify", env={"DAQ_RESOURCE": None})
+    assert_one_line_error(result, "--resource", "DAQ_RESOURCE")
+    assert result.returncode == 2
+    assert_one_line_error(invoke_daq("send", "-r", "sim", ""), "not empty")
+    assert_one_line_error(invoke_daq("query", "-r", "sim", "ID?", "--timeout", "0"), "--timeout")
 
 
 @pytest.mark.timeout(30)
 def test_instruments_lists_local_resources_without_noise(lock_dir):
-    result = run_daq("instruments")
+    result = invoke_daq("instruments")
     assert result.returncode == 0, result.stderr
     assert result.stderr == ""
     assert "VISA resources" in result.stdout
@@ -116,7 +111,7 @@ def test_instruments_lists_local_resources_without_noise(lock_dir):
 
 @pytest.mark.timeout(30)
 def test_send_refuses_a_query_and_query_decodes_a_selected_dump(lock_dir):
-    assert_one_line_error(run_daq("send", "-r", "sim", "ID?"), "use query")
-    result = run_daq("query", "-r", "sim", "TRCB;COHR;DDAN", "--timeout", "1")
+    assert_one_line_error(invoke_daq("send", "-r", "sim", "ID?"), "use query")
+    result = invoke_daq("query", "-r", "sim", "TRCB;COHR;DDAN", "--timeout", "1")
     # No data yet: the instrument's own reason, promptly and in one line.
     assert_one_line_error(result, "instrument error 5: No data available: COHR")
