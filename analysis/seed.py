@@ -1,6 +1,8 @@
 """Numbers published in the seed paper, kept verbatim so reports can quote them.
 
-The paper is ``shared/seed/000_d58cf785c5f08ede.txt``. Nothing here is computed.
+The paper: "Experimental damping identification of a cantilevered beam" (Linear
+and Non-Linear Vibrations Laboratory, University of Taubaté); docs/method.md
+says what it holds. Nothing here is computed.
 """
 
 from __future__ import annotations
@@ -8,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 #: Table 2, "Analytical" column (Hz). It cannot be reproduced from the paper's own
-#: eqs (10)-(11) and Table 1 (see DESIGN.md section 5): reported, never fitted to.
+#: eqs (10)-(11) and Table 1 (docs/method.md, "Reproduced numbers"): reported, never fitted to.
 TABLE_2_ANALYTICAL_HZ = (5.1639344, 29.644809, 84.726776)
 
 #: Table 2, "Experimental" column (Hz): matches exact Euler-Bernoulli theory to ~0.001 %.

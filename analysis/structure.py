@@ -1,6 +1,6 @@
 """A linear structure M q'' + R q' + K q = b f(t), observed as y = c^T q (or q', q'').
 
-This is the seed's model with the signs right (DESIGN.md section 5): its eqs (13)
+This is the seed's model with the signs right (docs/method.md): its eqs (13)
 and (16) drop the minus signs. The state x = [q, q'] obeys x' = A x + B f with
 
     A = [[0, I], [-M^-1 K, -M^-1 R]],   B = [0; M^-1 b],

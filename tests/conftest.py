@@ -1,2 +1,2 @@
-"""Shared fixtures. Reference numbers live in tests/reference.py, copied from
-shared/DESIGN.md section 5 and the seed paper, never produced by our code."""
+"""Shared fixtures. Reference numbers live in tests/reference.py, computed before any
+code existed (docs/method.md) or copied from the seed paper, never produced by our code."""

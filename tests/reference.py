@@ -1,9 +1,10 @@
-"""Numbers from outside the code: shared/DESIGN.md section 5 and the seed paper.
+"""Numbers from outside the code: the project's design notes (docs/method.md,
+"Reproduced numbers") and the seed paper.
 
 Each was computed or looked up before any code of this project existed.
 """
 
-# Ritz, Table 1 with tabulated A, I (DESIGN.md section 5), Hz.
+# Ritz, Table 1 with tabulated A, I (docs/method.md), Hz.
 RITZ_N3_HZ = (5.57206, 35.20718, 99.18859)
 RITZ_N6_HZ = (5.56925, 34.93745, 98.04948)
 RITZ_N10_HZ = (5.56884, 34.90795, 97.78995)
