@@ -1,4 +1,4 @@
-"""The simulator's copy of the analyzer's command set (DESIGN.md section 4).
+"""The simulator's copy of the analyzer's command set (docs/instrument.md).
 
 One table, each entry tagged with its source:
 
@@ -157,9 +157,9 @@ COMMANDS: tuple[Command, ...] = (
     _query("TRC?", "proj", "active trace: A or B"),
     # -- transfers
     _query("DDAN", "3562A", "dump the active trace: #A block of big-endian float64, 66-value header"),
-    _query("DDAS", "3562A", "dump the active trace as ASCII, one value per line"),
-    _query("DSAN", "3562A", "dump the state: #A block holding the state as commands"),
-    _query("DSAS", "3562A", "dump the state as one ASCII line of commands"),
+    _query("DDAS", "3562A", "dump the active trace as ASCII: #I, the count, one value per line"),
+    _query("DSAN", "3562A", "dump the state: #A block of 96 float64 (our settings at words 0-25, proj)"),
+    _query("DSAS", "3562A", "dump the state as ASCII: #I, the count 96, one value per line"),
     # -- status
     _query(
         "STA?",
@@ -200,8 +200,30 @@ STATUS_HIT_PENDING = 32
 STATUS_MEASURING = 64
 STATUS_PAUSED = 128
 
-#: Codes in header word 0 (display function), proj.
-DISPLAY_CODES = {name: i + 1 for i, name in enumerate(DISPLAY_FUNCTIONS)}
-#: Codes in header words 9 (y units) and 10 (x units), proj.
+#: Header word 0, the display function: the documented 3562A codes (1 frequency
+#: response, 2/3 power spectrum 1/2, 4 coherence, 6/7 input time 1/2, 8/9 linear
+#: spectrum 1/2; docs/instrument.md, "Trace format").
+DISPLAY_CODES = {"FRSP": 1, "PSP1": 2, "PSP2": 3, "COHR": 4, "TIM1": 6, "TIM2": 7, "LSP1": 8, "LSP2": 9}
+#: Header word 9, y units: no codes are documented, these are ours (proj).
 Y_UNIT_CODES = {"V": 0, "N": 1, "m/s^2": 2, "(m/s^2)/N": 3, "": 4, "N^2": 5, "(m/s^2)^2": 6}
-X_UNIT_CODES = {"s": 0, "Hz": 1}
+#: Header word 10, x units (documented: 1 Hz, 4 s); word 7, the domain (0 time, 1 frequency).
+X_UNIT_CODES = {"Hz": 1, "s": 4}
+DOMAIN_CODES = {"time": 0, "frequency": 1}
+
+
+def grammar() -> dict[str, dict]:
+    """Each mnemonic's grammar, in the shape the driver's table gives it
+    (tests/test_command_tables_agree.py): kind, source, argument kind, dimension,
+    choices and the read-back query of a setting."""
+    out: dict[str, dict] = {}
+    for c in COMMANDS:
+        arg = c.argument
+        out[c.mnemonic] = {
+            "kind": c.kind,
+            "source": c.source,
+            "argument": arg.kind if arg is not None else None,
+            "dimension": arg.dimension if arg is not None and arg.dimension != "none" else None,
+            "choices": tuple(arg.choices) if arg is not None else (),
+            "readback": c.mnemonic + "?" if c.kind == "setting" else None,
+        }
+    return out

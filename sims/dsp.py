@@ -9,11 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.signal
 
 from sims.settings import N_LINES
-
-# Flat top: the 5-term cosine series of the HP/SRS flat top (scipy's "flattop").
-_FLAT_TOP = (0.21557895, 0.41663158, 0.277263158, 0.083578947, 0.006947368)
 
 
 def window(
@@ -21,21 +19,22 @@ def window(
 ) -> np.ndarray:
     """One channel's window over a record, shape (n_points,).
 
-    FORC is 1 from the start of the record for ``force_width_s`` (at most the
-    record), 0 after; EXPO is exp(-t / exp_decay_s) from the start of the record.
+    Hanning and flat top are periodic (DFT-even), as a spectrum analyzer applies
+    them: scipy's "hann" and its 5-term "flattop". FORC is 1 from the start of the
+    record for ``force_width_s`` (at most the record), 0 after; EXPO is
+    exp(-t / exp_decay_s) from the start of the record.
     """
-    k = np.arange(n_points)
-    t = k / sample_rate_hz
     if kind == "UNIF":
         return np.ones(n_points)
     if kind == "HANN":
-        return 0.5 - 0.5 * np.cos(2 * np.pi * k / n_points)
+        return scipy.signal.get_window("hann", n_points, fftbins=True)
     if kind == "FLAT":
-        return sum((-1) ** i * a * np.cos(2 * np.pi * i * k / n_points) for i, a in enumerate(_FLAT_TOP))
+        return scipy.signal.get_window("flattop", n_points, fftbins=True)
     if kind == "FORC":
-        return (t < force_width_s).astype(float)
+        return (np.arange(n_points) / sample_rate_hz < force_width_s).astype(float)
     if kind == "EXPO":
-        return np.exp(-t / exp_decay_s)
+        decay_samples = exp_decay_s * sample_rate_hz
+        return scipy.signal.windows.exponential(n_points, center=0, tau=decay_samples, sym=False)
     raise ValueError(f"unknown window {kind}")
 
 

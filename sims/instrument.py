@@ -24,7 +24,7 @@ from sims import command_table as ct
 from sims.acquisition import Record
 from sims.command_table import BY_MNEMONIC, ERRORS, Command
 from sims.dsp import Average, line_spectrum, peak_scale, window
-from sims.encoding import TraceHeader, ascii_lines, binary_block, float_block, line, trace_values
+from sims.encoding import TraceHeader, ascii_dump, float_block, line, trace_values
 from sims.settings import MAX_SPAN_HZ, RANGES_V, AnalyzerSettings, check_center, coerce_range, coerce_span
 from sims.sources import PhysicsSource, ReplaySource, SourceError
 from sims.units import ArgumentError, format_number, parse_quantity
@@ -384,12 +384,9 @@ class Analyzer:
             return Reply(line(s.averaging))
         if m in ("AU1?", "AU2?"):
             return Reply(line(str(s.channel("autorange", int(m[2])))))
-        if m in ("DSAN", "DSAS"):
-            state = s.state_commands()
-            return Reply(binary_block(state.encode("ascii")), True) if m == "DSAN" else Reply(line(state))
-        if m in ("DDAN", "DDAS"):
-            values = self._trace_values()
-            return Reply(float_block(values), True) if m == "DDAN" else Reply(ascii_lines(values))
+        if m in ("DSAN", "DSAS", "DDAN", "DDAS"):
+            values = s.state_values() if m.startswith("DS") else self._trace_values()
+            return Reply(float_block(values), True) if m.endswith("N") else Reply(ascii_dump(values))
         raise CommandError(1, m)  # pragma: no cover
 
     def _trace_values(self) -> np.ndarray:

@@ -1,7 +1,7 @@
 """A pseudo-terminal that behaves like a Prologix GPIB-USB controller with the analyzer
 at its GPIB address, for the serial path (pyserial, pyvisa-py ASRL or PRLGX).
 
-What the Prologix manual (v6.1, DESIGN.md section 3) specifies is honoured:
+What the Prologix manual (v6.1, docs/instrument.md) specifies is honoured:
 ``++`` commands end with CR or LF; other lines go to the instrument at ``++addr``,
 with ESC-escaped CR, LF, ESC and ``+`` restored and the ``++eos`` characters
 appended, EOI on the last byte when ``++eoi 1``. With ``++auto 1`` the

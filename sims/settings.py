@@ -5,6 +5,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields
 
+import numpy as np
+
+from sims.command_table import DISPLAY_CODES, WINDOWS
+
 #: Maximum span and the number of halvings the analyzer offers (102.4 kHz / 2^n).
 MAX_SPAN_HZ = 102_400.0
 N_SPANS = 20
@@ -15,6 +19,12 @@ N_LINES = 400
 RECORD_SAMPLES = 1024
 SAMPLE_RATE_PER_SPAN = 2.56
 ADC_BITS = 16
+
+#: The state dump (DSAN, DSAS): its length is documented, its layout is ours (proj).
+STATE_LENGTH = 96
+STATE_AVERAGING = {"STBL": 1, "AVOF": 0}
+STATE_TRIGGER_SOURCES = {"FREE": 0, "CH1": 1, "CH2": 2}
+STATE_SLOPES = {"POS": 1, "NEG": -1}
 
 
 @dataclass
@@ -84,44 +94,39 @@ class AnalyzerSettings:
                 return getattr(self, f.name)
         raise KeyError(name)
 
-    def state_commands(self) -> str:
-        """The commands that restore this state, ``;``-separated (the DSAS reply)."""
+    def state_values(self) -> np.ndarray:
+        """The 96-value state dump (DSAN, DSAS), float64 (96,).
 
-        def num(v: float) -> str:
-            return repr(float(v))
-
-        parts = [
-            f"FRS {num(self.span_hz)} HZ",
-            f"CF {num(self.center_hz)} HZ",
-            f"NAVG {self.n_averages}",
-            self.averaging,
-            f"PRVW {self.preview}",
-            self.measurement,
-            self.mode,
-        ]
+        How many values the 3562A family dumps is documented, not what they mean:
+        where each setting sits is a project choice (proj, docs/instrument.md,
+        "State dump"); every other word is 0.
+        """
+        values = np.zeros(STATE_LENGTH)
+        values[0:5] = (
+            self.span_hz,
+            self.center_hz,
+            self.n_averages,
+            STATE_AVERAGING[self.averaging],
+            self.preview,
+        )
         for ch in (1, 2):
-            parts += [
-                f"WIN{ch} {self.channel('window', ch)}",
-                f"FWD{ch} {num(self.channel('force_width', ch))} S",  # type: ignore[arg-type]
-                f"EXD{ch} {num(self.channel('exp_decay', ch))} S",  # type: ignore[arg-type]
-                f"RNG{ch} {num(self.channel('range', ch))} V",  # type: ignore[arg-type]
-                f"C{ch}AC {self.channel('ac_coupled', ch)}",
-                f"SNS{ch} {num(self.channel('sensitivity', ch))} V",  # type: ignore[arg-type]
-            ]
-            if self.channel("autorange", ch):
-                parts.append(f"AU{ch}")
-        parts += [
-            f"TSRC {self.trigger_source}",
-            f"TLVL {num(self.trigger_level_v)} V",
-            f"TSLP {self.trigger_slope}",
-            f"TDLY {num(self.trigger_delay_s)} S",
-            "TRCA",
-            self.display["A"],
-            "TRCB",
-            self.display["B"],
-            f"TRC{self.trace}",
-        ]
-        return ";".join(parts)
+            values[4 + ch] = WINDOWS.index(str(self.channel("window", ch)))
+            values[6 + ch] = float(self.channel("force_width", ch))  # type: ignore[arg-type]
+            values[8 + ch] = float(self.channel("exp_decay", ch))  # type: ignore[arg-type]
+            values[10 + ch] = float(self.channel("range", ch))  # type: ignore[arg-type]
+            values[12 + ch] = int(self.channel("autorange", ch))  # type: ignore[arg-type]
+            values[14 + ch] = int(self.channel("ac_coupled", ch))  # type: ignore[arg-type]
+            values[16 + ch] = float(self.channel("sensitivity", ch))  # type: ignore[arg-type]
+        values[19:23] = (
+            STATE_TRIGGER_SOURCES[self.trigger_source],
+            self.trigger_level_v,
+            STATE_SLOPES[self.trigger_slope],
+            self.trigger_delay_s,
+        )
+        values[23] = 0 if self.trace == "A" else 1
+        values[24] = DISPLAY_CODES[self.display["A"]]
+        values[25] = DISPLAY_CODES[self.display["B"]]
+        return values
 
 
 def coerce_span(value_hz: float) -> float:

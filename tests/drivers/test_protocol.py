@@ -131,22 +131,25 @@ DEFAULT_CONFIGURE = [
     # centres a baseband measurement on half of that.
     (b"FRS?", b"+2.000000000E+02\r\n"),
     (b"CF 100 HZ", None),
+    # Windows and pre-trigger the settings leave open are sized to the 2 s record
+    # (docs/instrument.md, "Impact defaults"): force window 1/16, exponential 1/6,
+    # pre-trigger 1/32 of it.
     (b"WIN1 FORC", None),
-    (b"FWD1 0.05 S", None),
-    (b"EXD1 1 S", None),
+    (b"FWD1 0.125 S", None),
+    (b"EXD1 0.333333333333 S", None),
     (b"SNS1 0.00225 V", None),
     (b"C1AC 0", None),
     (b"RNG1 0.02 V", None),
     (b"WIN2 EXPO", None),
-    (b"FWD2 0.05 S", None),
-    (b"EXD2 0.5 S", None),
+    (b"FWD2 0.125 S", None),
+    (b"EXD2 0.333333333333 S", None),
     (b"SNS2 0.00102 V", None),
     (b"C2AC 0", None),
     (b"RNG2 1 V", None),
     (b"TSRC CH1", None),
     (b"TLVL 0.00225 V", None),
     (b"TSLP POS", None),
-    (b"TDLY -0.02 S", None),
+    (b"TDLY -0.0625 S", None),
     (b"NAVG 5", None),
     (b"STBL", None),
     (b"PRVW 1", None),
@@ -160,21 +163,21 @@ READ_BACK = [
     (b"SNS1?", b"+2.250000000E-03\r\n"),
     (b"AU1?", b"0\r\n"),
     (b"RNG1?", b"+2.238721139E-02\r\n"),
-    (b"FWD1?", b"+5.000000000E-02\r\n"),
-    (b"EXD1?", b"+1.000000000E+00\r\n"),
+    (b"FWD1?", b"+1.250000000E-01\r\n"),
+    (b"EXD1?", b"+3.333333333E-01\r\n"),
     (b"C1AC?", b"0\r\n"),
     (b"WIN2?", b"EXPO\r\n"),
     (b"SNS2?", b"+1.020000000E-03\r\n"),
     (b"AU2?", b"0\r\n"),
     (b"RNG2?", b"+1.000000000E+00\r\n"),
-    (b"FWD2?", b"+5.000000000E-02\r\n"),
-    (b"EXD2?", b"+5.000000000E-01\r\n"),
+    (b"FWD2?", b"+1.250000000E-01\r\n"),
+    (b"EXD2?", b"+3.333333333E-01\r\n"),
     (b"C2AC?", b"0\r\n"),
     (b"TSRC?", b"CH1\r\n"),
     (b"TLVL?", b"+2.250000000E-03\r\n"),
     (b"AVMD?", b"STBL\r\n"),
     (b"TSLP?", b"POS\r\n"),
-    (b"TDLY?", b"-2.000000000E-02\r\n"),
+    (b"TDLY?", b"-6.250000000E-02\r\n"),
     (b"NAVG?", b"5\r\n"),
     (b"PRVW?", b"1\r\n"),
 ]
@@ -188,7 +191,9 @@ def test_configure_sends_every_setting_then_reads_them_back():
     assert actual.hammer.range_v == pytest.approx(10 ** (-33 / 20), rel=1e-9)  # 20 mV -> -33 dBV
     assert actual.accelerometer.window is Window.EXPONENTIAL
     assert actual.trigger_level_eu == pytest.approx(1.0)
-    assert actual.pre_trigger_s == pytest.approx(0.02)
+    assert actual.pre_trigger_s == pytest.approx(2.0 / 32)
+    assert actual.hammer.force_width_s == pytest.approx(2.0 / 16)
+    assert actual.accelerometer.exp_decay_s == pytest.approx(2.0 / 6, rel=1e-9)
     assert actual.averages == 5
     assert actual.preview is True
 
@@ -214,12 +219,17 @@ def test_configure_autorange_zoom_and_ac_coupling():
         (b"FRS?", b"+1.250000000E+01\r\n"),
         (b"CF 36 HZ", None),
         (b"WIN1 FORC", None),
-        (b"FWD1 0.05 S", None),
-        (b"EXD1 1 S", None),
+        (b"FWD1 2 S", None),  # 1/16 of the 32 s record
+        (b"EXD1 5.33333333333 S", None),  # 1/6 of it
         (b"SNS1 0.00225 V", None),
         (b"C1AC 1", None),
         (b"AU1", None),
-        *DEFAULT_CONFIGURE[13:19],  # channel 2 as by default
+        (b"WIN2 EXPO", None),
+        (b"FWD2 2 S", None),
+        (b"EXD2 5.33333333333 S", None),
+        (b"SNS2 0.00102 V", None),
+        (b"C2AC 0", None),
+        (b"RNG2 1 V", None),
         (b"TSRC CH2", None),
         (b"TLVL 0.0102 V", None),
         (b"TSLP NEG", None),
@@ -235,10 +245,16 @@ def test_configure_autorange_zoom_and_ac_coupling():
         (b"WIN1?", b"FORC\r\n"),
         (b"SNS1?", b"+2.250000000E-03\r\n"),
         (b"AU1?", b"1\r\n"),  # autorange: no RNG1? asked
-        (b"FWD1?", b"+5.000000000E-02\r\n"),
-        (b"EXD1?", b"+1.000000000E+00\r\n"),
+        (b"FWD1?", b"+2.000000000E+00\r\n"),
+        (b"EXD1?", b"+5.333333333E+00\r\n"),
         (b"C1AC?", b"1\r\n"),
-        *READ_BACK[9:16],
+        (b"WIN2?", b"EXPO\r\n"),
+        (b"SNS2?", b"+1.020000000E-03\r\n"),
+        (b"AU2?", b"0\r\n"),
+        (b"RNG2?", b"+1.000000000E+00\r\n"),
+        (b"FWD2?", b"+2.000000000E+00\r\n"),
+        (b"EXD2?", b"+5.333333333E+00\r\n"),
+        (b"C2AC?", b"0\r\n"),
         (b"TSRC?", b"CH2\r\n"),
         (b"TLVL?", b"+1.020000000E-02\r\n"),
         (b"AVMD?", b"STBL\r\n"),
@@ -260,11 +276,11 @@ def test_configure_autorange_zoom_and_ac_coupling():
 
 
 def test_configure_refused_by_the_instrument_raises():
-    refused = b'2,"Parameter out of range: TDLY -0.02 S"\r\n'
+    refused = b'2,"Parameter out of range: TDLY -0.0625 S"\r\n'
     steps = [*DEFAULT_CONFIGURE[:-1], (b"ERR?", refused), (b"ERR?", NO_ERROR)]
     with (
         expected(steps) as dsa,
-        pytest.raises(InstrumentError, match=r"instrument error 2: Parameter out of range: TDLY -0.02 S$"),
+        pytest.raises(InstrumentError, match=r"instrument error 2: Parameter out of range: TDLY -0.0625 S$"),
     ):
         dsa.configure(ImpactSettings())
 

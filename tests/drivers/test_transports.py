@@ -187,8 +187,9 @@ def test_read_exact_in_small_pieces(endpoint: Endpoint):
         t.write(b"DSAN")
         assert t.read_exact(2) == b"#A"
         (length,) = struct.unpack(">H", t.read_exact(2))
-        state = t.read_exact(length)
-        assert state.startswith(b"FRS ")
+        assert length == 96 * 8  # the 96-value state dump
+        state = [struct.unpack(">d", t.read_exact(8))[0] for _ in range(96)]
+        assert state[0] == 102400.0  # word 0: the span, preset to the widest
         assert ask(t, b"TRC?") == b"A"
 
 

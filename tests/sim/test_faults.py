@@ -2,7 +2,7 @@
 link and through real TCP sockets.
 
 Expectations come from the fault table in sims/faults.py and the status/error
-conventions of DESIGN.md section 4, decoded on the test side (tests/sim/wire.py).
+conventions of docs/instrument.md, decoded on the test side (tests/sim/wire.py).
 Block-level faults run against a replayed hit whose samples the test made, so
 the bytes that should arrive are known before the simulator sends any.
 """

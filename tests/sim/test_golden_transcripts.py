@@ -1,15 +1,20 @@
 """Golden request -> reply transcripts of the simulated HP 35660A, byte for byte.
 
-Every expected reply below is written by hand from DESIGN.md section 4 and the
-documented formats (sims/command_table.py, sims/encoding.py docstrings), never
-read back from the simulator:
+Every expected reply below is written by hand from the documented formats
+(docs/instrument.md: the 3562A family's dumps and header codes, and the project's
+choices for the rest), never read back from the simulator:
 
 * numeric query replies ``{:+.9E}`` (``+2.000000000E+02``), integers and flags
   plain, choices as their mnemonic, every reply line ending CR LF;
 * ``ERR?`` replies ``code,"Message: detail"`` with the codes of ERRORS;
 * ``DDAN``: ``#A`` + 2-byte big-endian byte count + big-endian float64, a
-  66-value header then the data, no terminator; ``DDAS`` the same values as
-  ASCII, ``{:+.16E}`` one per CR LF line.
+  66-value header then the data, no terminator; ``DDAS`` is ``#I``, the count of
+  values, then the same values as ASCII, ``{:+.16E}`` one per CR LF line;
+* header word 0 holds the documented display-function code (1 frequency response,
+  2/3 power spectrum, 4 coherence, 6/7 time record, 8/9 linear spectrum), word 7
+  the domain (0 time, 1 frequency), word 10 the x units (1 Hz, 4 s);
+* ``DSAN``/``DSAS``: the 96-value state dump, laid out as docs/instrument.md,
+  "State dump" says (the project's choice: nothing of it is documented).
 
 Traces whose values must be known in advance come from the replay source
 (RecordedHit arrays built here; sample rate 2.56 x span, 512 Hz at 200 Hz).
@@ -88,7 +93,13 @@ def block(values: list[float]) -> bytes:
 
 
 def ascii_dump(values: list[float]) -> bytes:
-    return b"".join(f"{v:+.16E}".encode("ascii") + CRLF for v in values)
+    return (
+        b"#I"
+        + CRLF
+        + str(len(values)).encode("ascii")
+        + CRLF
+        + b"".join(f"{v:+.16E}".encode("ascii") + CRLF for v in values)
+    )
 
 
 def time_trace(function_code: int, channel: int, overflow: int, y_code: int, data: np.ndarray) -> list[float]:
@@ -103,7 +114,7 @@ def time_trace(function_code: int, channel: int, overflow: int, y_code: int, dat
     h[7] = 0  # time domain
     h[8] = 0  # peak
     h[9] = y_code
-    h[10] = 0  # x in s
+    h[10] = 4  # x in s
     h[35] = 0  # float
     h[36] = 1  # real
     h[40] = 1  # linear
@@ -114,16 +125,33 @@ def time_trace(function_code: int, channel: int, overflow: int, y_code: int, dat
     return h + [float(v) for v in data]
 
 
-# Display codes 1..8 (TIM1 TIM2 LSP1 LSP2 PSP1 PSP2 FRSP COHR); y units N=1, m/s^2=2.
-TIM1_VALUES = time_trace(1, 1, 1, 1, TIME_FORCE)
-TIM2_VALUES = time_trace(2, 2, 0, 2, TIME_ACCEL)
+# Display codes: input time 1 = 6, input time 2 = 7; y units (ours) N = 1, m/s^2 = 2.
+TIM1_VALUES = time_trace(6, 1, 1, 1, TIME_FORCE)
+TIM2_VALUES = time_trace(7, 2, 0, 2, TIME_ACCEL)
 
-PRESET_DSAS = (
-    "FRS 102400.0 HZ;CF 51200.0 HZ;NAVG 1;AVOF;PRVW 0;FRQR;LNRS;"
-    "WIN1 HANN;FWD1 0.05 S;EXD1 1.0 S;RNG1 1.0 V;C1AC 0;SNS1 0.00225 V;"
-    "WIN2 HANN;FWD2 0.05 S;EXD2 1.0 S;RNG2 1.0 V;C2AC 0;SNS2 0.00102 V;"
-    "TSRC FREE;TLVL 0.0 V;TSLP POS;TDLY 0.0 S;TRCA;FRSP;TRCB;COHR;TRCA"
-)
+# The state dump, word by word (docs/instrument.md, "State dump"): 0 span Hz, 1 center
+# Hz, 2 averages, 3 averaging (1 STBL, 0 AVOF), 4 preview, 5/6 windows (UNIF 0, HANN 1,
+# FLAT 2, FORC 3, EXPO 4), 7/8 force widths s, 9/10 exponential decays s, 11/12 ranges
+# V, 13/14 autorange, 15/16 AC coupling, 17/18 sensitivities V/EU, 19 trigger source
+# (0 FREE, 1 CH1, 2 CH2), 20 level V, 21 slope (1 POS, -1 NEG), 22 delay s, 23 active
+# trace (0 A, 1 B), 24/25 display-function codes of traces A and B; 26-95 zero.
+PRESET_STATE = [
+    *(102400.0, 51200.0, 1.0, 0.0, 0.0),
+    *(1.0, 1.0, 0.05, 0.05, 1.0, 1.0),
+    *(1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.00225, 0.00102),
+    *(0.0, 0.0, 1.0, 0.0),
+    *(0.0, 1.0, 4.0),
+    *([0.0] * 70),
+]
+
+
+def state_with(**words: float) -> list[float]:
+    """The preset state with some words changed: state_with(w13=1.0)."""
+    out = list(PRESET_STATE)
+    for key, value in words.items():
+        out[int(key[1:])] = value
+    return out
+
 
 # Every setting away from its preset (and an error in the queue).
 MESS = (
@@ -131,12 +159,14 @@ MESS = (
     "EXD1 0.5 S;EXD2 2 S;RNG1 5 V;RNG2 50 MV;AU1;AU2;C1AC 1;C2AC 1;SNS1 10 MV;SNS2 100 MV;"
     "TSRC CH2;TLVL -0.2 V;TSLP NEG;TDLY -1 S;TRCB;TIM2;TRCA;LSP1"
 )
-MESS_DSAS = (
-    "FRS 12.5 HZ;CF 36.0 HZ;NAVG 7;STBL;PRVW 1;FRQR;LNRS;"
-    "WIN1 FORC;FWD1 0.01 S;EXD1 0.5 S;RNG1 5.011872336272722 V;C1AC 1;SNS1 0.01 V;AU1;"
-    "WIN2 EXPO;FWD2 0.02 S;EXD2 2.0 S;RNG2 0.05011872336272722 V;C2AC 1;SNS2 0.1 V;AU2;"
-    "TSRC CH2;TLVL -0.2 V;TSLP NEG;TDLY -1.0 S;TRCA;LSP1;TRCB;TIM2;TRCA"
-)
+MESS_STATE = [
+    *(12.5, 36.0, 7.0, 1.0, 1.0),
+    *(3.0, 4.0, 0.01, 0.02, 0.5, 2.0),
+    *(5.011872336272722, 0.05011872336272722, 1.0, 1.0, 1.0, 1.0, 0.01, 0.1),  # ranges up 1 dB steps
+    *(2.0, -0.2, -1.0, -1.0),
+    *(0.0, 8.0, 7.0),  # trace A active: LSP1 on A, TIM2 on B
+    *([0.0] * 70),
+]
 
 
 # --------------------------------------------------------------------------- goldens
@@ -232,7 +262,7 @@ g("NAVG", "ID?\nNAVG 2\nNAVG?", lines("HP35660A", "2"))
 
 # -- identification, reset, local
 g("ID?", "ID?", lines("HP35660A"))
-g("RST", f"{MESS};RST;DSAS", lines(PRESET_DSAS))
+g("RST", f"{MESS};RST;DSAS", ascii_dump(PRESET_STATE))
 g("LCL", "NAVG 4;LCL;NAVG?;ERR?", lines("4", '0,"No error"'))
 
 # -- windows, averaging, measurement, mode
@@ -250,8 +280,8 @@ g("AVMD?", "STBL;AVMD?;AVOF;AVMD?", lines("STBL", "AVOF"))
 g("AU1?", "AU1;AU1?;AU2?;RNG1 1 V;AU1?", lines("1", "0", "0"))
 g("AU2?", "AU2;AU2?;AU1?;RNG2 1 V;AU2?", lines("1", "0", "0"))
 # -- autorange (only DSAS shows it)
-g("AU1", "RST;AU1;DSAS", lines(PRESET_DSAS.replace("SNS1 0.00225 V;", "SNS1 0.00225 V;AU1;")))
-g("AU2", "RST;AU2;DSAS", lines(PRESET_DSAS.replace("SNS2 0.00102 V;", "SNS2 0.00102 V;AU2;")))
+g("AU1", "RST;AU1;DSAS", ascii_dump(state_with(w13=1.0)))
+g("AU2", "RST;AU2;DSAS", ascii_dump(state_with(w14=1.0)))
 
 # -- traces and display functions (each trace keeps its own)
 g("TRC?", "TRC?", lines("A"))
@@ -303,10 +333,10 @@ g("DDAN", "FRS 200 HZ;STRT;TIM1;DDAN", block(TIM1_VALUES), "time")
 g("DDAN", "FRS 200 HZ;STRT;TRCB;TIM2;DDAN", block(TIM2_VALUES), "time")
 g("DDAS", "FRS 200 HZ;STRT;TIM2;DDAS", ascii_dump(TIM2_VALUES), "time")
 g("DDAS", "FRS 200 HZ;STRT;TRCB;TIM1;DDAS", ascii_dump(TIM1_VALUES), "time")
-g("DSAS", "RST;DSAS", lines(PRESET_DSAS))
-g("DSAS", f"{MESS};DSAS", lines(MESS_DSAS))
-g("DSAN", "RST;DSAN", b"#A" + struct.pack(">H", len(PRESET_DSAS)) + PRESET_DSAS.encode("ascii"))
-g("DSAN", f"{MESS};DSAN", b"#A" + struct.pack(">H", len(MESS_DSAS)) + MESS_DSAS.encode("ascii"))
+g("DSAS", "RST;DSAS", ascii_dump(PRESET_STATE))
+g("DSAS", f"{MESS};DSAS", ascii_dump(MESS_STATE))
+g("DSAN", "RST;DSAN", block(PRESET_STATE))
+g("DSAN", f"{MESS};DSAN", block(MESS_STATE))
 
 # -- errors, read back through ERR? (code -> transcripts)
 ERROR_GOLDENS: list[tuple[int, str, bytes]] = [
@@ -409,14 +439,14 @@ _X1 = 2.0 * np.exp(-2j * np.pi * _K * 1 / N)  # 2 N at sample 1
 _X2 = 3.0 * np.exp(-2j * np.pi * _K * 5 / N)  # 3 m/s^2 at sample 5
 # function: (display code, channel, y-units code, complex, expected data)
 SPECTRAL = {
-    "LSP1": (3, 1, 1, True, _X1 * _SCALE),
-    "LSP2": (4, 2, 2, True, _X2 * _SCALE),
-    "PSP1": (5, 1, 5, False, 4.0 * _SCALE**2),
-    "PSP2": (6, 2, 6, False, 9.0 * _SCALE**2),
+    "LSP1": (8, 1, 1, True, _X1 * _SCALE),
+    "LSP2": (9, 2, 2, True, _X2 * _SCALE),
+    "PSP1": (2, 1, 5, False, 4.0 * _SCALE**2),
+    "PSP2": (3, 2, 6, False, 9.0 * _SCALE**2),
     # H1 = G21 / G11 = conj(X1) X2 / |X1|^2: the response lags the force by 4 samples,
     # so the phase falls with frequency (a conjugated H1 would rise).
-    "FRSP": (7, 3, 3, True, 1.5 * np.exp(-2j * np.pi * _K * 4 / N)),
-    "COHR": (8, 3, 4, False, np.ones(401)),
+    "FRSP": (1, 3, 3, True, 1.5 * np.exp(-2j * np.pi * _K * 4 / N)),
+    "COHR": (4, 3, 4, False, np.ones(401)),
 }
 
 
@@ -455,6 +485,7 @@ def test_ascii_dump_reads_back_bit_exact(connect):
     text = ask(conn, "DDAS")
     values = struct.unpack(f">{(len(binary) - 4) // 8}d", binary[4:])
     rows = text.split(CRLF)
+    assert rows[:2] == [b"#I", str(len(values)).encode("ascii")]
     assert rows[-1] == b""
-    assert [float(r) for r in rows[:-1]] == list(values)
-    assert all(re.fullmatch(rb"[+-]\d\.\d{16}E[+-]\d\d", r) for r in rows[:-1])
+    assert [float(r) for r in rows[2:-1]] == list(values)
+    assert all(re.fullmatch(rb"[+-]\d\.\d{16}E[+-]\d\d", r) for r in rows[2:-1])

@@ -29,7 +29,9 @@ def _lines(header: np.ndarray) -> np.ndarray:
 
 
 # Spans where the response has died out within the record (400 / span seconds):
-# seed mode 1 decays as exp(-1.26 t), realistic mode 1 as exp(-0.35 t).
+# seed mode 1 decays as exp(-1.26 t), realistic mode 1 as exp(-0.35 t). The
+# pre-trigger (1/32 of the record) holds the spread the zero-phase decimating
+# filters give the hammer pulse before the trigger (docs/simulator.md).
 @pytest.mark.parametrize(
     ("scenario", "span_hz", "center_hz"),
     [("seed", 50.0, 25.0), ("realistic", 12.5, 6.25), ("seed", 12.5, 36.0), ("realistic", 12.5, 98.0)],
@@ -39,7 +41,8 @@ def test_frf_of_a_capture_equals_the_specimen_h(make_analyzer, connect, scenario
     conn = connect(make_analyzer(scenario, seed=5, noise=False))
     _measure(
         conn,
-        f"FRS {span_hz} HZ;CF {center_hz} HZ;TSRC CH1;TLVL 2 MV;TDLY -20 MS;UNIF;NAVG 2;STBL;"
+        f"FRS {span_hz} HZ;CF {center_hz} HZ;TSRC CH1;TLVL 2 MV;TDLY {-400 / span_hz / 32} S;UNIF;"
+        "NAVG 2;STBL;"
         "RNG1 20 MV;RNG2 0.5 V",
     )
     header, frf = _trace(conn, "FRSP;DDAN")
@@ -67,7 +70,7 @@ def test_realistic_frf_peaks_sit_on_the_exact_beam_frequencies_with_noise(make_a
     line = header[55]
     assert line == pytest.approx(0.5)
     magnitude = np.abs(frf)
-    for exact in EXACT_TABULATED_HZ:  # 5.57, 34.90, 97.72, 191.49 Hz (DESIGN.md section 5)
+    for exact in EXACT_TABULATED_HZ:  # 5.57, 34.90, 97.72, 191.49 Hz (docs/method.md)
         near = np.abs(f - exact) < 4.0
         peak = f[near][np.argmax(magnitude[near])]
         assert abs(peak - exact) <= line, f"peak at {peak} Hz, exact {exact} Hz"
@@ -100,7 +103,7 @@ def test_analyzer_frf_is_h1_of_its_own_time_records(make_analyzer, connect, wind
     h1, force, _, accel = _records(conn)
     n, fs = force.size, 2 * h1[52]
     k, t = np.arange(n), np.arange(n) / fs
-    # Window definitions from sims/command_table.py and DESIGN.md, written out here.
+    # Window definitions from sims/command_table.py and docs/instrument.md, written out here.
     shapes = {
         "UNIF": np.ones(n),
         "HANN": 0.5 - 0.5 * np.cos(2 * np.pi * k / n),

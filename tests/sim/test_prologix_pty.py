@@ -1,9 +1,9 @@
 """The simulator's Prologix GPIB-USB emulation on a real pseudo-terminal, driven
-through pyserial and pyvisa-py's ASRL resource (DESIGN.md section 3, Prologix
+through pyserial and pyvisa-py's ASRL resource (docs/instrument.md, Prologix
 manual v6.1).
 
 Expectations come from the Prologix manual (command names, escaping, ++eos
-codes), from DESIGN.md (the wire format) and from independent views of the same
+codes), from docs/instrument.md (the wire format) and from independent views of the same
 data: the analyzer's own time record, the ASCII dump and the TCP front end.
 """
 
@@ -30,7 +30,7 @@ from sims.tcp_server import TcpServer
 pytestmark = pytest.mark.timeout(30)
 
 VERSION_LINE = b"Prologix GPIB-USB Controller version 6.101\r\n"
-#: What pyvisa-py (0.8+) sends when it opens a Prologix interface (DESIGN.md section 3).
+#: What pyvisa-py (0.8+) sends when it opens a Prologix interface (docs/instrument.md).
 PYVISA_PY_INIT = ("++mode 1", "++auto 0", "++read_tmo_ms 50", "++eos 3", "++eoi 1", "++eot_enable 0")
 SETUP = "FRS 200 HZ;TSRC CH1;TLVL 2 MV;TDLY -10 MS;STRT"
 RECORD_SAMPLES = 1024
@@ -216,7 +216,7 @@ def test_binary_ddan_through_read_eoi_matches_the_record_ascii_and_tcp(visa_ser,
     assert values.tobytes() == np.asarray(analyzer.last_record.force_n, dtype=np.float64).tobytes()
 
     send(visa_ser, "DDAS", "++read eoi")
-    expected_lines = HEADER_LENGTH + RECORD_SAMPLES
+    expected_lines = 2 + HEADER_LENGTH + RECORD_SAMPLES  # #I, the count, the values
     visa_ser.timeout = 5
     text = b"".join(visa_ser.readline() for _ in range(expected_lines))
     assert text.count(b"\r\n") == expected_lines
@@ -390,7 +390,7 @@ def test_open_and_close_leave_no_thread_and_no_fd(analyzer):
 
 def test_close_is_prompt_while_the_host_has_stopped_reading(analyzer):
     """close() must not wait for a host that stopped reading in the middle of a
-    transfer (DESIGN.md section 3: partial reads; sims/prologix.py gives such a
+    transfer (docs/instrument.md: partial reads; sims/prologix.py gives such a
     host up after WRITE_GIVE_UP_S and stops on close)."""
     p = PrologixPty(analyzer, 11).start()
     port = serial.Serial(p.port, baudrate=115200, timeout=3)

@@ -3,7 +3,7 @@ the HDF5 reader behind ``daq sim serve --replay`` (daq.recorded_hits) and the tw
 together in a real subprocess.
 
 The hits are made here; what the analyzer must return is computed here with numpy
-from DESIGN.md section 4 (1024 samples at 2.56 x span, 400 lines, H1 = G21 / G11),
+from docs/instrument.md (1024 samples at 2.56 x span, 400 lines, H1 = G21 / G11),
 never taken from a previous reply of the simulator.
 """
 
@@ -267,7 +267,7 @@ def test_replay_source_refuses_hits_that_are_not_1024_samples():
 
 # ---------------------------------------------------------------- HDF5 runs
 def write_run(path: Path, hits: list[RecordedHit], skip: tuple[str, ...] = (), **datasets) -> Path:
-    """A run laid out as DESIGN.md section 6: /entry/hits/{force,response,time}
+    """A run laid out as docs/run-format.md: /entry/hits/{force,response,time}
     plus whatever ``datasets`` add or replace; ``skip`` leaves datasets (or "hits",
     the whole group) out."""
     fields = {

@@ -1,9 +1,9 @@
 """The simulator's TCP front end through real sockets: pyvisa-py's TCPIP SOCKET
-resource and raw loopback sockets (DESIGN.md sections 3 and 4).
+resource and raw loopback sockets (docs/instrument.md).
 
 Expectations come from an independent view of the same data: the time record
 the analyzer holds (bit-exact), the DDAS ASCII dump against the DDAN binary
-block, pyvisa's own HP block decoder, and header words defined in DESIGN.md.
+block, pyvisa's own HP block decoder, and header words documented in docs/instrument.md.
 """
 
 from __future__ import annotations
@@ -28,8 +28,8 @@ pytestmark = pytest.mark.timeout(30)
 
 SPAN_HZ = 200.0
 SETUP = "FRS 200 HZ;TSRC CH1;TLVL 2 MV;TDLY -10 MS;STRT"
-RECORD_SAMPLES = 1024  # DESIGN.md section 4: 1024-sample time record per channel
-LINES = 400  # DESIGN.md section 4: 400 lines
+RECORD_SAMPLES = 1024  # docs/instrument.md: 1024-sample time record per channel
+LINES = 400  # docs/instrument.md: 400 lines
 BIG_REQUEST = b"TIM1;" + b"DDAN;" * 200 + b"\n"  # about 1.7 MB of reply
 
 
@@ -169,11 +169,12 @@ def test_tim1_block_is_the_time_record_bit_exact(inst, analyzer):
     assert values.tobytes() == np.asarray(force, dtype=np.float64).tobytes()
     assert np.any(values != 0.0)  # the hit is in the record
 
-    # Header words as DESIGN.md section 4 and sims/encoding.py define them.
+    # Header words as documented (docs/instrument.md, "Trace format").
+    assert header[0] == 6  # input time 1
     assert header[1] == header[2] == RECORD_SAMPLES
     assert header[4] == 1  # channel 1
     assert header[7] == 0  # time domain
-    assert header[10] == 0  # x in seconds
+    assert header[10] == 4  # x in seconds
     assert header[35] == 0  # float
     assert header[36] == 1  # real
     assert header[40] == 1  # linear
@@ -195,6 +196,8 @@ def test_tim1_binary_equals_ascii_dump(inst):
     payload, _ = split_block(block)
     binary = np.frombuffer(payload, dtype=">f8")
     inst.write("DDAS")
+    assert inst.read() == "#I"
+    assert int(inst.read()) == binary.size
     ascii_values = np.array([float(inst.read()) for _ in range(binary.size)])
     assert np.array_equal(binary, ascii_values)
     assert inst.query("ID?") == "HP35660A"  # the ASCII dump had exactly that many lines
@@ -211,6 +214,8 @@ def test_frsp_binary_decodes_to_the_ascii_dump(inst):
         )
     )
     inst.write("DDAS")
+    assert inst.read() == "#I"
+    assert int(inst.read()) == values.size
     first = float(inst.read())
     assert first == values[0]
     rest = [float(inst.read()) for _ in range(values.size - 1)]
@@ -222,6 +227,7 @@ def test_frsp_binary_decodes_to_the_ascii_dump(inst):
     n = int(header[1])
     assert header[36] == 0  # complex: interleaved re, im
     assert body.size == 2 * n
+    assert header[0] == 1  # frequency response
     assert header[7] == 1  # frequency domain
     assert header[10] == 1  # x in Hz
     assert header[4] == 3  # ch2 over ch1
@@ -242,7 +248,7 @@ def test_binary_block_followed_directly_by_the_next_reply(sock, analyzer):
     assert values.tobytes() == np.asarray(analyzer.last_record.force_n, dtype=np.float64).tobytes()
     sock.sendall(b"DDAS\n")
     text = bytearray()
-    while text.count(b"\r\n") < HEADER_LENGTH + RECORD_SAMPLES:
+    while text.count(b"\r\n") < 2 + HEADER_LENGTH + RECORD_SAMPLES:  # #I, count, values
         chunk = sock.recv(65536)
         assert chunk
         text += chunk

@@ -1,5 +1,6 @@
-"""Test-side decoding of what the analyzer sends, written from DESIGN.md section 4
-(not shared with sims/ or drivers/, so a bug there cannot hide here)."""
+"""Test-side decoding of what the analyzer sends, written from the documented formats
+(docs/instrument.md, "Trace format"; not shared with sims/ or drivers/, so a bug
+there cannot hide here)."""
 
 from __future__ import annotations
 
@@ -32,10 +33,13 @@ def decode_trace(data: bytes) -> tuple[np.ndarray, np.ndarray]:
 
 
 def decode_ascii_trace(data: bytes) -> np.ndarray:
-    """Every value of a DDAS reply, (66 + n,) float."""
+    """Every value of a DDAS reply (``#I``, the count, one value per line), (66 + n,) float."""
     lines = data.split(b"\r\n")
+    assert lines[0] == b"#I", lines[0]
     assert lines[-1] == b""
-    return np.array([float(x) for x in lines[:-1]])
+    values = np.array([float(x) for x in lines[2:-1]])
+    assert values.size == int(lines[1]), (lines[1], values.size)
+    return values
 
 
 def ask(conn, text: str) -> bytes:
