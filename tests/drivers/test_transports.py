@@ -766,11 +766,8 @@ def test_list_resources_sends_nothing_onto_the_network(monkeypatch: pytest.Monke
 
     for name in ("sendto", "sendmsg", "connect", "connect_ex"):
         monkeypatch.setattr(socket.socket, name, refuse(name))
-    start = time.monotonic()
     found = list_resources()
-    elapsed = time.monotonic() - start
-    assert attempts == []
-    assert elapsed < 0.9  # pyvisa-py's VXI-11/HiSLIP discovery waits 1 s
+    assert attempts == []  # no discovery packet, so none of its 1 s waits either
     assert set(found) == {"visa", "serial", "notes"}
     assert all(isinstance(v, list) for v in found.values())
     assert all(isinstance(n, str) for v in found.values() for n in v)

@@ -461,6 +461,9 @@ def test_daq_sim_serve_replays_a_run_over_tcp(tmp_path):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         env=env,
+        # A child of a shell or CI runner that ignores SIGINT would inherit that and
+        # never see the Ctrl-C this test sends.
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         assert proc.stdout is not None
