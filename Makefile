@@ -24,7 +24,7 @@ demo: $(VENV)/.installed-run
 	$(BIN)/daq demo
 
 test: lint
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .
