@@ -1,0 +1,121 @@
+"""Run store timings (not a test): seal, list cold/warm, open and verify.
+
+    .venv/bin/python bench/bench_store.py [--runs 1000]
+
+Prints a small table. The store is built in a temporary folder and removed afterwards.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from daq.store import Hits, Instrument, Run, Sample, Store, new_run_id, open_run, seal, verify
+
+
+def make_run(n_hits: int, n_samples: int, seed: int) -> Run:
+    rng = np.random.default_rng(seed)
+    t = np.arange(n_samples) / 2560.0
+    # Decaying sines with noise: compresses like real records, unlike pure noise.
+    response = np.sin(2 * np.pi * 27.3 * t) * np.exp(-t / 0.4) * 20 + rng.normal(0, 0.05, (n_hits, n_samples))
+    force = np.zeros((n_hits, n_samples))
+    force[:, 32:40] = 150.0
+    force += rng.normal(0, 0.01, force.shape)
+    return Run(
+        run_id=new_run_id(),
+        kind="simulated",
+        complete=True,
+        start_time="2026-11-23T10:15:03.123Z",
+        end_time="2026-11-23T10:16:03.123Z",
+        operator="bench",
+        note=f"bench run {seed}",
+        instrument=Instrument(
+            "HP 35660A", "HEWLETT-PACKARD,35660A", "sim", "tcp", "35660A", {"span_hz": 1000.0}
+        ),
+        sample=Sample(2700.0, 69e9, 0.025, 0.003, 0.3, 7.5e-5, 5.625e-11),
+        hits=Hits(
+            force_n=force,
+            response_m_s2=response,
+            sample_rate_hz=2560.0,
+            start_s=-32 / 2560.0,
+            center_hz=0.0,
+            accepted=np.ones(n_hits, bool),
+            reject_reason=[""] * n_hits,
+            overload=np.zeros((n_hits, 2), bool),
+            peak_force_n=force.max(axis=1),
+            timestamp_utc=["2026-11-23T10:15:03.123Z"] * n_hits,
+            checks=[{"double_hit": False}] * n_hits,
+        ),
+    )
+
+
+def best_of(fn, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=1000)
+    args = parser.parse_args()
+    root = Path(tempfile.mkdtemp(prefix="bench-store-"))
+    rows: list[tuple[str, str]] = []
+    try:
+        one = root / "one"
+        seal_times = []
+        for i in range(20):
+            run = make_run(10, 1024, seed=i)
+            start = time.perf_counter()
+            path = seal(run, one)
+            seal_times.append(time.perf_counter() - start)
+        raw_bytes = 2 * 10 * 1024 * 8
+        size = path.stat().st_size
+        rows.append(
+            ("seal 10 hits x 1024 samples (median of 20)", f"{statistics.median(seal_times) * 1e3:.1f} ms")
+        )
+        rows.append(
+            ("  size on disk (raw records 160 KiB)", f"{size / 1024:.1f} KiB ({size / raw_bytes:.0%})")
+        )
+        rows.append(
+            ("open_run of that run (best of 10)", f"{best_of(lambda: open_run(path), 10) * 1e3:.1f} ms")
+        )
+        rows.append(("verify of that run (best of 10)", f"{best_of(lambda: verify(path), 10) * 1e3:.1f} ms"))
+
+        many = root / "many"
+        start = time.perf_counter()
+        for i in range(args.runs):
+            seal(make_run(10, 1024, seed=i), many)
+        filling = time.perf_counter() - start
+        rows.append((f"seal {args.runs} runs (10 x 1024 each)", f"{filling:.1f} s"))
+        store = Store(many)
+        start = time.perf_counter()
+        listing = store.list()
+        cold = time.perf_counter() - start
+        assert len(listing) == args.runs
+        rows.append((f"list {args.runs} runs cold (no index; builds it)", f"{cold * 1e3:.0f} ms"))
+        warm = best_of(store.list, 5)
+        rows.append((f"list {args.runs} runs warm (index present, best of 5)", f"{warm * 1e3:.0f} ms"))
+        start = time.perf_counter()
+        store.resolve(listing[-1].run_id[:22])
+        rows.append(("resolve a prefix among them", f"{(time.perf_counter() - start) * 1e3:.1f} ms"))
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    width = max(len(label) for label, _ in rows)
+    print(f"{'what':<{width}}  value")
+    print(f"{'-' * width}  ------")
+    for label, value in rows:
+        print(f"{label:<{width}}  {value}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,127 @@
+"""HDF5 tree -> Run (the inverse of encode.py). Raises StoreError for anything amiss."""
+
+from __future__ import annotations
+
+import json
+
+import h5py
+import numpy as np
+
+from daq.store import layout
+from daq.store.errors import StoreError
+from daq.store.h5io import (
+    get_array,
+    get_bool,
+    get_float,
+    get_group,
+    get_int,
+    get_json,
+    get_text,
+    get_text_array,
+)
+from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample
+
+
+def check_schema(f: h5py.File) -> int:
+    """The file's schema version; StoreError unless it is a run this code can read."""
+    if layout.ATTR_SCHEMA not in f.attrs:
+        raise StoreError("not a run file (no schema attribute on the root)")
+    schema = get_text(f, layout.ATTR_SCHEMA)
+    if schema != layout.SCHEMA_NAME:
+        raise StoreError(f"not a run file (schema {schema!r}, expected {layout.SCHEMA_NAME!r})")
+    version = get_int(f, layout.ATTR_SCHEMA_VERSION)
+    if version > layout.SCHEMA_VERSION:
+        raise StoreError(
+            f"run schema version {version} is newer than this software reads "
+            f"({layout.SCHEMA_VERSION}); update cantilever-daq"
+        )
+    if version < 1:
+        raise StoreError(f"run schema version {version} is not valid")
+    return version
+
+
+def decode_run(f: h5py.File) -> Run:
+    check_schema(f)
+    entry = get_group(f, layout.ENTRY)
+    provenance = get_json(entry, layout.ATTR_PROVENANCE)
+    instrument = sample = None
+    group = get_group(f, layout.INSTRUMENT, required=False)
+    if group is not None:
+        settings = get_json(group, layout.ATTR_SETTINGS)
+        instrument = _build(
+            Instrument, **{n: get_text(group, n) for n in layout.INSTRUMENT_ATTRS}, settings=settings
+        )
+    group = get_group(f, layout.SAMPLE, required=False)
+    if group is not None:
+        values = {n: get_float(group, n) for n in layout.SAMPLE_ATTRS}
+        values |= {n: get_float(group, n) for n in layout.SAMPLE_OPTIONAL_ATTRS if n in group.attrs}
+        sample = _build(Sample, **values)
+    group = get_group(f, layout.HITS, required=False)
+    hits = _decode_hits(group) if group is not None else None
+    group = get_group(f, layout.ANALYZER, required=False)
+    analyzer = _decode_frf(group) if group is not None else None
+    group = get_group(f, layout.MEASURED_FRF, required=False)
+    measured = _decode_frf(group) if group is not None else None
+    return _build(
+        Run,
+        **{n: get_text(entry, n) for n in ("run_id", "kind", "start_time", "end_time", "operator", "note")},
+        complete=get_bool(entry, "complete"),
+        software=get_text(entry, layout.ATTR_SOFTWARE),
+        provenance=provenance,
+        instrument=instrument,
+        sample=sample,
+        hits=hits,
+        analyzer=analyzer,
+        measured_frfs=measured,
+    )
+
+
+def _decode_hits(group: h5py.Group) -> Hits:
+    force = get_array(group, layout.D_FORCE, "fc", 2)
+    response = get_array(group, layout.D_RESPONSE, "fc", 2)
+    time_axis = get_array(group, layout.D_TIME, "f", 1)
+    if force.shape[1:] != time_axis.shape:
+        raise StoreError(
+            f"{group.name}: time axis has {time_axis.size} samples, records have {force.shape[1]}"
+        )
+    checks_text = get_text_array(group, layout.D_CHECKS)
+    try:
+        checks = [json.loads(text) for text in checks_text]
+    except json.JSONDecodeError:
+        raise StoreError(f"{group.name}/{layout.D_CHECKS} holds text that is not JSON") from None
+    hits = _build(
+        Hits,
+        force_n=force,
+        response_m_s2=response,
+        sample_rate_hz=get_float(group, "sample_rate_hz"),
+        start_s=get_float(group, "start_s"),
+        center_hz=get_float(group, "center_hz"),
+        accepted=get_array(group, layout.D_ACCEPTED, "b", 1),
+        reject_reason=get_text_array(group, layout.D_REJECT_REASON),
+        overload=get_array(group, layout.D_OVERLOAD, "b", 2),
+        peak_force_n=get_array(group, layout.D_PEAK_FORCE, "f", 1),
+        timestamp_utc=get_text_array(group, layout.D_TIMESTAMP),
+        checks=checks,
+    )
+    # The stored time axis is redundant with start_s and sample_rate_hz; a mismatch
+    # means one of them was damaged or edited.
+    if not np.allclose(time_axis, hits.time_s(), rtol=1e-12, atol=1e-15):
+        raise StoreError(f"{group.name}/time disagrees with start_s and sample_rate_hz")
+    return hits
+
+
+def _decode_frf(group: h5py.Group) -> MeasuredFrf:
+    return _build(
+        MeasuredFrf,
+        frequency_hz=get_array(group, layout.D_FREQUENCY, "f", 1),
+        frf=get_array(group, layout.D_FRF, "c", 2),
+        coherence=get_array(group, layout.D_COHERENCE, "f", 2, required=False),
+        labels=get_text_array(group, layout.D_LABEL),
+    )
+
+
+def _build(cls: type, **values: object) -> object:
+    try:
+        return cls(**values)
+    except ValueError as exc:
+        raise StoreError(f"inconsistent {cls.__name__.lower()} data: {exc}") from None

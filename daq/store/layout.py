@@ -1,0 +1,101 @@
+"""Names of everything inside a run file (HDF5), in one place.
+
+The tree is NeXus-flavoured so that generic viewers (h5web, silx, HDFView) show and
+plot a run without knowing this program: groups carry ``NX_class``, plottable groups
+carry ``signal`` and ``axes``, datasets carry ``units`` and ``long_name``, and the
+root's ``default`` leads to the data worth plotting. docs/run-format.md describes
+every name below.
+"""
+
+from __future__ import annotations
+
+SCHEMA_NAME = "cantilever-daq.run"
+# Bumped only for changes an older reader would misread; readers refuse newer versions.
+SCHEMA_VERSION = 1
+
+RESULT_SCHEMA_NAME = "cantilever-daq.result"
+RESULT_SCHEMA_VERSION = 1
+
+# HDF5 file-format features: exactly those of HDF5 1.10. They checksum every piece
+# of metadata (superblock v3, object headers v2, attribute and link heaps, and the
+# v4 chunk indexes; the 1.8 format still used unchecksummed v1 B-trees for chunks),
+# which is what lets a flipped byte anywhere in the metadata be detected. Capping at
+# 1.10 keeps the files readable by every HDF5 library from 1.10 on (HDFView, h5web's
+# h5wasm, silx).
+LIBVER = ("v110", "v110")
+
+# Filters on every dataset: gzip level 4 (good ratio, fast), shuffle (groups the
+# bytes of float64 values so gzip finds the repeats) and fletcher32 (per-chunk
+# checksum, verified by HDF5 on every read).
+GZIP_LEVEL = 4
+
+# --- root attributes -------------------------------------------------------
+ATTR_SCHEMA = "schema"
+ATTR_SCHEMA_VERSION = "schema_version"
+ATTR_CREATOR = "creator"
+ATTR_DEFAULT = "default"
+ATTR_NX_CLASS = "NX_class"
+ATTR_SIGNAL = "signal"
+ATTR_AXES = "axes"
+ATTR_AUX_SIGNALS = "auxiliary_signals"
+ATTR_UNITS = "units"
+ATTR_LONG_NAME = "long_name"
+
+# --- groups ---------------------------------------------------------------
+ENTRY = "entry"
+INSTRUMENT = "entry/instrument"
+SAMPLE = "entry/sample"
+HITS = "entry/hits"
+ANALYZER = "entry/analyzer"
+MEASURED_FRF = "entry/measured_frf"
+
+# --- /entry attributes ------------------------------------------------------
+ENTRY_ATTRS = ("run_id", "kind", "complete", "start_time", "end_time", "operator", "note")
+ATTR_SOFTWARE = "software"
+ATTR_PROVENANCE = "provenance_json"
+
+# --- /entry/instrument attributes -------------------------------------------
+INSTRUMENT_ATTRS = ("model", "identification", "resource", "transport", "dialect")
+ATTR_SETTINGS = "settings_json"
+
+# --- /entry/sample attributes (SI units are in the names) ---------------------
+SAMPLE_ATTRS = (
+    "density_kg_m3",
+    "youngs_modulus_pa",
+    "width_m",
+    "height_m",
+    "length_m",
+    "area_m2",
+    "second_moment_m4",
+)
+SAMPLE_OPTIONAL_ATTRS = ("force_position_m", "sensor_position_m")
+
+# --- /entry/hits ----------------------------------------------------------------
+HITS_ATTRS = ("sample_rate_hz", "start_s", "center_hz")
+D_FORCE = "force"  # (n_hits, n_samples) N, float64 or complex128
+D_RESPONSE = "response"  # (n_hits, n_samples) m/s^2
+D_TIME = "time"  # (n_samples,) s relative to the trigger
+D_HIT = "hit"  # (n_hits,) hit index 0..n-1, the first axis for viewers
+D_ACCEPTED = "accepted"  # (n_hits,) bool
+D_REJECT_REASON = "reject_reason"  # (n_hits,) UTF-8 text, "" when accepted
+D_OVERLOAD = "overload"  # (n_hits, 2) bool: [force channel, response channel]
+D_PEAK_FORCE = "peak_force"  # (n_hits,) N
+D_TIMESTAMP = "timestamp"  # (n_hits,) ISO 8601 UTC text
+D_CHECKS = "checks_json"  # (n_hits,) one JSON object per hit
+
+# --- FRF groups (/entry/analyzer and /entry/measured_frf) ------------------------
+D_FREQUENCY = "frequency"  # (n_lines,) Hz
+D_FRF = "frf"  # (n_frf, n_lines) complex128, (m/s^2)/N
+D_COHERENCE = "coherence"  # (n_frf, n_lines) dimensionless
+D_LABEL = "label"  # (n_frf,) UTF-8 text
+D_FRF_INDEX = "frf_index"  # (n_frf,) 0..n-1, the first axis for viewers
+
+# --- result files ---------------------------------------------------------------
+RESULT_GROUP = "result"
+D_RESULT_JSON = "values_json"  # the non-array part of a result payload, one JSON text
+
+# --- file names in a store folder ------------------------------------------------
+RUN_SUFFIX = ".h5"
+TMP_PREFIX = "."  # temporaries are hidden files: ".<run_id>.h5.tmp-<pid>-<hex>"
+TMP_MARKER = ".tmp-"
+INDEX_FILE = ".index.sqlite"

@@ -1,0 +1,325 @@
+"""A run in memory: plain dataclasses holding numpy arrays, checked on construction.
+
+Units are SI unless a name says otherwise. Every constructor raises ValueError with
+a one-line message when shapes, dtypes or values do not fit together, so a Run that
+exists is a Run that can be sealed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from datetime import datetime
+from typing import Any
+
+import numpy as np
+
+from daq import __version__
+from daq.store.ids import is_run_id
+
+RUN_KINDS = ("simulated", "captured", "replayed", "imported")
+SOFTWARE = f"cantilever-daq {__version__}"
+
+
+@dataclass(eq=False)
+class Hits:
+    """The time records of a run's hits, both channels, and what was decided about each.
+
+    force_n, response_m_s2: (n_hits, n_samples), N and m/s^2; float64 at baseband,
+        complex128 for zoom records (complex envelope around ``center_hz``).
+    sample_rate_hz: samples per second of each record, Hz.
+    start_s: time of the first sample relative to the trigger, s (negative = pre-trigger).
+    center_hz: 0 at baseband, the zoom centre frequency otherwise, Hz.
+    accepted: (n_hits,) bool. reject_reason: (n_hits,) str, "" exactly when accepted.
+    overload: (n_hits, 2) bool, [force channel, response channel].
+    peak_force_n: (n_hits,) N. timestamp_utc: (n_hits,) ISO 8601 UTC strings.
+    checks: n_hits JSON-able dicts, the per-hit check results.
+    """
+
+    force_n: np.ndarray
+    response_m_s2: np.ndarray
+    sample_rate_hz: float
+    start_s: float
+    center_hz: float
+    accepted: np.ndarray
+    reject_reason: np.ndarray
+    overload: np.ndarray
+    peak_force_n: np.ndarray
+    timestamp_utc: np.ndarray
+    checks: list[dict[str, Any]]
+
+    def __post_init__(self) -> None:
+        self.force_n = _record_array(self.force_n, "force_n")
+        self.response_m_s2 = _record_array(self.response_m_s2, "response_m_s2")
+        if self.force_n.shape != self.response_m_s2.shape:
+            raise ValueError(
+                f"hits: force_n {self.force_n.shape} and response_m_s2 "
+                f"{self.response_m_s2.shape} differ in shape"
+            )
+        if self.force_n.dtype != self.response_m_s2.dtype:
+            raise ValueError("hits: force_n and response_m_s2 must both be float64 or both complex128")
+        n_hits = self.force_n.shape[0]
+        self.sample_rate_hz = _finite_float(self.sample_rate_hz, "hits.sample_rate_hz", positive=True)
+        self.start_s = _finite_float(self.start_s, "hits.start_s")
+        self.center_hz = _finite_float(self.center_hz, "hits.center_hz")
+        if self.center_hz < 0:
+            raise ValueError(f"hits.center_hz must be >= 0, got {self.center_hz}")
+        if self.force_n.dtype == np.float64 and self.center_hz != 0:
+            raise ValueError("hits: real (baseband) records need center_hz = 0; zoom records are complex128")
+        self.accepted = _array(self.accepted, "hits.accepted", "b", (n_hits,), np.bool_)
+        self.reject_reason = _text_array(self.reject_reason, "hits.reject_reason", n_hits)
+        for i, (ok, reason) in enumerate(zip(self.accepted, self.reject_reason, strict=True)):
+            if bool(ok) == bool(reason):
+                raise ValueError(
+                    f"hits: hit {i} is {'accepted' if ok else 'rejected'} but its reject_reason "
+                    f"is {reason!r} (must be empty exactly when accepted)"
+                )
+        self.overload = _array(self.overload, "hits.overload", "b", (n_hits, 2), np.bool_)
+        self.peak_force_n = _array(self.peak_force_n, "hits.peak_force_n", "fiu", (n_hits,), np.float64)
+        self.timestamp_utc = _text_array(self.timestamp_utc, "hits.timestamp_utc", n_hits)
+        for stamp in self.timestamp_utc:
+            check_iso_utc(str(stamp), "hits.timestamp_utc")
+        if not isinstance(self.checks, (list, tuple)) or len(self.checks) != n_hits:
+            raise ValueError(f"hits.checks must be a list of {n_hits} dicts (one per hit)")
+        self.checks = [_json_dict(c, f"hits.checks[{i}]") for i, c in enumerate(self.checks)]
+
+    @property
+    def n_hits(self) -> int:
+        return int(self.force_n.shape[0])
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.force_n.shape[1])
+
+    @property
+    def is_zoom(self) -> bool:
+        return bool(self.force_n.dtype == np.complex128)
+
+    def time_s(self) -> np.ndarray:
+        """(n_samples,) time of each sample relative to the trigger, s."""
+        return self.start_s + np.arange(self.n_samples) / self.sample_rate_hz
+
+
+@dataclass(eq=False)
+class MeasuredFrf:
+    """Frequency response functions, (m/s^2)/N, with coherence when known.
+
+    frequency_hz: (n_lines,) Hz, strictly increasing.
+    frf: (n_frf, n_lines) complex128, acceleration over force, (m/s^2)/N.
+    coherence: (n_frf, n_lines) float64 (dimensionless, 0..1) or None.
+    labels: n_frf names, e.g. "H21" or the UFF record's description.
+    """
+
+    frequency_hz: np.ndarray
+    frf: np.ndarray
+    coherence: np.ndarray | None
+    labels: list[str]
+
+    def __post_init__(self) -> None:
+        freq = _array(self.frequency_hz, "frf.frequency_hz", "fiu", None, np.float64)
+        if freq.ndim != 1 or freq.size == 0:
+            raise ValueError(f"frf.frequency_hz must be a non-empty 1-D array, got shape {freq.shape}")
+        if not np.all(np.isfinite(freq)) or np.any(np.diff(freq) <= 0):
+            raise ValueError("frf.frequency_hz must be finite and strictly increasing")
+        self.frequency_hz = freq
+        frf = _array(self.frf, "frf.frf", "fiuc", None, np.complex128)
+        if frf.ndim != 2 or frf.shape[0] == 0 or frf.shape[1] != freq.size:
+            raise ValueError(f"frf.frf must have shape (n_frf >= 1, {freq.size}), got {frf.shape}")
+        self.frf = frf
+        if self.coherence is not None:
+            self.coherence = _array(self.coherence, "frf.coherence", "fiu", frf.shape, np.float64)
+        self.labels = list(_text_array(self.labels, "frf.labels", frf.shape[0]))
+
+    @property
+    def n_frf(self) -> int:
+        return int(self.frf.shape[0])
+
+    @property
+    def n_lines(self) -> int:
+        return int(self.frf.shape[1])
+
+
+@dataclass(eq=False)
+class Instrument:
+    """The analyzer as it identified itself and the settings it reported back.
+
+    settings: JSON-able dict, e.g. span_hz, lines, record points, windows, ranges.
+    """
+
+    model: str
+    identification: str
+    resource: str
+    transport: str
+    dialect: str
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in ("model", "identification", "resource", "transport", "dialect"):
+            _text(getattr(self, name), f"instrument.{name}")
+        self.settings = _json_dict(self.settings, "instrument.settings")
+
+
+@dataclass(eq=False)
+class Sample:
+    """The test article: a uniform cantilever beam, SI units as the names say.
+
+    force_position_m, sensor_position_m: distance from the clamp, m (None if unknown).
+    """
+
+    density_kg_m3: float
+    youngs_modulus_pa: float
+    width_m: float
+    height_m: float
+    length_m: float
+    area_m2: float
+    second_moment_m4: float
+    force_position_m: float | None = None
+    sensor_position_m: float | None = None
+
+    def __post_init__(self) -> None:
+        for name in (
+            "density_kg_m3",
+            "youngs_modulus_pa",
+            "width_m",
+            "height_m",
+            "length_m",
+            "area_m2",
+            "second_moment_m4",
+        ):
+            setattr(self, name, _finite_float(getattr(self, name), f"sample.{name}", positive=True))
+        for name in ("force_position_m", "sensor_position_m"):
+            value = getattr(self, name)
+            if value is not None:
+                value = _finite_float(value, f"sample.{name}")
+                if not 0 <= value <= self.length_m:
+                    raise ValueError(
+                        f"sample.{name} = {value} m lies outside the beam (0..{self.length_m} m)"
+                    )
+                setattr(self, name, value)
+
+
+@dataclass(eq=False)
+class Run:
+    """One impact test (or one imported FRF set) as stored on disk.
+
+    complete: False when the run was sealed after an interruption (listed as incomplete).
+    start_time, end_time: ISO 8601 UTC, e.g. "2026-11-23T10:15:03.123Z".
+    provenance: JSON-able dict: replayed_from run id, imported file name and SHA-256,
+        simulator scenario and seed...
+    hits: None for a run without time records (e.g. imported FRFs).
+    analyzer: the averaged FRF/coherence the analyzer itself computed, if read.
+    measured_frfs: FRFs imported from elsewhere (UFF 58), if any.
+    """
+
+    run_id: str
+    kind: str
+    complete: bool
+    start_time: str
+    end_time: str
+    operator: str = ""
+    note: str = ""
+    software: str = SOFTWARE
+    provenance: dict[str, Any] = field(default_factory=dict)
+    instrument: Instrument | None = None
+    sample: Sample | None = None
+    hits: Hits | None = None
+    analyzer: MeasuredFrf | None = None
+    measured_frfs: MeasuredFrf | None = None
+
+    def __post_init__(self) -> None:
+        if not is_run_id(self.run_id):
+            raise ValueError(
+                f"run_id {self.run_id!r} is not a valid run id (e.g. 20261123T101503.123Z-3f9c1a2b)"
+            )
+        if self.kind not in RUN_KINDS:
+            raise ValueError(f"run kind {self.kind!r} is not one of {', '.join(RUN_KINDS)}")
+        if not isinstance(self.complete, (bool, np.bool_)):
+            raise ValueError(f"run.complete must be a bool, got {type(self.complete).__name__}")
+        self.complete = bool(self.complete)
+        check_iso_utc(self.start_time, "run.start_time")
+        check_iso_utc(self.end_time, "run.end_time")
+        for name in ("operator", "note", "software"):
+            _text(getattr(self, name), f"run.{name}")
+        self.provenance = _json_dict(self.provenance, "run.provenance")
+        for name, cls in (
+            ("instrument", Instrument),
+            ("sample", Sample),
+            ("hits", Hits),
+            ("analyzer", MeasuredFrf),
+            ("measured_frfs", MeasuredFrf),
+        ):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, cls):
+                raise ValueError(f"run.{name} must be a {cls.__name__} or None, got {type(value).__name__}")
+        if self.hits is None and self.analyzer is None and self.measured_frfs is None:
+            raise ValueError("a run needs hits, an analyzer FRF or measured FRFs: it has none")
+
+
+def check_iso_utc(text: object, what: str) -> str:
+    """``text`` if it is an ISO 8601 time in UTC ("...Z" or "...+00:00"), else ValueError."""
+    if not isinstance(text, str):
+        raise ValueError(f"{what} must be an ISO 8601 UTC string, got {type(text).__name__}")
+    try:
+        stamp = datetime.fromisoformat(text)
+    except ValueError:
+        raise ValueError(f"{what} {text!r} is not an ISO 8601 time") from None
+    if stamp.utcoffset() is None or stamp.utcoffset().total_seconds() != 0:
+        raise ValueError(f"{what} {text!r} must be in UTC (end in Z or +00:00)")
+    return text
+
+
+def _text(value: object, what: str) -> str:
+    if not isinstance(value, str):
+        raise ValueError(f"{what} must be a str, got {type(value).__name__}")
+    # NUL cannot survive HDF5's fixed-length strings (it is the padding character).
+    if "\x00" in value:
+        raise ValueError(f"{what} contains a NUL character")
+    return value
+
+
+def _text_array(values: object, what: str, n: int) -> np.ndarray:
+    items = list(values) if not isinstance(values, str) else None
+    if items is None or len(items) != n:
+        raise ValueError(f"{what} must hold {n} strings")
+    for i, item in enumerate(items):
+        _text(item, f"{what}[{i}]")  # np.str_ is a str too
+    return np.array([str(item) for item in items], dtype=str) if n else np.array([], dtype=str)
+
+
+def _finite_float(value: object, what: str, positive: bool = False) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{what} must be a number, got {type(value).__name__}")
+    number = float(value)
+    if not math.isfinite(number) or (positive and number <= 0):
+        raise ValueError(f"{what} must be {'positive and ' if positive else ''}finite, got {number}")
+    return number
+
+
+def _array(value: object, what: str, kinds: str, shape: tuple[int, ...] | None, dtype: type) -> np.ndarray:
+    array = np.asarray(value)
+    if array.dtype.kind not in kinds:
+        raise ValueError(f"{what} must have dtype kind {kinds!r} ({np.dtype(dtype).name}), got {array.dtype}")
+    if shape is not None and array.shape != shape:
+        raise ValueError(f"{what} must have shape {shape}, got {array.shape}")
+    return np.ascontiguousarray(array, dtype=dtype)
+
+
+def _record_array(value: object, what: str) -> np.ndarray:
+    array = np.asarray(value)
+    if array.dtype not in (np.float64, np.complex128):
+        raise ValueError(f"hits.{what} must be float64 (baseband) or complex128 (zoom), got {array.dtype}")
+    if array.ndim != 2 or array.shape[0] == 0 or array.shape[1] == 0:
+        raise ValueError(f"hits.{what} must have shape (n_hits >= 1, n_samples >= 1), got {array.shape}")
+    return np.ascontiguousarray(array)
+
+
+def _json_dict(value: object, what: str) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ValueError(f"{what} must be a dict, got {type(value).__name__}")
+    try:
+        # Round trip so the in-memory value equals what a reader will get back
+        # (tuples become lists, numpy scalars are refused rather than mangled).
+        return json.loads(json.dumps(value, allow_nan=False))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{what} is not JSON-able: {exc}") from None

@@ -1,0 +1,116 @@
+"""Opening sealed runs: the whole run, or only the header for listings.
+
+Files are opened read-only with HDF5 file locking off (a sealed run never changes,
+and locks fail on some network filesystems). Every failure, from a missing file to
+a checksum mismatch deep in h5py, becomes one StoreError naming the file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+
+from daq.store import layout
+from daq.store.decode import check_schema, decode_run
+from daq.store.errors import StoreError
+from daq.store.h5io import get_bool, get_group, get_text, refuse_outside_references
+from daq.store.model import Run
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What a listing shows about one run file, read without loading the records.
+
+    n_hits and n_accepted are 0 for runs without hits. error is None for a readable
+    run; otherwise it says what is wrong, and the other fields may be empty.
+    """
+
+    file_name: str
+    run_id: str
+    start_time: str
+    kind: str
+    complete: bool
+    n_hits: int
+    n_accepted: int
+    operator: str
+    note: str
+    size_bytes: int
+    error: str | None = None
+
+
+@contextlib.contextmanager
+def open_h5(path: Path | str, whole_file_check: bool = True) -> Iterator[h5py.File]:
+    """The HDF5 file at ``path`` opened read-only; errors become StoreError naming it.
+
+    whole_file_check: refuse the file if any object links or maps data outside it.
+    Callers that pass False must check each object they read (read_summary does).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise StoreError(f"{path}: no such run file")
+    try:
+        with h5py.File(path, "r", locking=False) as f:
+            if whole_file_check:
+                refuse_outside_references(f)
+            yield f
+    except StoreError as exc:
+        raise StoreError(f"{path}: {exc}") from None
+    except Exception as exc:
+        # h5py reports damage as OSError, RuntimeError, KeyError or ValueError
+        # depending on where HDF5 trips; all of it means "this file is damaged".
+        raise StoreError(f"{path}: damaged or not an HDF5 run file ({_short(exc)})") from None
+
+
+def open_run(path: Path | str) -> Run:
+    """The complete run stored at ``path`` (all arrays read; checksums verified)."""
+    with open_h5(path) as f:
+        return decode_run(f)
+
+
+def read_summary(path: Path | str) -> RunSummary:
+    """The listing line of the run at ``path``; StoreError if it is unreadable."""
+    path = Path(path)
+    size = path.stat().st_size if path.exists() else 0
+    # Listing must be quick: only the root, /entry and the accepted flags are read,
+    # so only they are checked for links to outside (not the whole tree).
+    with open_h5(path, whole_file_check=False) as f:
+        check_schema(f)
+        entry = get_group(f, layout.ENTRY)
+        n_hits = n_accepted = 0
+        hits = get_group(f, layout.HITS, required=False)
+        if hits is not None:
+            link = hits.get(layout.D_ACCEPTED, getlink=True)
+            accepted = hits.get(layout.D_ACCEPTED) if isinstance(link, h5py.HardLink) else None
+            if (
+                not isinstance(accepted, h5py.Dataset)
+                or accepted.is_virtual
+                or accepted.external
+                or accepted.ndim != 1
+                or accepted.dtype.kind != "b"
+            ):
+                raise StoreError(
+                    f"dataset {layout.HITS}/{layout.D_ACCEPTED} is missing, linked or malformed; refused"
+                )
+            values = accepted[()]
+            n_hits, n_accepted = int(values.size), int(values.sum())
+        return RunSummary(
+            file_name=path.name,
+            run_id=get_text(entry, "run_id"),
+            start_time=get_text(entry, "start_time"),
+            kind=get_text(entry, "kind"),
+            complete=get_bool(entry, "complete"),
+            n_hits=n_hits,
+            n_accepted=n_accepted,
+            operator=get_text(entry, "operator"),
+            note=get_text(entry, "note"),
+            size_bytes=size,
+        )
+
+
+def _short(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= 160 else text[:157] + "..."

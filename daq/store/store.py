@@ -1,0 +1,160 @@
+"""A folder of runs: where it is, what is in it, and picking a run by id or prefix.
+
+Only files named exactly ``<run_id>.h5`` are runs. Hidden temporaries
+(``.<run_id>.h5.tmp-...``), result files (``<run_id>.<name>.h5``) and the index cache
+are never listed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from daq.store import layout
+from daq.store.config import APP_DIR, load_config
+from daq.store.errors import StoreError
+from daq.store.ids import RUN_ID_PATTERN, validate_run_id_prefix
+from daq.store.index import cached_summaries
+from daq.store.model import Run
+from daq.store.reader import RunSummary, open_run, read_summary
+from daq.store.results import read_result, write_result
+from daq.store.verify import verify
+from daq.store.writer import seal
+
+
+def resolve_store_dir(option: str | None, env: Mapping[str, str] | None = None) -> tuple[Path, str]:
+    """The store folder and where that choice came from, in order of precedence:
+
+    the --store option, $DAQ_STORE, the config file's ``store`` key, and finally the
+    per-user data folder ($XDG_DATA_HOME or ~/.local/share)/cantilever-daq/runs.
+    """
+    env = os.environ if env is None else env
+    if option:
+        return Path(option).expanduser().absolute(), "--store option"
+    if env.get("DAQ_STORE"):
+        return Path(env["DAQ_STORE"]).expanduser().absolute(), "$DAQ_STORE"
+    config = load_config(env=env)
+    if config.store is not None:
+        return config.store.absolute(), f"config file {config.path}"
+    base = Path(env["XDG_DATA_HOME"]) if env.get("XDG_DATA_HOME") else Path.home() / ".local" / "share"
+    return (base / APP_DIR / "runs").absolute(), "default per-user data folder"
+
+
+def is_run_file_name(name: str) -> bool:
+    return (
+        name.endswith(layout.RUN_SUFFIX)
+        and RUN_ID_PATTERN.fullmatch(name[: -len(layout.RUN_SUFFIX)]) is not None
+    )
+
+
+def is_temporary_name(name: str) -> bool:
+    return name.startswith(layout.TMP_PREFIX) and layout.TMP_MARKER in name
+
+
+class Store:
+    """The runs in folder ``path`` (which need not exist until the first seal)."""
+
+    def __init__(self, path: Path | str) -> None:
+        self.path = Path(path)
+
+    def __repr__(self) -> str:
+        return f"Store({str(self.path)!r})"
+
+    def seal(self, run: Run) -> Path:
+        """Write ``run`` atomically into the store (never overwriting); its path."""
+        return seal(run, self.path)
+
+    def list(self) -> list[RunSummary]:
+        """One summary per run file, sorted by run id (that is, by creation time).
+
+        Damaged files are listed too, with ``error`` saying what is wrong.
+        """
+        files = [(entry.name, st.st_size, st.st_mtime_ns) for entry, st in self._entries(is_run_file_name)]
+        files.sort()
+        return cached_summaries(self.path, files, _summary_or_error)
+
+    def resolve(self, name: str) -> Path:
+        """The file of the run whose id is ``name`` or starts with ``name``.
+
+        Accepts ``<id>.h5`` too. StoreError if no run or several runs match.
+        """
+        if isinstance(name, str) and name.endswith(layout.RUN_SUFFIX):
+            name = name[: -len(layout.RUN_SUFFIX)]
+        prefix = validate_run_id_prefix(name)
+        ids = sorted(e.name[: -len(layout.RUN_SUFFIX)] for e, _ in self._entries(is_run_file_name))
+        if prefix in ids:
+            return self.path / f"{prefix}{layout.RUN_SUFFIX}"
+        matches = [run_id for run_id in ids if run_id.startswith(prefix)]
+        if not matches:
+            raise StoreError(f"no run matches {prefix!r} in {self.path}")
+        if len(matches) > 1:
+            shown = ", ".join(matches[:3]) + (", ..." if len(matches) > 3 else "")
+            raise StoreError(
+                f"{prefix!r} matches {len(matches)} runs in {self.path} ({shown}); type more of the id"
+            )
+        return self.path / f"{matches[0]}{layout.RUN_SUFFIX}"
+
+    def open(self, name: str) -> Run:
+        """The run picked by id or unique prefix."""
+        return open_run(self.resolve(name))
+
+    def verify(self, name: str) -> list[str]:
+        """verify() of the run picked by id or unique prefix."""
+        return verify(self.resolve(name))
+
+    def write_result(self, run_id: str, name: str, payload: dict[str, Any], overwrite: bool = False) -> Path:
+        return write_result(self.path, run_id, name, payload, overwrite=overwrite)
+
+    def read_result(self, run_id: str, name: str) -> dict[str, Any]:
+        return read_result(self.path, run_id, name)
+
+    def temporaries(self) -> list[Path]:
+        """Hidden temporary files left by interrupted seals (or seals in progress)."""
+        return sorted(self.path / e.name for e, _ in self._entries(is_temporary_name))
+
+    def clean_temporaries(self, older_than_s: float = 3600.0) -> list[Path]:
+        """Delete temporaries not modified for ``older_than_s`` seconds; the paths deleted.
+
+        A seal in progress keeps its temporary's mtime fresh, so a threshold well above
+        the time one seal takes (milliseconds to seconds) never removes live work.
+        """
+        removed = []
+        now_ns = time.time_ns()
+        for entry, st in self._entries(is_temporary_name):
+            if now_ns - st.st_mtime_ns >= older_than_s * 1e9:
+                with contextlib.suppress(FileNotFoundError):
+                    (self.path / entry.name).unlink()
+                    removed.append(self.path / entry.name)
+        return sorted(removed)
+
+    def _entries(self, wanted) -> list[tuple[os.DirEntry, os.stat_result]]:
+        try:
+            scan = list(os.scandir(self.path))
+        except FileNotFoundError:
+            return []  # a store nothing was sealed into yet is an empty store
+        except OSError as exc:
+            raise StoreError(f"cannot read store folder {self.path}: {os.strerror(exc.errno or 0)}") from None
+        out = []
+        for entry in scan:
+            if not wanted(entry.name):
+                continue
+            try:
+                st = entry.stat(follow_symlinks=False)
+            except FileNotFoundError:
+                continue  # removed while we looked
+            out.append((entry, st))
+        return out
+
+
+def _summary_or_error(path: Path) -> RunSummary:
+    try:
+        return read_summary(path)
+    except StoreError as exc:
+        size = path.stat().st_size if path.exists() else 0
+        return RunSummary(
+            path.name, path.name[: -len(layout.RUN_SUFFIX)], "", "", False, 0, 0, "", "", size, str(exc)
+        )

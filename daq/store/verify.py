@@ -1,0 +1,103 @@
+"""Checking a run file end to end, reporting every problem instead of stopping at the first.
+
+verify() reads every dataset completely, which makes HDF5 check each chunk's
+fletcher32 sum, and every attribute, whose object headers carry their own HDF5
+metadata checksums; then it decodes the run, which checks the schema, the required
+groups and attributes, dtypes and the shapes against each other.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+
+from daq.store.decode import check_schema, decode_run
+from daq.store.errors import StoreError
+from daq.store.h5io import refuse_outside_references
+
+_EXPECTED_FILTERS = "gzip + shuffle + fletcher32"
+
+
+def verify(path: Path | str) -> list[str]:
+    """The problems found in the run file at ``path``; an empty list means it is sound.
+
+    Never raises for a damaged or foreign file: damage is what it reports.
+    """
+    path = Path(path)
+    if not path.is_file():
+        return [f"{path}: no such file"]
+    try:
+        f = h5py.File(path, "r", locking=False)
+    except Exception as exc:
+        return [f"cannot open as HDF5 (truncated or damaged): {_short(exc)}"]
+    problems: list[str] = []
+    try:
+        with f:
+            _check(f, problems)
+    except Exception as exc:  # closing a damaged file can fail too
+        problems.append(f"unreadable: {_short(exc)}")
+    return problems
+
+
+def _check(f: h5py.File, problems: list[str]) -> None:
+    try:
+        refuse_outside_references(f)
+    except StoreError as exc:
+        problems.append(str(exc))
+        return  # never read through a link to another file
+    except Exception as exc:
+        problems.append(f"metadata damaged (cannot walk the groups): {_short(exc)}")
+        return
+    try:
+        check_schema(f)
+    except Exception as exc:
+        problems.append(_short(exc))
+        return
+    _read_everything(f, problems)
+    if problems:
+        return  # decoding damaged data would only repeat the same faults less clearly
+    try:
+        decode_run(f)
+    except Exception as exc:
+        problems.append(_short(exc))
+
+
+def _read_everything(f: h5py.File, problems: list[str]) -> None:
+    objects: list[tuple[str, h5py.HLObject]] = [("/", f)]
+    try:
+        f.visititems(lambda name, obj: objects.append(("/" + name, obj)))
+    except Exception as exc:
+        problems.append(f"cannot list all objects: {_short(exc)}")
+    for name, obj in objects:
+        try:
+            for key in obj.attrs:
+                obj.attrs[key]
+        except Exception as exc:
+            problems.append(f"attributes of {name} unreadable (metadata damaged): {_short(exc)}")
+        if not isinstance(obj, h5py.Dataset):
+            continue
+        if not (obj.compression == "gzip" and obj.shuffle and obj.fletcher32):
+            problems.append(f"dataset {name} lacks {_EXPECTED_FILTERS} (has {_filters(obj)})")
+        try:
+            obj[()]
+        except Exception as exc:
+            problems.append(f"dataset {name} unreadable (checksum mismatch or damaged chunk): {_short(exc)}")
+
+
+def _filters(dset: h5py.Dataset) -> str:
+    found = [
+        n
+        for n, on in (
+            ("gzip", dset.compression == "gzip"),
+            ("shuffle", dset.shuffle),
+            ("fletcher32", dset.fletcher32),
+        )
+        if on
+    ]
+    return " + ".join(found) or "no filters"
+
+
+def _short(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= 200 else text[:197] + "..."

@@ -1,0 +1,89 @@
+"""Crash safety with real processes: a child sealing runs in a loop is killed with
+SIGKILL at random moments; whatever it leaves must be whole runs or ignored temporaries."""
+
+from __future__ import annotations
+
+import os
+import random
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from daq.store import Store, open_run, verify
+from daq.store.store import is_run_file_name, is_temporary_name
+
+HERE = Path(__file__).parent
+
+SEAL_FOREVER = textwrap.dedent(
+    """
+    import sys
+    from store_helpers import make_run
+    from daq.store import new_run_id, seal
+    store, first_seed = sys.argv[1], int(sys.argv[2])
+    runs = [make_run(seed=first_seed + i, n_hits=8, n_samples=2048) for i in range(3)]
+    print("ready", flush=True)
+    i = 0
+    while True:
+        run = runs[i % 3]
+        run.run_id = new_run_id()
+        seal(run, store)
+        i += 1
+    """
+)
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(HERE), env.get("PYTHONPATH", "")])
+    return env
+
+
+@pytest.mark.slow
+def test_sigkill_at_random_moments_leaves_only_whole_runs(tmp_path):
+    store_dir = tmp_path / "store"
+    rng = random.Random(1123)
+    env = _env()
+    for kill in range(50):
+        child = subprocess.Popen(
+            [sys.executable, "-c", SEAL_FOREVER, str(store_dir), str(kill)],
+            stdout=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        assert child.stdout.readline().strip() == "ready"
+        time.sleep(rng.uniform(0.0, 0.06))  # a seal of this run takes a few ms
+        os.kill(child.pid, signal.SIGKILL)
+        child.wait(timeout=30)
+        child.stdout.close()
+        assert child.returncode == -signal.SIGKILL
+
+    names = os.listdir(store_dir)
+    runs = sorted(n for n in names if is_run_file_name(n))
+    temporaries = sorted(n for n in names if is_temporary_name(n))
+    assert sorted(runs + temporaries) == sorted(names)  # nothing else was left behind
+    assert len(runs) >= 50  # the children got work done between the kills
+    assert temporaries, "no kill landed inside a seal: the test did not test anything"
+    for name in runs:
+        assert verify(store_dir / name) == [], name
+        assert open_run(store_dir / name).hits.n_samples == 2048
+
+    store = Store(store_dir)
+    listing = store.list()
+    assert [s.file_name for s in listing] == runs
+    assert all(s.error is None and s.n_hits == 8 for s in listing)
+    assert store.temporaries() == [store_dir / n for n in temporaries]
+
+    assert store.clean_temporaries(older_than_s=3600) == []  # all fresh: kept
+    removed = store.clean_temporaries(older_than_s=0)
+    assert removed == [store_dir / n for n in temporaries]
+    assert sorted(os.listdir(store_dir)) == sorted([*runs, ".index.sqlite", *_sqlite_side_files(store_dir)])
+    assert [s.file_name for s in store.list()] == runs
+
+
+def _sqlite_side_files(store_dir: Path) -> list[str]:
+    return [n for n in os.listdir(store_dir) if n.startswith(".index.sqlite-")]
