@@ -38,6 +38,7 @@ bench: $(VENV)/.installed-run
 	$(BIN)/python bench/bench_model.py
 	$(BIN)/python bench/bench_driver.py
 	$(BIN)/python bench/sim_frf_accuracy.py
+	$(BIN)/python bench/bench_store.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis

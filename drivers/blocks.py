@@ -118,23 +118,6 @@ def decode_values(
     return values
 
 
-def encode_block(values: np.ndarray, kind: str = "A", dtype: str = ">f8") -> bytes:
-    """The inverse, for tests and simulators of other instruments: values -> block bytes."""
-    payload = np.asarray(values, dtype=DTYPES[dtype]).tobytes()
-    if kind == "A":
-        if len(payload) > 0xFFFF:
-            raise ValueError("an #A block holds at most 65535 bytes")
-        return b"#A" + struct.pack(">H", len(payload)) + payload
-    if kind == "definite":
-        digits = str(len(payload)).encode()
-        if len(digits) > 9:
-            raise ValueError("payload too large for an IEEE definite block")
-        return b"#" + str(len(digits)).encode() + digits + payload
-    if kind == "indefinite":
-        return b"#0" + payload + b"\n"
-    raise ValueError(f"unknown block kind {kind!r}")
-
-
 def read_ascii_dump(read_line: Callable[[], bytes], command: str, max_values: int) -> np.ndarray:
     """An HP ASCII dump (DDAS, DSAS), read line by line: ``#I``, then the count of
     values, then that many values, one per line (docs/instrument.md).

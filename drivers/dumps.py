@@ -34,11 +34,6 @@ class DumpsMixin:
         dump = "DDAS" if ascii else "DDAN"
         return self._dump(f"TRCA;{function};{dump}", f"{dump} of {function}", function)
 
-    def fetch_active_trace(self, ascii: bool = False) -> Trace:
-        """Dump the active trace as the analyzer shows it (DDAN, or DDAS), changing nothing."""
-        dump = "DDAS" if ascii else "DDAN"
-        return self._dump(dump, dump, None)
-
     def dump_trace(self, message: str) -> Trace:
         """Send ``message``, which must end in DDAN or DDAS (e.g. ``TRCB;COHR;DDAN``),
         and decode the dump."""

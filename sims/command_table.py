@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from sims.units import Dimension
+from sims.units import ArgumentError, Dimension, parse_quantity
 
 Kind = Literal["action", "setting", "query"]
 
@@ -35,6 +35,28 @@ class Argument:
     low: float = float("-inf")
     high: float = float("inf")
     choices: tuple[str, ...] = ()
+
+    def parse(self, text: str) -> float | int | str:
+        """The value ``text`` gives: a quantity in SI units (Hz, s, V), an integer, a
+        flag as 0/1 (``ON``/``OFF`` too) or a choice's mnemonic, upper case.
+
+        ArgumentError (code 3 malformed, 4 wrong unit) if it gives none; the range
+        (``low``..``high``) is left to the caller, which reports it as error 2.
+        """
+        if self.kind == "quantity":
+            return parse_quantity(text, self.dimension)
+        token = text.strip().upper()
+        if self.kind == "choice":
+            if token not in self.choices:
+                raise ArgumentError(f"{token!r} is not one of {', '.join(self.choices)}", 3)
+            return token
+        if self.kind == "flag":
+            token = {"ON": "1", "OFF": "0"}.get(token, token)
+        digits = token[1:] if token[:1] in "+-" else token
+        # ASCII only: str.isdigit() also takes "²", which int() then refuses.
+        if not (digits.isascii() and digits.isdigit()):
+            raise ArgumentError(f"not an integer: {text.strip()!r}", 3)
+        return int(token)
 
 
 @dataclass(frozen=True)
@@ -178,6 +200,13 @@ COMMANDS: tuple[Command, ...] = (
 
 BY_MNEMONIC: dict[str, Command] = {c.mnemonic: c for c in COMMANDS}
 
+
+def split_message(message: str) -> list[str]:
+    """The commands of one message: separated by ``;`` or line ends (CR, LF), blanks dropped."""
+    pieces = message.replace("\r", "\n").replace(";", "\n").split("\n")
+    return [piece.strip() for piece in pieces if piece.strip()]
+
+
 #: Error codes the instrument reports through ERR? (proj).
 ERRORS = {
     1: "Undefined command",
@@ -212,9 +241,16 @@ DOMAIN_CODES = {"time": 0, "frequency": 1}
 
 
 def grammar() -> dict[str, dict]:
-    """Each mnemonic's grammar, in the shape the driver's table gives it
-    (tests/test_command_tables_agree.py): kind, source, argument kind, dimension,
-    choices and the read-back query of a setting."""
+    """Each mnemonic's grammar, in the shape the driver's independent table gives it
+    (tests/test_command_tables_agree.py compares the two).
+
+    Keys: settings under their mnemonic without ``?``, queries as sent (``ID?``,
+    ``SMSD``). Each value holds ``kind`` ("action", "setting", "query"), ``source``
+    ("3562A", "proj"), ``argument`` (None, "quantity", "integer", "flag", "choice"),
+    ``dimension`` (the sims.units dimension of a quantity, whose query replies in its
+    SI unit: Hz, s, V; None for anything else), ``choices`` (a tuple, empty if none)
+    and ``readback`` (a setting's query, e.g. ``FRS?``; None for actions and queries).
+    """
     out: dict[str, dict] = {}
     for c in COMMANDS:
         arg = c.argument
@@ -222,7 +258,7 @@ def grammar() -> dict[str, dict]:
             "kind": c.kind,
             "source": c.source,
             "argument": arg.kind if arg is not None else None,
-            "dimension": arg.dimension if arg is not None and arg.dimension != "none" else None,
+            "dimension": arg.dimension if arg is not None and arg.kind == "quantity" else None,
             "choices": tuple(arg.choices) if arg is not None else (),
             "readback": c.mnemonic + "?" if c.kind == "setting" else None,
         }

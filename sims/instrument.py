@@ -22,12 +22,13 @@ import numpy as np
 
 from sims import command_table as ct
 from sims.acquisition import Record
-from sims.command_table import BY_MNEMONIC, ERRORS, Command
+from sims.command_table import BY_MNEMONIC, ERRORS, Command, split_message
 from sims.dsp import Average, line_spectrum, peak_scale, window
-from sims.encoding import TraceHeader, ascii_dump, float_block, line, trace_values
+from sims.encoding import ascii_dump, float_block, line
 from sims.settings import MAX_SPAN_HZ, RANGES_V, AnalyzerSettings, check_center, coerce_range, coerce_span
 from sims.sources import PhysicsSource, ReplaySource, SourceError
-from sims.units import ArgumentError, format_number, parse_quantity
+from sims.traces import NoData, active_trace_values
+from sims.units import ArgumentError, format_number
 
 IDENTITY = "HP35660A"
 MAX_ERRORS = 32
@@ -191,7 +192,7 @@ class Analyzer:
         replies: list[Reply] = []
         with self.lock:
             self._advance()
-            for text in _split_commands(message):
+            for text in split_message(message):
                 if len(text) > MAX_COMMAND_CHARS:
                     self.push_error(8, f"command of {len(text)} characters")
                     continue
@@ -301,20 +302,8 @@ class Analyzer:
         arg, s, name = command.argument, self.settings, command.attribute
         assert arg is not None
         assert name is not None
-        value: object
         try:
-            if arg.kind == "quantity":
-                value = parse_quantity(text, arg.dimension)
-            elif arg.kind in ("integer", "flag"):
-                token = text.strip().upper()
-                token = {"ON": "1", "OFF": "0"}.get(token, token) if arg.kind == "flag" else token
-                if not (token[1:] if token[:1] in "+-" else token).isdigit():
-                    raise ArgumentError(f"not an integer: {text.strip()!r}", 3)
-                value = int(token)
-            else:
-                value = text.strip().upper()
-                if value not in arg.choices:
-                    raise ArgumentError(f"{value!r} is not one of {', '.join(arg.choices)}", 3)
+            value = arg.parse(text)
         except ArgumentError as exc:
             raise CommandError(exc.code, f"{command.mnemonic}: {exc}") from None
         if arg.kind != "choice" and not (arg.low <= value <= arg.high):  # type: ignore[operator]
@@ -390,44 +379,10 @@ class Analyzer:
         raise CommandError(1, m)  # pragma: no cover
 
     def _trace_values(self) -> np.ndarray:
-        s = self.settings
-        function = s.display[s.trace]
-        fs = s.sample_rate_hz
-        if function in ("TIM1", "TIM2"):
-            record = self.last_record
-            if record is None:
-                raise CommandError(5, f"{function}: no time record yet")
-            ch = int(function[-1])
-            data = record.force_n if ch == 1 else record.acceleration_m_s2
-            header = TraceHeader(
-                function, data.size, self.average.count, ch, record.overload[ch - 1], True,
-                "N" if ch == 1 else "m/s^2", np.iscomplexobj(data), record.sample_rate_hz / 2,
-                1 / record.sample_rate_hz, record.start_s,
-            )  # fmt: skip
-            return trace_values(header, data)
         try:
-            data = self.average.trace(function)
-        except LookupError:
-            raise CommandError(5, f"{function}: no averaged data yet") from None
-        units = {
-            "LSP1": "N", "LSP2": "m/s^2", "PSP1": "N^2", "PSP2": "(m/s^2)^2", "FRSP": "(m/s^2)/N", "COHR": "",
-        }[function]  # fmt: skip
-        channel = int(function[-1]) if function[-1] in "12" else 3
-        overflow = any(self.average.overload) if channel == 3 else self.average.overload[channel - 1]
-        header = TraceHeader(
-            function, data.size, self.average.count, channel, overflow, False, units,
-            np.iscomplexobj(data), fs / 2, s.line_spacing_hz, s.start_hz,
-        )  # fmt: skip
-        return trace_values(header, data)
-
-
-def _split_commands(message: str) -> list[str]:
-    parts = []
-    for piece in message.replace("\r", "\n").replace(";", "\n").split("\n"):
-        piece = piece.strip()
-        if piece:
-            parts.append(piece)
-    return parts
+            return active_trace_values(self.settings, self.average, self.last_record)
+        except NoData as exc:
+            raise CommandError(5, str(exc)) from None
 
 
 def _resolve(text: str) -> tuple[Command, str | None, bool]:

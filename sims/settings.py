@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from sims.command_table import DISPLAY_CODES, WINDOWS
+from sims.command_table import DISPLAY_CODES
 
 #: Maximum span and the number of halvings the analyzer offers (102.4 kHz / 2^n).
 MAX_SPAN_HZ = 102_400.0
@@ -20,8 +20,11 @@ RECORD_SAMPLES = 1024
 SAMPLE_RATE_PER_SPAN = 2.56
 ADC_BITS = 16
 
-#: The state dump (DSAN, DSAS): its length is documented, its layout is ours (proj).
+#: The state dump (DSAN, DSAS): its length is documented, its layout is ours (proj,
+#: docs/instrument.md, "State dump"). Codes are spelled out, not taken from the order
+#: of a tuple, so that reordering a table cannot silently move a dumped value.
 STATE_LENGTH = 96
+STATE_WINDOWS = {"UNIF": 0, "HANN": 1, "FLAT": 2, "FORC": 3, "EXPO": 4}
 STATE_AVERAGING = {"STBL": 1, "AVOF": 0}
 STATE_TRIGGER_SOURCES = {"FREE": 0, "CH1": 1, "CH2": 2}
 STATE_SLOPES = {"POS": 1, "NEG": -1}
@@ -99,7 +102,15 @@ class AnalyzerSettings:
 
         How many values the 3562A family dumps is documented, not what they mean:
         where each setting sits is a project choice (proj, docs/instrument.md,
-        "State dump"); every other word is 0.
+        "State dump"): 0 span Hz, 1 center Hz, 2 averages, 3 averaging (1 STBL,
+        0 AVOF), 4 preview 0/1, 5/6 window of ch1/ch2 (STATE_WINDOWS), 7/8 force
+        window widths s, 9/10 exponential time constants s, 11/12 ranges V peak,
+        13/14 autorange 0/1, 15/16 AC coupling 0/1, 17/18 sensitivities V/EU,
+        19 trigger source (0 FREE, 1 CH1, 2 CH2), 20 trigger level V, 21 slope
+        (1 POS, -1 NEG), 22 trigger delay s, 23 active trace (0 A, 1 B), 24/25 the
+        display-function codes of traces A and B (header word 0's codes). Every
+        other word is 0; the measurement (FRQR) and mode (LNRS), having one value
+        each, are not dumped.
         """
         values = np.zeros(STATE_LENGTH)
         values[0:5] = (
@@ -110,7 +121,7 @@ class AnalyzerSettings:
             self.preview,
         )
         for ch in (1, 2):
-            values[4 + ch] = WINDOWS.index(str(self.channel("window", ch)))
+            values[4 + ch] = STATE_WINDOWS[str(self.channel("window", ch))]
             values[6 + ch] = float(self.channel("force_width", ch))  # type: ignore[arg-type]
             values[8 + ch] = float(self.channel("exp_decay", ch))  # type: ignore[arg-type]
             values[10 + ch] = float(self.channel("range", ch))  # type: ignore[arg-type]

@@ -1,6 +1,6 @@
 """Numeric arguments with unit suffixes, the 3562A way: ``2 KHZ``, ``-10 MS``, ``20 MV``.
 
-Independent of the driver's encoder on purpose (docs/architecture.md): a bug in a
+Independent of the driver's encoder on purpose (docs/simulator.md): a bug in a
 shared helper would pass every end-to-end test.
 """
 

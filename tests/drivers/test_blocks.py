@@ -1,7 +1,6 @@
 """Binary blocks (drivers.blocks) and trace decoding (drivers.trace).
 
-Expected bytes are written by hand from the documented formats, never produced
-by drivers.blocks.encode_block:
+Expected bytes are written by hand from the documented formats:
 
 * HP ``#A`` (docs/instrument.md): ``#A``, a 2-byte big-endian byte count, the payload.
 * IEEE 488.2 definite length: ``#``, one digit n, n digits of byte count, the payload.

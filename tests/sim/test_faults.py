@@ -253,9 +253,9 @@ def test_parse_fault_rejects_bad_specs_with_a_clear_message(spec, message):
     [("garbage,nbytes=nan", "nbytes"), ("garbage,seed=nan", "seed"), ("slow,delay=nan", "delay")],
 )
 def test_parse_fault_rejects_values_that_are_not_finite(spec, option):
-    # BUG (kept failing on purpose): these specs are accepted, then the fault
-    # breaks the session at its first reply (garbage: ValueError escapes the
-    # front end; slow: the reply never comes).
+    """A non-finite number is refused when the spec is parsed, naming the option;
+    accepted, it would break the session at its first reply (garbage: a ValueError
+    escaping the front end; slow: a reply that never comes)."""
     with pytest.raises(ValueError, match=option):
         parse_fault(spec)
 
@@ -477,9 +477,9 @@ def test_error_puts_the_instrument_in_a_hardware_fault_until_rst(open_link, make
 
 @pytest.mark.timeout(5)
 def test_strt_with_no_hit_armed_still_fails_cleanly_in_a_hardware_fault(make_analyzer):
-    # BUG (kept failing on purpose): with no_hit armed, the session starts the
-    # analyzer outside its error handling, so a hardware fault's CommandError
-    # escapes the front end instead of becoming error 7 in the queue.
+    """With no_hit armed the session starts the analyzer itself; in a hardware fault
+    that STRT still ends as error 7 in the queue, and the session keeps answering
+    (no CommandError escapes the front end)."""
     analyzer = make_analyzer(time_scale=0.0)
     link = InProcessLink(InProcessConnection(analyzer, ["no_hit"]))
     link.send("SIM:FAULT error")

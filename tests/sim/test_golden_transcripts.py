@@ -149,7 +149,7 @@ def state_with(**words: float) -> list[float]:
     """The preset state with some words changed: state_with(w13=1.0)."""
     out = list(PRESET_STATE)
     for key, value in words.items():
-        out[int(key[1:])] = value
+        out[int(key[1:])] = float(value)
     return out
 
 
@@ -337,6 +337,10 @@ g("DSAS", "RST;DSAS", ascii_dump(PRESET_STATE))
 g("DSAS", f"{MESS};DSAS", ascii_dump(MESS_STATE))
 g("DSAN", "RST;DSAN", block(PRESET_STATE))
 g("DSAN", f"{MESS};DSAN", block(MESS_STATE))
+# The codes MESS leaves out: UNIF 0 and FLAT 2, trigger on CH1 1, trace B active 1, and
+# the display codes of PSP1 2, PSP2 3, TIM1 6 and LSP2 9.
+g("DSAN", "RST;UNIF;TSRC CH1;PSP1;TRCB;PSP2;DSAN", block(state_with(w5=0, w6=0, w19=1, w23=1, w24=2, w25=3)))
+g("DSAS", "RST;FLAT;TIM1;TRCB;LSP2;DSAS", ascii_dump(state_with(w5=2, w6=2, w23=1, w24=6, w25=9)))
 
 # -- errors, read back through ERR? (code -> transcripts)
 ERROR_GOLDENS: list[tuple[int, str, bytes]] = [
@@ -429,63 +433,3 @@ def test_error_goldens_cover_every_error_code():
     assert {code for code, _, _ in ERROR_GOLDENS} == set(ERRORS)
     for code, _, reply in ERROR_GOLDENS:
         assert f'{code},"{ERRORS[code]}: '.encode("ascii") in reply
-
-
-# --------------------------------------------------------------------------- spectral dumps
-_K = np.arange(401)
-_SCALE = np.full(401, 2 / N)  # 2 / sum(uniform window): a sinusoid's line reads its peak
-_SCALE[0] = 1 / N  # the DC line of a real record
-_X1 = 2.0 * np.exp(-2j * np.pi * _K * 1 / N)  # 2 N at sample 1
-_X2 = 3.0 * np.exp(-2j * np.pi * _K * 5 / N)  # 3 m/s^2 at sample 5
-# function: (display code, channel, y-units code, complex, expected data)
-SPECTRAL = {
-    "LSP1": (8, 1, 1, True, _X1 * _SCALE),
-    "LSP2": (9, 2, 2, True, _X2 * _SCALE),
-    "PSP1": (2, 1, 5, False, 4.0 * _SCALE**2),
-    "PSP2": (3, 2, 6, False, 9.0 * _SCALE**2),
-    # H1 = G21 / G11 = conj(X1) X2 / |X1|^2: the response lags the force by 4 samples,
-    # so the phase falls with frequency (a conjugated H1 would rise).
-    "FRSP": (1, 3, 3, True, 1.5 * np.exp(-2j * np.pi * _K * 4 / N)),
-    "COHR": (4, 3, 4, False, np.ones(401)),
-}
-
-
-@pytest.mark.parametrize("function", list(SPECTRAL))
-def test_spectral_dump_header_bytes_and_values(function: str, connect):
-    code, channel, y_code, is_complex, expected = SPECTRAL[function]
-    conn = connect(Analyzer(ReplaySource([DELTA_HIT], loop=True)))
-    reply = ask(conn, f"FRS 200 HZ;UNIF;STRT;TRCB;{function};DDAN")
-    n_values = 66 + 401 * (2 if is_complex else 1)
-    h = [0.0] * 66
-    h[0] = code
-    h[1] = h[2] = 401
-    h[3] = 1
-    h[4] = channel
-    h[7] = 1  # frequency domain
-    h[9] = y_code
-    h[10] = 1  # x in Hz
-    h[36] = 0 if is_complex else 1
-    h[40] = 1
-    h[52] = h[53] = RATE_HZ / 2
-    h[55] = SPAN_HZ / 400
-    h[64] = 0.0
-    assert reply[:4] == b"#A" + struct.pack(">H", 8 * n_values)
-    assert reply[4 : 4 + 66 * 8] == struct.pack(">66d", *h)
-    assert len(reply) == 4 + 8 * n_values
-    body = np.array(struct.unpack(f">{n_values - 66}d", reply[4 + 66 * 8 :]))
-    if is_complex:
-        body = body[0::2] + 1j * body[1::2]
-    np.testing.assert_allclose(body, expected, rtol=1e-12, atol=1e-12 * np.max(np.abs(expected)))
-
-
-def test_ascii_dump_reads_back_bit_exact(connect):
-    """DDAS and DDAN carry the same values; DDAS text parses back to the same float64s."""
-    conn = connect(Analyzer(ReplaySource([DELTA_HIT], loop=True)))
-    binary = ask(conn, "FRS 200 HZ;UNIF;STRT;DDAN")
-    text = ask(conn, "DDAS")
-    values = struct.unpack(f">{(len(binary) - 4) // 8}d", binary[4:])
-    rows = text.split(CRLF)
-    assert rows[:2] == [b"#I", str(len(values)).encode("ascii")]
-    assert rows[-1] == b""
-    assert [float(r) for r in rows[2:-1]] == list(values)
-    assert all(re.fullmatch(rb"[+-]\d\.\d{16}E[+-]\d\d", r) for r in rows[2:-1])

@@ -161,6 +161,17 @@ def test_malformed_signed_integer_is_error_3_not_a_crash(connect):
     assert ask(conn, "NAVG?") == lines("1")
 
 
+@pytest.mark.parametrize("text", ["NAVG \u00b2", "PRVW \u00b9", "NAVG \u0663"])
+def test_a_non_ascii_digit_given_to_the_analyzer_itself_is_error_3(text):
+    """Analyzer.execute takes str (front ends decode ASCII first): a superscript or
+    Arabic-Indic digit is no integer to the analyzer, not a ValueError escaping it."""
+    analyzer = Analyzer()
+    assert analyzer.execute(text) == []
+    (reply,) = analyzer.execute("ERR?")
+    assert reply.data.startswith(b'3,"Invalid parameter: ')
+    assert [r.data for r in analyzer.execute("NAVG?;PRVW?")] == [b"1\r\n", b"0\r\n"]
+
+
 def test_non_ascii_byte_is_error_1_not_a_crash(connect):
     """A stray byte >= 0x80 is an undefined command whose ERR? text still encodes as ASCII."""
     conn = connect()

@@ -399,11 +399,11 @@ def test_close_is_prompt_while_the_host_has_stopped_reading(analyzer):
         send(port, *PYVISA_PY_INIT, SETUP, "SMSD", "TIM1" + ";DDAN" * 100, "++read")
         assert read_exact(port, 1000).startswith(b"1\r\n#A")  # the transfer has begun; now stop reading
         time.sleep(0.3)
-        t0 = time.monotonic()
         closer.start()
-        closer.join(2.0)
+        # Prompt means well under the 10 s a writer waits before giving a host up
+        # (WRITE_GIVE_UP_S); half of it leaves a loaded machine room to be slow.
+        closer.join(5.0)
         hung = closer.is_alive()
-        took = time.monotonic() - t0
     finally:
         if closer.ident is None:  # failed before closing: close now, the same way
             closer.start()
@@ -416,4 +416,3 @@ def test_close_is_prompt_while_the_host_has_stopped_reading(analyzer):
                 port.read(65536)
         port.close()
     assert not hung, "PrologixPty.close() blocks while the host does not read (os.write on the pty master)"
-    assert took < 1.0

@@ -415,15 +415,17 @@ def test_a_file_that_is_not_hdf5_is_a_user_error(tmp_path):
     ids=["overload-1d", "overload-short", "accepted-short"],
 )
 def test_misshapen_flags_are_a_user_error(tmp_path, datasets, name):
-    # BUG (kept failing on purpose): these raise IndexError, which `daq sim serve
-    # --replay` turns into "internal error" (exit 70) instead of a user error.
+    """Flags shaped unlike the hits (overload (n_hits, 2), accepted (n_hits,)) are a
+    UserError naming the dataset, which `daq sim serve --replay` reports as the user's
+    mistake, not an IndexError it would turn into "internal error" (exit 70)."""
     path = write_run(tmp_path / "run.h5", make_hits(2), **datasets)
     with pytest.raises(UserError, match=name):
         load_recorded_hits(path, accepted_only=True)
 
 
 def test_a_group_where_a_dataset_belongs_is_a_user_error(tmp_path):
-    # BUG (kept failing on purpose): TypeError from h5py, not a UserError.
+    """A group where the force dataset belongs is a UserError naming it, not the
+    TypeError h5py raises on reading a group as an array."""
     path = write_run(tmp_path / "run.h5", make_hits(2), skip=("force",))
     with h5py.File(path, "a") as f:
         f.create_group("entry/hits/force")

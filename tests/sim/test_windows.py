@@ -41,3 +41,20 @@ def test_force_window_is_one_for_its_width_from_the_record_start():
     inside = int(np.ceil(0.05 * RATE_HZ))  # samples k with k / rate < 0.05 s
     assert w[:inside].tolist() == [1.0] * inside
     assert not w[inside:].any()
+
+
+@pytest.mark.parametrize("kind", ["HANN", "FLAT"])
+def test_cosine_windows_are_periodic_not_symmetric(kind):
+    """DFT-even: the peak sits on sample N/2 and w[k] == w[N - k]; a symmetric window
+    (period N - 1) would peak between samples and miss both."""
+    w = window(kind, N, RATE_HZ, 0.05, 1.0)
+    assert int(np.argmax(w)) == N // 2
+    np.testing.assert_allclose(w[1:], w[1:][::-1], atol=1e-14)
+    assert w[N // 2] == pytest.approx(1.0, rel=1e-8)  # both peak at 1 (the flat top's sum of a_i)
+
+
+@pytest.mark.parametrize("decay_s", [0.05, 2.0])
+def test_exponential_is_exp_of_minus_time_over_the_time_constant(decay_s):
+    """Time constant in seconds, time from the record's first sample (k / 512 Hz)."""
+    w = window("EXPO", N, RATE_HZ, 0.05, decay_s)
+    np.testing.assert_allclose(w, np.exp(-K / RATE_HZ / decay_s), rtol=1e-12, atol=1e-300)
