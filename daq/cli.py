@@ -18,7 +18,7 @@ from typing import Annotated
 
 import typer
 
-from daq import __version__
+from daq import __version__, config_command, runs_command
 from daq import talk_command as talk
 from daq.demo_command import demo
 from daq.errors import UserError
@@ -96,6 +96,8 @@ app.command(name="identify")(talk.identify)
 app.command(name="send")(talk.send)
 app.command(name="query")(talk.query)
 app.command(name="demo")(demo)
+runs_command.register(app)
+config_command.register(app)
 
 
 def _fail(message: str, exit_code: int) -> int:

@@ -32,7 +32,15 @@ def _open(resource: str | None, timeout: float):
     from daq.instrument import open_analyzer
 
     if not resource:
-        raise UserError("no analyzer given: use --resource (-r) or set DAQ_RESOURCE", exit_code=2)
+        from daq.store.config import load_config
+
+        resource = load_config().resource  # the lab PC's config file (daq config shows it)
+    if not resource:
+        raise UserError(
+            "no analyzer given: use --resource (-r), set DAQ_RESOURCE or put resource = ... in the "
+            "config file (daq config)",
+            exit_code=2,
+        )
     if not timeout > 0:
         raise UserError("--timeout must be positive", exit_code=2)
     try:

@@ -19,7 +19,8 @@ from daq.cli import app, help_hint
 
 #: Every command and group, as typed after `daq`.
 COMMANDS = [(), ("model",), ("sim",), ("sim", "serve"), ("sim", "commands"), ("instruments",)]
-COMMANDS += [("identify",), ("send",), ("query",), ("demo",)]
+COMMANDS += [("identify",), ("send",), ("query",), ("demo",), ("config",)]
+COMMANDS += [("runs",), ("runs", "list"), ("runs", "show"), ("runs", "verify")]
 
 
 # ------------------------------------------------------------ real process
@@ -73,7 +74,7 @@ def test_help_lists_every_command():
     for result in (invoke_daq("--help"), invoke_daq("-h"), invoke_daq()):
         assert result.returncode == 0, result.stderr
         assert result.stderr == ""
-        for name in ("model", "sim", "instruments", "identify", "send", "query", "demo"):
+        for name in ("model", "sim", "instruments", "identify", "send", "query", "demo", "config", "runs"):
             assert f"\n  {name} " in result.stdout
     sim = invoke_daq("sim")
     assert sim.returncode == 0

@@ -115,3 +115,14 @@ def test_send_refuses_a_query_and_query_decodes_a_selected_dump(lock_dir):
     result = invoke_daq("query", "-r", "sim", "TRCB;COHR;DDAN", "--timeout", "1")
     # No data yet: the instrument's own reason, promptly and in one line.
     assert_one_line_error(result, "instrument error 5: No data available: COHR")
+
+
+def test_the_config_file_names_the_analyzer_when_nothing_else_does(tmp_path, monkeypatch):
+    config = tmp_path / "config.toml"
+    config.write_text('resource = "sim"\n')
+    monkeypatch.setenv("DAQ_LOCK_DIR", str(tmp_path / "locks"))
+    found = invoke_daq("identify", env={"DAQ_CONFIG": str(config), "DAQ_RESOURCE": None})
+    assert found.returncode == 0, found.stderr
+    assert "HP35660A" in found.stdout
+    missing = invoke_daq("identify", env={"DAQ_CONFIG": str(tmp_path / "none.toml"), "DAQ_RESOURCE": None})
+    assert_one_line_error(missing, "no analyzer given", "config file")

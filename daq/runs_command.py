@@ -1,0 +1,371 @@
+"""`daq runs list`, `daq runs show`, `daq runs verify`: what the run store holds.
+
+The store folder comes from --store, $DAQ_STORE, the config file or the per-user
+data folder, in that order (daq.store.resolve_store_dir). `list` names the store and
+where its location came from on stderr, so that its stdout stays clean for --json.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from daq.errors import UserError
+
+runs_app = typer.Typer(
+    help="List, show and check the runs in the run store.\n\n"
+    "Each impact test is one HDF5 file in the store folder, named by its run id. "
+    "The folder is --store, else $DAQ_STORE, else the config file's store, else the "
+    "per-user data folder (see `daq config`).",
+    invoke_without_command=True,
+)
+
+StoreOption = Annotated[
+    str | None,
+    typer.Option(
+        "--store",
+        metavar="<dir>",
+        show_default=False,
+        help="The store folder; else $DAQ_STORE, the config file's store or the per-user data folder.",
+    ),
+]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+
+
+def register(app: typer.Typer) -> None:
+    """Add `daq runs` to ``app`` (once: a second call does nothing)."""
+    if any(group.name == "runs" for group in app.registered_groups):
+        return
+    app.add_typer(runs_app, name="runs")
+
+
+@runs_app.callback()
+def _runs(ctx: typer.Context) -> None:
+    if ctx.invoked_subcommand is None:
+        # A bare `daq runs`: the help is the answer, not an error.
+        typer.echo(ctx.get_help())
+        raise typer.Exit()
+
+
+def _store(option: str | None):
+    from daq.store import Store, resolve_store_dir
+
+    path, source = resolve_store_dir(option)
+    return Store(path), source
+
+
+def _note(text: str) -> None:
+    sys.stderr.write(" ".join(text.split()) + "\n")
+    sys.stderr.flush()
+
+
+def _dumps(data: Any) -> str:
+    return json.dumps(data, indent=2, ensure_ascii=False, default=_json_default)
+
+
+def _json_default(value: Any) -> Any:
+    # numpy scalars and arrays that reach a JSON dump (settings, sample constants).
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
+
+
+# ----------------------------------------------------------------------- list
+@runs_app.command(name="list")
+def list_runs(store: StoreOption = None, as_json: JsonOption = False) -> None:
+    """List the runs of the store, oldest first.
+
+    Damaged files are listed too, marked DAMAGED, with what is wrong with them.
+    The first line on stderr names the store and where its location came from.
+    """
+    the_store, source = _store(store)
+    summaries = the_store.list() if the_store.path.exists() else []
+    # Only now, when nothing can fail any more: an error stays the one line on stderr.
+    _note(f"store {the_store.path} (from {source})")
+    if not summaries:
+        why = "no runs yet" if the_store.path.is_dir() else "the folder does not exist yet"
+        _note(f"no runs in this store: {why}")
+    if as_json:
+        print(_dumps([_summary_dict(s) for s in summaries]))
+        return
+    if summaries:
+        _print_table(summaries, the_store.path)
+
+
+def _summary_dict(s) -> dict[str, Any]:
+    return {
+        "run_id": s.run_id,
+        "file": s.file_name,
+        "start_time": s.start_time,
+        "kind": s.kind,
+        "complete": s.complete,
+        "n_hits": s.n_hits,
+        "n_accepted": s.n_accepted,
+        "operator": s.operator,
+        "note": s.note,
+        "size_bytes": s.size_bytes,
+        "error": s.error,
+    }
+
+
+def _print_table(summaries, store_dir: Path) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    table = Table(box=None, header_style="bold", pad_edge=False)
+    table.add_column("run id", no_wrap=True)
+    table.add_column("started (UTC)", no_wrap=True)
+    table.add_column("kind", no_wrap=True)
+    table.add_column("status", no_wrap=True)
+    table.add_column("hits", justify="right", no_wrap=True)
+    table.add_column("accepted", justify="right", no_wrap=True)
+    table.add_column("operator")
+    table.add_column("note", overflow="fold")
+    for s in summaries:
+        if s.error is not None:
+            table.add_row(escape(s.run_id), "", "", "[red]DAMAGED[/]", "", "", "", "see below")
+            continue
+        table.add_row(
+            escape(s.run_id),
+            escape(s.start_time[:19].replace("T", " ")),
+            escape(s.kind),
+            "complete" if s.complete else "[yellow]incomplete[/]",
+            str(s.n_hits),
+            str(s.n_accepted),
+            escape(s.operator),
+            escape(" ".join(s.note.split())),
+        )
+    Console().print(table)
+    damaged = [s for s in summaries if s.error is not None]
+    for s in damaged:
+        # Plain print: a long error must not be wrapped or cut by the table.
+        error = s.error.removeprefix(f"{store_dir / s.file_name}: ")
+        print(f"DAMAGED {s.file_name}: {error}")
+    if damaged:
+        print("('daq runs verify' lists every problem of a file)")
+
+
+# ----------------------------------------------------------------------- show
+@runs_app.command()
+def show(
+    run: Annotated[
+        str, typer.Argument(metavar="RUN", help="A run id, or any unique start of one (e.g. 20261123T1015).")
+    ],
+    store: StoreOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """Show what one run holds: metadata, hits, analyzer data."""
+    from daq.store import open_run
+
+    the_store, source = _store(store)
+    path = the_store.resolve(run)
+    data = _run_dict(open_run(path), path)
+    if as_json:
+        print(_dumps(data))
+        return
+    _print_run(data, f"{the_store.path} (from {source})")
+
+
+def _frf_dict(frf) -> dict[str, Any] | None:
+    if frf is None:
+        return None
+    return {
+        "n_frf": int(frf.n_frf),
+        "n_lines": int(frf.n_lines),
+        "f_min_hz": float(frf.frequency_hz[0]),
+        "f_max_hz": float(frf.frequency_hz[-1]),
+        "coherence": frf.coherence is not None,
+        "labels": list(frf.labels),
+    }
+
+
+def _run_dict(run, path: Path) -> dict[str, Any]:
+    hits = run.hits
+    hits_data = None
+    n_hits = n_accepted = 0
+    if hits is not None:
+        n_hits, n_accepted = int(hits.n_hits), int(hits.accepted.sum())
+        hits_data = {
+            "n_hits": n_hits,
+            "n_accepted": n_accepted,
+            "n_rejected": n_hits - n_accepted,
+            "n_samples": int(hits.n_samples),
+            "sample_rate_hz": float(hits.sample_rate_hz),
+            "start_s": float(hits.start_s),
+            "center_hz": float(hits.center_hz),
+            "zoom": bool(hits.is_zoom),
+            "hits": [
+                {
+                    "index": i,
+                    "accepted": bool(hits.accepted[i]),
+                    "reject_reason": str(hits.reject_reason[i]),
+                    "peak_force_n": float(hits.peak_force_n[i]),
+                    "overload_force": bool(hits.overload[i, 0]),
+                    "overload_response": bool(hits.overload[i, 1]),
+                    "timestamp_utc": str(hits.timestamp_utc[i]),
+                }
+                for i in range(n_hits)
+            ],
+        }
+    return {
+        "run_id": run.run_id,
+        "file": str(path),
+        "size_bytes": path.stat().st_size,
+        "kind": run.kind,
+        "complete": bool(run.complete),
+        "start_time": run.start_time,
+        "end_time": run.end_time,
+        "operator": run.operator,
+        "note": run.note,
+        "software": run.software,
+        "provenance": run.provenance,
+        "instrument": None if run.instrument is None else dict(vars(run.instrument)),
+        "sample": None if run.sample is None else dict(vars(run.sample)),
+        "n_hits": n_hits,
+        "n_accepted": n_accepted,
+        "hits": hits_data,
+        "analyzer": _frf_dict(run.analyzer),
+        "measured_frf": _frf_dict(run.measured_frfs),
+    }
+
+
+def _one_line(value: Any) -> str:
+    text = value if isinstance(value, str) else json.dumps(value, ensure_ascii=False, default=_json_default)
+    return " ".join(text.split())
+
+
+def _print_run(d: dict[str, Any], store: str) -> None:
+    def field(name: str, value: Any) -> None:
+        print(f"{name:<14}{value}")
+
+    field("run", d["run_id"])
+    field("file", f"{d['file']} ({d['size_bytes']} bytes)")
+    field("store", store)
+    field("kind", d["kind"])
+    field("status", "complete" if d["complete"] else "incomplete (sealed after an interruption)")
+    field("started", d["start_time"])
+    field("ended", d["end_time"])
+    field("operator", _one_line(d["operator"]) or "-")
+    field("note", _one_line(d["note"]) or "-")
+    field("software", d["software"])
+    field("provenance", _one_line(d["provenance"]) if d["provenance"] else "-")
+    inst = d["instrument"]
+    if inst is None:
+        field("instrument", "-")
+    else:
+        field(
+            "instrument",
+            f"{inst['model']} at {inst['resource']} via {inst['transport']}, dialect {inst['dialect']}",
+        )
+        field("", f"identification: {_one_line(inst['identification'])}")
+        if inst.get("settings"):
+            field("", f"settings: {_one_line(inst['settings'])}")
+    sample = d["sample"]
+    if sample is None:
+        field("sample", "-")
+    else:
+        field("sample", ", ".join(f"{k} {v:g}" for k, v in sample.items() if v is not None))
+    hits = d["hits"]
+    if hits is None:
+        field("hits", "none")
+    else:
+        band = f"zoom around {hits['center_hz']:g} Hz" if hits["zoom"] else "baseband"
+        field(
+            "hits",
+            f"{hits['n_hits']}: {hits['n_accepted']} accepted, {hits['n_rejected']} rejected; "
+            f"{hits['n_samples']} samples at {hits['sample_rate_hz']:g} Hz from "
+            f"{hits['start_s']:g} s, {band}",
+        )
+        for h in hits["hits"]:
+            overload = [
+                c for c, on in (("force", h["overload_force"]), ("response", h["overload_response"])) if on
+            ]
+            verdict = "accepted" if h["accepted"] else f"rejected: {_one_line(h['reject_reason'])}"
+            extra = f", OVERLOAD {'+'.join(overload)}" if overload else ""
+            field(
+                "",
+                f"hit {h['index']:>3}  {h['timestamp_utc']}  "
+                f"peak {h['peak_force_n']:.4g} N{extra}  {verdict}",
+            )
+    for name, key in (("analyzer", "analyzer"), ("measured FRF", "measured_frf")):
+        frf = d[key]
+        if frf is None:
+            field(name, "none")
+            continue
+        coherence = "with coherence" if frf["coherence"] else "no coherence"
+        field(
+            name,
+            f"{frf['n_frf']} FRF(s) x {frf['n_lines']} lines, {frf['f_min_hz']:g}-{frf['f_max_hz']:g} Hz, "
+            f"{coherence}; labels: {', '.join(_one_line(x) for x in frf['labels'])}",
+        )
+
+
+# --------------------------------------------------------------------- verify
+@runs_app.command()
+def verify(
+    runs: Annotated[
+        list[str] | None,
+        typer.Argument(
+            metavar="RUN",
+            show_default=False,
+            help="Run ids or unique starts of them; default: every run of the store.",
+        ),
+    ] = None,
+    store: StoreOption = None,
+    as_json: JsonOption = False,
+) -> None:
+    """Check run files end to end; exit 1 if any has a problem.
+
+    Every dataset is read in full, so every checksum is checked, and every run is
+    decoded. Prints OK or the problems of each run.
+    """
+    from daq.store import verify as verify_file
+
+    the_store, source = _store(store)
+    if runs:
+        paths = list(dict.fromkeys(the_store.resolve(name) for name in runs))
+    else:
+        summaries = the_store.list() if the_store.path.exists() else []
+        paths = [the_store.path / s.file_name for s in summaries]
+    results = [(path, verify_file(path)) for path in paths]
+    bad = [path for path, problems in results if problems]
+    if as_json:
+        print(
+            _dumps(
+                [
+                    {
+                        "run_id": path.name.removesuffix(".h5"),
+                        "file": str(path),
+                        "ok": not problems,
+                        "problems": problems,
+                    }
+                    for path, problems in results
+                ]
+            )
+        )
+    else:
+        print(f"store {the_store.path} (from {source})")
+        for path, problems in results:
+            run_id = path.name.removesuffix(".h5")
+            if not problems:
+                print(f"OK       {run_id}")
+                continue
+            print(f"PROBLEM  {run_id}: {' '.join(problems[0].split())}")
+            for problem in problems[1:]:
+                print(f"         {run_id}: {' '.join(problem.split())}")
+        if results:
+            print(f"{len(results)} run(s) checked: {len(results) - len(bad)} OK, {len(bad)} with problems")
+    if not results:
+        _note(f"no runs in store {the_store.path}: nothing to verify")
+    if bad:
+        names = ", ".join(path.name.removesuffix(".h5") for path in bad[:3]) + (
+            ", ..." if len(bad) > 3 else ""
+        )
+        raise UserError(f"{len(bad)} of {len(results)} run(s) have problems: {names}")
