@@ -18,7 +18,7 @@ from typing import Annotated
 
 import typer
 
-from daq import __version__, config_command, runs_command
+from daq import __version__, capture_command, config_command, runs_command
 from daq import talk_command as talk
 from daq.demo_command import demo
 from daq.errors import UserError
@@ -96,6 +96,7 @@ app.command(name="identify")(talk.identify)
 app.command(name="send")(talk.send)
 app.command(name="query")(talk.query)
 app.command(name="demo")(demo)
+capture_command.register(app)
 runs_command.register(app)
 config_command.register(app)
 

@@ -19,7 +19,7 @@ from daq.cli import app, help_hint
 
 #: Every command and group, as typed after `daq`.
 COMMANDS = [(), ("model",), ("sim",), ("sim", "serve"), ("sim", "commands"), ("instruments",)]
-COMMANDS += [("identify",), ("send",), ("query",), ("demo",), ("config",)]
+COMMANDS += [("identify",), ("send",), ("query",), ("demo",), ("config",), ("capture",)]
 COMMANDS += [("runs",), ("runs", "list"), ("runs", "show"), ("runs", "verify")]
 
 

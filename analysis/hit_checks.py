@@ -1,0 +1,203 @@
+"""Per-hit checks of an impact test, shared by capture and analysis. Pure numpy, no I/O.
+
+Each check takes one hit's record and returns a :class:`HitCheck`. Records are the
+analyzer's time records: (n_samples,) float64 at baseband, or complex128 (the complex
+envelope around the centre frequency) in zoom; force in N.
+
+Thresholds and why (docs/capture.md):
+
+- double impact: the analyzer's decimating filters spread a short hammer pulse over
+  a few samples with band-limited ringing. Measured on the simulator at a 200 Hz
+  span (2 ms pulse, 1.95 ms samples), a clean pulse rings at -24 %, +13 %, -7 %,
+  +4 % of its peak after it, and up to 10 % before it. A hit is called double when,
+  outside the main pulse (the samples around the peak down to, and including, the
+  first sample below FALL_FRACTION = 10 % of the peak on either side), the force rises above
+  RISE_FRACTION = 20 % of the peak again: above the filter's largest positive
+  sidelobe (13 %) with margin. A rebound weaker than 20 % of the main peak is not
+  told from ringing at spans where the pulse covers only a sample or two.
+- force roll-off: the force auto-spectrum at the top 10 % of the span is more than
+  ``max_drop_db`` (10 dB) below its level over the lowest 10 % (DC excluded): the
+  tip is too soft for the span, the modes near its top are barely excited.
+- too weak: the peak force uses less than WEAK_FRACTION = 5 % of the force
+  channel's range (-26 dB): the record is mostly the converter's noise. The
+  decimating filters lower a short pulse's recorded peak at low spans; lower the
+  range there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: double impact: the main pulse ends where the force first falls below this fraction of the peak.
+FALL_FRACTION = 0.10
+#: double impact: outside the main pulse, a rise above this fraction of the peak is a second hit.
+RISE_FRACTION = 0.20
+#: force roll-off: largest tolerated drop of the force spectrum across the span, dB.
+MAX_DROP_DB = 10.0
+#: force roll-off: the share of the span averaged at each end.
+BAND_FRACTION = 0.10
+#: too weak: a hit's peak below this fraction of the force channel's range is too weak.
+WEAK_FRACTION = 0.05
+
+#: The names of the checks, as used in reject reasons.
+OVERLOAD, DOUBLE_IMPACT, FORCE_ROLLOFF, TOO_WEAK = "overload", "double impact", "force roll-off", "too weak"
+
+
+@dataclass(frozen=True)
+class HitCheck:
+    """One check's verdict on one hit.
+
+    name : the check's name ("overload", "double impact", "force roll-off", "too weak").
+    passed : True when the hit is fine in this respect.
+    detail : one line for a technician, e.g. "second pulse at 34 % of the peak, 12 ms later".
+    value : the number the verdict rests on (units in the check's docstring), or None.
+    """
+
+    name: str
+    passed: bool
+    detail: str
+    value: float | None = None
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-able form, as stored in a run's per-hit ``checks``."""
+        return {"passed": self.passed, "detail": self.detail, "value": self.value}
+
+
+def _magnitude_or_signed(force_n: np.ndarray) -> np.ndarray:
+    force = np.asarray(force_n)
+    if force.ndim != 1 or force.size == 0:
+        raise ValueError(f"a force record must be a non-empty 1-D array, got shape {force.shape}")
+    # A zoom record is a complex envelope: its magnitude is the pulse's outline.
+    return np.abs(force) if np.iscomplexobj(force) else force.astype(np.float64)
+
+
+def overload(flags: tuple[bool, bool]) -> HitCheck:
+    """The analyzer's overload flag on (force, response) channel; value: channels overloaded."""
+    force_flag, response_flag = (bool(f) for f in flags)
+    which = [name for name, flag in (("force", force_flag), ("response", response_flag)) if flag]
+    detail = f"{' and '.join(which)} channel overloaded" if which else "no overload"
+    return HitCheck(OVERLOAD, not which, detail, float(len(which)))
+
+
+def double_impact(
+    force_n: np.ndarray,
+    sample_rate_hz: float,
+    fall_fraction: float = FALL_FRACTION,
+    rise_fraction: float = RISE_FRACTION,
+) -> HitCheck:
+    """A second force pulse in the record; value: its height as a fraction of the peak (0 if none).
+
+    force_n : (n_samples,) N, real (baseband) or complex (zoom: its magnitude is used).
+    sample_rate_hz : samples per second, Hz (for the delay in the detail).
+    """
+    if not 0 < fall_fraction < rise_fraction < 1:
+        raise ValueError("double impact needs 0 < fall_fraction < rise_fraction < 1")
+    force = _magnitude_or_signed(force_n)
+    i_peak = int(np.argmax(force))
+    peak = float(force[i_peak])
+    if not peak > 0:
+        return HitCheck(DOUBLE_IMPACT, True, "no force pulse", 0.0)
+    below = force < fall_fraction * peak
+    after = np.flatnonzero(below[i_peak + 1 :])
+    before = np.flatnonzero(below[:i_peak])
+    end = i_peak + 1 + int(after[0]) if after.size else force.size  # first sample past the pulse
+    start = int(before[-1]) if before.size else -1  # last sample before the pulse
+    # The samples where the force crossed FALL_FRACTION belong to the pulse's edges.
+    first, last = max(start, 0), min(end + 1, force.size)
+    outside = np.concatenate([force[:first], force[last:]])
+    positions = np.concatenate([np.arange(first), np.arange(last, force.size)])
+    if outside.size == 0:
+        return HitCheck(DOUBLE_IMPACT, True, "single pulse", 0.0)
+    k = int(np.argmax(outside))
+    ratio = float(outside[k]) / peak
+    if ratio > rise_fraction:
+        delay_ms = (positions[k] - i_peak) / sample_rate_hz * 1e3
+        return HitCheck(
+            DOUBLE_IMPACT,
+            False,
+            f"second pulse at {ratio:.0%} of the peak, {delay_ms:+.1f} ms from it",
+            ratio,
+        )
+    return HitCheck(DOUBLE_IMPACT, True, f"single pulse (largest rebound {max(ratio, 0.0):.0%})", ratio)
+
+
+def force_rolloff(
+    force_n: np.ndarray, sample_rate_hz: float, span_hz: float, max_drop_db: float = MAX_DROP_DB
+) -> HitCheck:
+    """The force spectrum's drop across the span, dB (value), against ``max_drop_db``.
+
+    Compares the mean force auto-spectrum over the top BAND_FRACTION of the span with
+    its mean over the lowest BAND_FRACTION (DC excluded). In zoom (complex records),
+    the band is centre +- span/2 and the comparison is its top against its bottom.
+    force_n : (n_samples,) N; sample_rate_hz, span_hz : Hz.
+    """
+    force = np.asarray(force_n)
+    if force.ndim != 1 or force.size < 2:
+        raise ValueError(f"a force record must be a 1-D array of 2 or more samples, got {force.shape}")
+    if not (sample_rate_hz > 0 and span_hz > 0 and span_hz <= sample_rate_hz):
+        raise ValueError("force roll-off needs 0 < span_hz <= sample_rate_hz")
+    if np.iscomplexobj(force):
+        offsets = np.fft.fftfreq(force.size, 1.0 / sample_rate_hz)
+        power = np.abs(np.fft.fft(force)) ** 2
+        low = (offsets >= -span_hz / 2) & (offsets <= -span_hz / 2 + BAND_FRACTION * span_hz)
+        top = (offsets <= span_hz / 2) & (offsets >= span_hz / 2 - BAND_FRACTION * span_hz)
+    else:
+        freq = np.fft.rfftfreq(force.size, 1.0 / sample_rate_hz)
+        power = np.abs(np.fft.rfft(force)) ** 2
+        low = (freq > 0) & (freq <= BAND_FRACTION * span_hz)
+        top = (freq <= span_hz) & (freq >= (1 - BAND_FRACTION) * span_hz)
+    if not (low.any() and top.any()):
+        raise ValueError("the record is too short to resolve the span's ends: no spectral lines there")
+    low_level, top_level = float(power[low].mean()), float(power[top].mean())
+    if not low_level > 0:
+        return HitCheck(FORCE_ROLLOFF, False, "no force at low frequency", None)
+    drop_db = math.inf if top_level <= 0 else 10 * math.log10(low_level / top_level)
+    passed = drop_db <= max_drop_db
+    detail = f"force spectrum falls {drop_db:.1f} dB across the span" + (
+        "" if passed else f" (more than {max_drop_db:g} dB: use a harder tip or a lower span)"
+    )
+    return HitCheck(FORCE_ROLLOFF, passed, detail, drop_db if math.isfinite(drop_db) else None)
+
+
+def too_weak(force_n: np.ndarray, range_n: float | None, min_fraction: float = WEAK_FRACTION) -> HitCheck:
+    """The peak |force| as a fraction of the channel's range (value); fails below ``min_fraction``.
+
+    force_n : (n_samples,) N. range_n : the force channel's full scale in N (range in V
+    over the hammer's sensitivity in V/N); None (autorange) passes unjudged.
+    """
+    peak = float(np.max(np.abs(np.asarray(force_n))))
+    if range_n is None:
+        return HitCheck(TOO_WEAK, True, f"peak {peak:.3g} N (autorange: not judged)", None)
+    if not range_n > 0:
+        raise ValueError(f"range_n must be positive, got {range_n!r}")
+    used = peak / range_n
+    passed = used >= min_fraction
+    detail = f"peak {peak:.3g} N is {used:.0%} of the {range_n:.3g} N range" + (
+        "" if passed else f" (below {min_fraction:.0%}: hit harder or lower the range)"
+    )
+    return HitCheck(TOO_WEAK, passed, detail, used)
+
+
+def run_checks(
+    force_n: np.ndarray,
+    sample_rate_hz: float,
+    span_hz: float,
+    overload_flags: tuple[bool, bool],
+    range_n: float | None,
+    max_drop_db: float = MAX_DROP_DB,
+) -> list[HitCheck]:
+    """Every check on one hit, in a fixed order: overload, double impact, roll-off, too weak."""
+    return [
+        overload(overload_flags),
+        double_impact(force_n, sample_rate_hz),
+        force_rolloff(force_n, sample_rate_hz, span_hz, max_drop_db),
+        too_weak(force_n, range_n),
+    ]
+
+
+def failed_names(checks: list[HitCheck]) -> str:
+    """The failed checks' names, comma-separated ("" when every check passed): a reject reason."""
+    return ", ".join(c.name for c in checks if not c.passed)

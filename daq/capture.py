@@ -1,0 +1,291 @@
+"""The capture workflow, free of any user interface: hits in, a Run out.
+
+``Capture(driver, settings, hits_wanted)`` is an iterator of events. After each
+``HitArrived`` the caller decides (``decide(accept, reason)``) before asking for the
+next event; without a decision the policy decides (default: the checks' verdict).
+The analyzer runs in preview, so its own average holds only the accepted hits; after
+``hits_wanted`` accepted hits its averaged FRF and coherence are fetched and
+``Finished(run)`` is the last event. The caller seals the run. After an interruption
+(Ctrl-C, a driver error) ``partial_run()`` gives the hits so far as an incomplete run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import asdict, dataclass, field, replace
+from datetime import UTC, datetime
+from typing import Any
+
+import numpy as np
+
+from analysis.beam import TABLE_1
+from analysis.hit_checks import HitCheck, failed_names, run_checks
+from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, new_run_id
+from drivers.hp35660a import HP35660A
+from drivers.settings import ImpactSettings
+
+#: The reason stored for a hit rejected by hand with no reason given.
+OPERATOR_REJECT = "rejected by operator"
+
+
+class CaptureError(Exception):
+    """The capture cannot go on (e.g. too many hits rejected); one line for the user."""
+
+
+@dataclass(frozen=True)
+class Connected:
+    identification: str
+
+
+@dataclass(frozen=True)
+class Configured:
+    """settings : as the analyzer holds them (span and ranges rounded up)."""
+
+    settings: ImpactSettings
+
+
+@dataclass(frozen=True)
+class HitArrived:
+    """One hit, waiting for a decision.
+
+    index : 0-based among all hits of the run. force_n, response_m_s2 : (n_samples,)
+    N and m/s^2 (complex in zoom). overload : (force, response) flags.
+    peak_force_n : peak |force|, N. suggested_reason : the failed checks, "" if none.
+    """
+
+    index: int
+    force_n: np.ndarray
+    response_m_s2: np.ndarray
+    checks: list[HitCheck]
+    overload: tuple[bool, bool]
+    timestamp_utc: str
+    peak_force_n: float
+    accepted_so_far: int
+
+    @property
+    def suggested_reason(self) -> str:
+        return failed_names(self.checks)
+
+    @property
+    def passed(self) -> bool:
+        return not self.suggested_reason
+
+
+@dataclass(frozen=True)
+class HitDecided:
+    index: int
+    accepted: bool
+    reason: str
+    accepted_so_far: int
+
+
+@dataclass(frozen=True)
+class Finished:
+    run: Run
+
+
+Event = Connected | Configured | HitArrived | HitDecided | Finished
+#: A policy: (hit) -> (accept, reason).
+Policy = Callable[[HitArrived], tuple[bool, str]]
+
+
+def checks_policy(hit: HitArrived) -> tuple[bool, str]:
+    """Accept every hit that passes the checks, reject the others naming the failed checks."""
+    return hit.passed, hit.suggested_reason
+
+
+def utc_now() -> str:
+    """Now, ISO 8601 UTC to the millisecond, ending in Z."""
+    return datetime.now(UTC).isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def settings_as_dict(settings: ImpactSettings) -> dict[str, Any]:
+    """JSON- and TOML-friendly dict of ``settings`` (windows as their mnemonics)."""
+    out = asdict(settings)
+    for channel in ("hammer", "accelerometer"):
+        out[channel]["window"] = str(getattr(settings, channel).window.value)
+    return out
+
+
+def table1_sample() -> Sample:
+    """The seed's Table 1 beam with force and accelerometer at the tip."""
+    return Sample(**TABLE_1.to_dict(), force_position_m=TABLE_1.length_m, sensor_position_m=TABLE_1.length_m)
+
+
+@dataclass
+class _Hit:
+    force_n: np.ndarray
+    response_m_s2: np.ndarray
+    accepted: bool
+    reason: str
+    overload: tuple[bool, bool]
+    peak_force_n: float
+    timestamp_utc: str
+    checks: dict[str, Any]
+
+
+@dataclass
+class Capture:
+    """Take ``hits_wanted`` accepted hits with ``driver``; iterate for the events.
+
+    resource, transport : how the analyzer was reached (stored with the run).
+    simulator : None for a real analyzer, else the simulator's provenance (scenario, seed...).
+    max_hits : give up (CaptureError) after this many hits without enough accepted;
+        default 4 x hits_wanted + 10.
+    hit_timeout_s : how long to wait for each hit; None = the driver's allowance.
+    """
+
+    driver: HP35660A
+    settings: ImpactSettings
+    hits_wanted: int
+    policy: Policy = checks_policy
+    resource: str = ""
+    transport: str = ""
+    simulator: dict[str, Any] | None = None
+    operator: str = ""
+    note: str = ""
+    sample: Sample = field(default_factory=table1_sample)
+    max_hits: int | None = None
+    hit_timeout_s: float | None = None
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.hits_wanted <= 9999:
+            raise ValueError(f"hits_wanted must be 1..9999, got {self.hits_wanted}")
+        self.max_hits = self.max_hits or 4 * self.hits_wanted + 10
+        self.run_id = new_run_id()
+        self.start_time = utc_now()
+        self.identification = ""
+        self.actual: ImpactSettings | None = None
+        self.hits: list[_Hit] = []
+        self.sample_rate_hz = 0.0
+        self.start_s = 0.0
+        self._pending: HitArrived | None = None
+        self._decision: tuple[bool, str] | None = None
+
+    @property
+    def accepted(self) -> int:
+        return sum(h.accepted for h in self.hits)
+
+    def decide(self, accept: bool, reason: str = "") -> None:
+        """Decide the hit just offered (HitArrived); a rejection without a reason gets one."""
+        if self._pending is None:
+            raise RuntimeError("no hit is waiting for a decision")
+        self._decision = (bool(accept), reason)
+
+    def __iter__(self) -> Iterator[Event]:
+        dsa = self.driver
+        self.identification = dsa.identify()
+        yield Connected(self.identification)
+        wanted = replace(self.settings, averages=self.hits_wanted, preview=True)
+        self.actual = dsa.configure(wanted)
+        yield Configured(self.actual)
+        range_v = self.actual.hammer.range_v
+        range_n = None if range_v is None else range_v / self.actual.hammer.sensitivity_v_per_eu
+        dsa.start()
+        while self.accepted < self.hits_wanted:
+            if len(self.hits) >= self.max_hits:
+                raise CaptureError(
+                    f"{len(self.hits)} hits taken, only {self.accepted} of {self.hits_wanted} accepted: "
+                    "giving up (check the hammer tip, the ranges and the trigger)"
+                )
+            dsa.wait_for_hit(timeout_s=self.hit_timeout_s)
+            force, response = dsa.fetch_time_records()
+            self.sample_rate_hz = force.header.sample_rate_hz
+            self.start_s = force.header.start_x
+            flags = (force.header.overflow, response.header.overflow)
+            checks = run_checks(force.data, self.sample_rate_hz, self.actual.span_hz, flags, range_n)
+            hit = HitArrived(
+                index=len(self.hits),
+                force_n=force.data,
+                response_m_s2=response.data,
+                checks=checks,
+                overload=flags,
+                timestamp_utc=utc_now(),
+                peak_force_n=float(np.max(np.abs(force.data))),
+                accepted_so_far=self.accepted,
+            )
+            self._pending, self._decision = hit, None
+            yield hit
+            accept, reason = self._decision if self._decision is not None else self.policy(hit)
+            reason = "" if accept else (reason.strip() or OPERATOR_REJECT)
+            if accept:
+                dsa.accept()
+            else:
+                dsa.reject()
+            self._keep(hit, accept, reason)
+            yield HitDecided(hit.index, accept, reason, self.accepted)
+        dsa.wait_until_done(timeout_s=10.0 + 2 * self.actual.record_length_s)
+        frf, coherence = dsa.fetch_frf(), dsa.fetch_coherence()
+        analyzer = MeasuredFrf(
+            frequency_hz=frf.x, frf=frf.data[np.newaxis, :], coherence=coherence.data[np.newaxis, :],
+            labels=["H21"],
+        )  # fmt: skip
+        yield Finished(self._run(complete=True, analyzer=analyzer))
+
+    def _keep(self, hit: HitArrived, accept: bool, reason: str) -> None:
+        self._pending = None
+        self.hits.append(
+            _Hit(
+                hit.force_n,
+                hit.response_m_s2,
+                accept,
+                reason,
+                hit.overload,
+                hit.peak_force_n,
+                hit.timestamp_utc,
+                {c.name: c.as_dict() for c in hit.checks},
+            )
+        )
+
+    def partial_run(self) -> Run | None:
+        """The hits so far as an incomplete run (a hit still undecided is kept, rejected
+        as "interrupted"); None when there is nothing to keep."""
+        if self._pending is not None:
+            self._keep(self._pending, False, "interrupted before a decision")
+        if not self.hits:
+            return None
+        return self._run(complete=False, analyzer=None)
+
+    def _run(self, complete: bool, analyzer: MeasuredFrf | None) -> Run:
+        assert self.actual is not None
+        n_samples = {h.force_n.size for h in self.hits}
+        if len(n_samples) != 1:
+            raise CaptureError(f"hits of different lengths {sorted(n_samples)}: cannot store them together")
+        hits = Hits(
+            force_n=np.stack([h.force_n for h in self.hits]),
+            response_m_s2=np.stack([h.response_m_s2 for h in self.hits]),
+            sample_rate_hz=self.sample_rate_hz,
+            start_s=self.start_s,
+            center_hz=self.actual.center_hz or 0.0,
+            accepted=np.array([h.accepted for h in self.hits]),
+            reject_reason=[h.reason for h in self.hits],
+            overload=np.array([h.overload for h in self.hits], dtype=bool),
+            peak_force_n=np.array([h.peak_force_n for h in self.hits]),
+            timestamp_utc=[h.timestamp_utc for h in self.hits],
+            checks=[h.checks for h in self.hits],
+        )
+        instrument = Instrument(
+            model="HP 35660A",
+            identification=self.identification,
+            resource=self.resource,
+            transport=self.transport,
+            dialect="35660A",
+            settings=settings_as_dict(self.actual),
+        )
+        provenance: dict[str, Any] = {"hits_wanted": self.hits_wanted}
+        if self.simulator is not None:
+            provenance["simulator"] = self.simulator
+        return Run(
+            run_id=self.run_id,
+            kind="simulated" if self.simulator is not None else "captured",
+            complete=complete,
+            start_time=self.start_time,
+            end_time=utc_now(),
+            operator=self.operator,
+            note=self.note,
+            provenance=provenance,
+            instrument=instrument,
+            sample=self.sample,
+            hits=hits,
+            analyzer=analyzer,
+        )

@@ -1,0 +1,365 @@
+"""`daq capture`: take an impact test's hits, check each, seal the run into the store.
+
+With --sim, or when no analyzer is configured (--resource, $DAQ_RESOURCE, the config
+file's ``resource``), the built-in simulator serves on 127.0.0.1 (a real TCP socket)
+and the first line says so. The workflow itself lives in daq/capture.py.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import sys
+import tomllib
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+
+from daq.errors import UserError
+from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+from drivers.errors import DriverError
+from drivers.settings import ChannelSetup, ImpactSettings
+
+SPARK = "▁▂▃▄▅▆▇█"
+#: Keys of a setup file: top level, and of each [hammer] / [accelerometer] table.
+TOP_KEYS = {
+    "span_hz": float, "center_hz": float, "averages": int, "trigger_source": str,
+    "trigger_level_eu": float, "trigger_slope": str, "pre_trigger_s": float,
+}  # fmt: skip
+CHANNEL_KEYS = {
+    "window": str, "sensitivity_v_per_eu": float, "range_v": (float, str), "force_width_s": float,
+    "exp_decay_s": float, "ac_coupled": bool,
+}  # fmt: skip
+#: Sized to the record when left out (drivers/settings.py); printed as comments.
+RECORD_SIZED = {"pre_trigger_s": "1/32", "force_width_s": "1/16", "exp_decay_s": "1/6"}
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="capture")(capture)
+
+
+def setup_toml(settings: ImpactSettings) -> str:
+    """``settings`` as a setup file; record-sized values appear as comments."""
+
+    def value(v: object) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return f'"{v}"'
+        return repr(float(v)) if isinstance(v, float) else str(v)
+
+    def line(key: str, v: object, comment: str = "") -> str:
+        if key in RECORD_SIZED:
+            return f"# {key} = {value(v)}  # default: {RECORD_SIZED[key]} of the record, uncomment to fix it"
+        return f"{key} = {value(v)}" + (f"  # {comment}" if comment else "")
+
+    lines = [
+        "# daq capture setup (SI units; EU = N for the hammer, m/s^2 for the accelerometer)",
+        line("span_hz", settings.span_hz, "the analyzer rounds up to 102.4 kHz / 2^n"),
+        line("center_hz", settings.center_hz or 0.0, "0 = baseband, else a zoom around it"),
+        line("averages", settings.averages, "accepted hits wanted (--hits overrides)"),
+        line("trigger_source", settings.trigger_source),
+        line("trigger_level_eu", settings.trigger_level_eu, "N on CH1"),
+        line("trigger_slope", settings.trigger_slope),
+        line("pre_trigger_s", settings.pre_trigger_s),
+    ]
+    for name in ("hammer", "accelerometer"):
+        ch: ChannelSetup = getattr(settings, name)
+        lines += [
+            "",
+            f"[{name}]",
+            line("window", ch.window.value, "UNIF, HANN, FLAT, FORC or EXPO"),
+            line("sensitivity_v_per_eu", ch.sensitivity_v_per_eu),
+            line("range_v", "auto" if ch.range_v is None else ch.range_v, 'full scale, V, or "auto"'),
+            line("force_width_s", ch.force_width_s),
+            line("exp_decay_s", ch.exp_decay_s),
+            line("ac_coupled", ch.ac_coupled),
+        ]
+    return "\n".join(lines) + "\n"
+
+
+def _typed(where: str, key: str, raw: object, kind: Any) -> object:
+    kinds = kind if isinstance(kind, tuple) else (kind,)
+    if float in kinds and isinstance(raw, int) and not isinstance(raw, bool):
+        raw = float(raw)
+    if not isinstance(raw, kinds) or (isinstance(raw, bool) and bool not in kinds):
+        names = " or ".join("a number" if k is float else k.__name__ for k in kinds)
+        raise UserError(f"{where}: {key} must be {names}, got {raw!r}")
+    if isinstance(raw, float) and not math.isfinite(raw):
+        raise UserError(f"{where}: {key} must be finite")
+    return raw
+
+
+def settings_from_setup(data: dict[str, Any], where: str) -> ImpactSettings:
+    """ImpactSettings from a parsed setup file; UserError names the bad key."""
+    kwargs: dict[str, Any] = {}
+    for key, raw in data.items():
+        if key in ("hammer", "accelerometer"):
+            if not isinstance(raw, dict):
+                raise UserError(f"{where}: [{key}] must be a table")
+            channel: dict[str, Any] = {}
+            defaults = ImpactSettings.__dataclass_fields__[key].default_factory()
+            for ckey, craw in raw.items():
+                if ckey not in CHANNEL_KEYS:
+                    raise UserError(f"{where}: unknown key {key}.{ckey}; known: {', '.join(CHANNEL_KEYS)}")
+                v = _typed(where, f"{key}.{ckey}", craw, CHANNEL_KEYS[ckey])
+                if ckey == "range_v" and isinstance(v, str):
+                    if v != "auto":
+                        raise UserError(f'{where}: {key}.range_v must be a number or "auto", got {v!r}')
+                    v = None
+                channel[ckey] = v
+            try:
+                kwargs[key] = ChannelSetup(**{**defaults.__dict__, **channel})
+            except ValueError as exc:
+                raise UserError(f"{where}: [{key}] {exc}") from None
+        elif key in TOP_KEYS:
+            kwargs[key] = _typed(where, key, raw, TOP_KEYS[key])
+        else:
+            known = ", ".join([*TOP_KEYS, "[hammer]", "[accelerometer]"])
+            raise UserError(f"{where}: unknown key {key}; known: {known}")
+    if kwargs.get("center_hz") == 0.0:
+        kwargs["center_hz"] = None
+    try:
+        return ImpactSettings(**kwargs)
+    except ValueError as exc:
+        raise UserError(f"{where}: {exc}") from None
+
+
+def read_setup(path: Path) -> ImpactSettings:
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise UserError(f"setup file {path}: cannot read it ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise UserError(f"setup file {path}: not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise UserError(f"setup file {path}: not valid TOML ({exc})") from None
+    return settings_from_setup(data, f"setup file {path}")
+
+
+def sparkline(values: np.ndarray, width: int = 32) -> str:
+    """|values| as a bar per bin (max of each), scaled to the largest."""
+    magnitude = np.abs(np.asarray(values))
+    bins = np.array_split(magnitude, min(width, magnitude.size))
+    peaks = np.array([b.max() for b in bins])
+    top = peaks.max()
+    if not top > 0:
+        return SPARK[0] * len(peaks)
+    return "".join(SPARK[min(len(SPARK) - 1, int(p / top * (len(SPARK) - 1) + 0.5))] for p in peaks)
+
+
+def _resource(resource: str | None) -> str | None:
+    from daq.store.config import load_config
+
+    if resource:
+        return resource
+    if os.environ.get("DAQ_RESOURCE"):
+        return os.environ["DAQ_RESOURCE"]
+    return load_config().resource
+
+
+def capture(
+    resource: Annotated[
+        str | None,
+        typer.Option(
+            "--resource",
+            "-r",
+            metavar="<resource>",
+            help="The analyzer's VISA resource (else $DAQ_RESOURCE, the config file).",
+        ),
+    ] = None,
+    sim: Annotated[
+        bool, typer.Option("--sim", help="Use the built-in simulator even if an analyzer is configured.")
+    ] = False,
+    setup: Annotated[
+        Path | None, typer.Option(metavar="<file.toml>", help="Settings file (see --print-setup).")
+    ] = None,
+    hits: Annotated[
+        int | None,
+        typer.Option(metavar="<1-9999>", help="Accepted hits to average [default: the setup's averages]."),
+    ] = None,
+    yes: Annotated[
+        bool,
+        typer.Option(
+            "--yes", "-y", help="Accept hits that pass the checks, reject the others, without asking."
+        ),
+    ] = False,
+    operator: Annotated[
+        str, typer.Option(metavar="<name>", help="Who hits the beam (stored with the run).")
+    ] = "",
+    note: Annotated[str, typer.Option(metavar="<text>", help="Free text stored with the run.")] = "",
+    store: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<dir>", help="Run store folder (else $DAQ_STORE, the config file, the default)."
+        ),
+    ] = None,
+    scenario: Annotated[Scenario | None, typer.Option(help="Simulator only. " + SCENARIO_HELP)] = None,
+    seed: Annotated[int | None, typer.Option(metavar="<int>", help="Simulator only. " + SEED_HELP)] = None,
+    time_scale: Annotated[
+        float | None,
+        typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
+    ] = None,
+    hammer: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<k=v,...>", help="Simulator only: the simulated hammer, e.g. double_hit_probability=1."
+        ),
+    ] = None,
+    print_setup: Annotated[
+        bool, typer.Option("--print-setup", help="Print the default setup file and exit.")
+    ] = False,
+) -> None:
+    """Capture an impact test: hit, check, accept or reject, seal the run.
+
+    Each hit is checked (overload, double impact, force roll-off, too weak) and offered
+    for accept/reject with the checks' verdict as the default. The analyzer averages only
+    accepted hits; its FRF and coherence are stored with every hit's time records.
+    Ctrl-C keeps the hits so far as an incomplete run.
+    """
+    if print_setup:
+        sys.stdout.write(setup_toml(ImpactSettings()))
+        return
+    settings = read_setup(setup) if setup is not None else ImpactSettings()
+    hits_wanted = hits if hits is not None else settings.averages
+    if not 1 <= hits_wanted <= 9999:
+        raise UserError("--hits must be 1..9999", exit_code=2)
+    if sim and resource:
+        raise UserError("--sim and --resource exclude each other", exit_code=2)
+    real = None if sim else _resource(resource)
+    sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--hammer": hammer}
+    if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
+        raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
+    if time_scale is not None and not time_scale >= 0:
+        raise UserError("--time-scale must be >= 0", exit_code=2)
+    run_capture(
+        real, settings, hits_wanted, yes, operator, note, store,
+        scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
+        time_scale=0.05 if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
+    )  # fmt: skip
+
+
+def run_capture(
+    resource: str | None,
+    settings: ImpactSettings,
+    hits_wanted: int,
+    yes: bool,
+    operator: str,
+    note: str,
+    store: str | None,
+    scenario: str,
+    seed: int,
+    time_scale: float,
+    hammer: str | None,
+    sim_asked: bool = False,
+) -> None:
+    """Open the analyzer (or start the simulator when ``resource`` is None), run the
+    capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
+    from rich.console import Console
+
+    from daq.capture import Capture, Configured, Connected, Finished, HitArrived, HitDecided
+    from daq.store import Store, StoreError, resolve_store_dir
+    from drivers.hp35660a import HP35660A
+
+    console = Console(highlight=False, soft_wrap=True)
+    store_dir, _ = resolve_store_dir(store)
+    with contextlib.ExitStack() as stack:
+        simulator = None
+        if resource is None:
+            from sims.hammer import HammerModel, adjusted
+            from sims.instrument import Analyzer
+            from sims.sources import PhysicsSource
+            from sims.tcp_server import TcpServer
+
+            try:
+                hammer_model = adjusted(HammerModel(), hammer) if hammer else HammerModel()
+            except ValueError as exc:
+                raise UserError(f"--hammer: {exc}", exit_code=2) from None
+            source = PhysicsSource(scenario, hammer=hammer_model, seed=seed)
+            server = stack.enter_context(TcpServer(Analyzer(source, time_scale=time_scale)))
+            resource = server.resource
+            simulator = {"scenario": scenario, "seed": seed, "time_scale": time_scale, "hammer": hammer or ""}
+            why = "--sim" if sim_asked else "no analyzer configured (--resource, $DAQ_RESOURCE, config file)"
+            console.print(f"Simulated analyzer ({scenario} beam) at {resource}: {why}")
+        try:
+            dsa = stack.enter_context(HP35660A.open(resource, timeout_s=5.0))
+        except ValueError as exc:
+            raise UserError(f"--resource {resource}: {exc}") from None
+        job = Capture(
+            dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
+            simulator=simulator, operator=operator, note=note,
+        )  # fmt: skip
+
+        def seal_partial(why: str, exit_code: int) -> UserError:
+            run = job.partial_run()
+            if run is None:
+                return UserError(f"{why}; no hits to keep", exit_code)
+            try:
+                path = Store(store_dir).seal(run)
+            except StoreError as exc:
+                return UserError(f"{why}; the {run.hits.n_hits} hits so far could not be sealed: {exc}", 1)
+            return UserError(
+                f"{why}; {run.hits.n_hits} hits kept as incomplete run {run.run_id} in {path}", exit_code
+            )
+
+        try:
+            for event in job:
+                if isinstance(event, Connected):
+                    console.print(f"Analyzer: {event.identification}")
+                elif isinstance(event, Configured):
+                    s = event.settings
+                    console.print(
+                        f"Span {s.span_hz:g} Hz, {s.record_length_s:g} s records, trigger "
+                        f"{s.trigger_level_eu:g} N, {hits_wanted} hits wanted. Hammer away."
+                    )
+                elif isinstance(event, HitArrived):
+                    _show_hit(console, event, hits_wanted)
+                    if not yes:
+                        _ask(console, job, event)
+                elif isinstance(event, HitDecided):
+                    verdict = "accepted" if event.accepted else f"rejected ({event.reason})"
+                    console.print(f"  -> {verdict}; {event.accepted_so_far}/{hits_wanted} accepted")
+                elif isinstance(event, Finished):
+                    path = Store(store_dir).seal(event.run)
+                    console.print(f"Run {event.run.run_id} sealed: {path}")
+        except KeyboardInterrupt:
+            raise seal_partial("interrupted", 130) from None
+        except EOFError:
+            raise seal_partial("no answer on stdin (use --yes to decide by the checks)", 1) from None
+        except DriverError as exc:
+            raise seal_partial(str(exc), 1) from None
+        except StoreError as exc:
+            raise UserError(str(exc)) from None
+        except Exception as exc:  # CaptureError and the like: keep what was taken
+            from daq.capture import CaptureError
+
+            if isinstance(exc, CaptureError):
+                raise seal_partial(str(exc), 1) from None
+            raise
+
+
+def _show_hit(console: Any, hit: Any, hits_wanted: int) -> None:
+    verdict = "checks pass" if hit.passed else f"FAILS: {hit.suggested_reason}"
+    console.print(
+        f"Hit {hit.index + 1}: peak {hit.peak_force_n:.3g} N, {hit.accepted_so_far}/{hits_wanted} "
+        f"accepted, {verdict}"
+    )
+    for check in hit.checks:
+        if not check.passed:
+            console.print(f"  {check.name}: {check.detail}")
+    console.print(f"  force    {sparkline(hit.force_n)}")
+    console.print(f"  response {sparkline(hit.response_m_s2)}")
+
+
+def _ask(console: Any, job: Any, hit: Any) -> None:
+    from rich.prompt import Prompt
+
+    default = "a" if hit.passed else "r"
+    answer = Prompt.ask("  [a]ccept / [r]eject", choices=["a", "r"], default=default, console=console)
+    if answer == "a":
+        job.decide(True)
+    else:
+        job.decide(False, hit.suggested_reason or "rejected by operator")
