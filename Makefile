@@ -19,9 +19,15 @@ $(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check -e '.[dev]'
 	@touch $@ $(VENV)/.installed-run
 
+# The demo's runs go to a store of their own, not the lab's.
+DEMO_STORE ?= $(VENV)/demo-runs
+
 demo: $(VENV)/.installed-run
 	$(BIN)/daq model
 	$(BIN)/daq demo
+	$(BIN)/daq capture --sim --hits 5 --yes --operator demo --note "make demo" --store $(DEMO_STORE)
+	$(BIN)/daq runs list --store $(DEMO_STORE)
+	$(BIN)/daq runs verify --store $(DEMO_STORE)
 
 test: lint
 	$(BIN)/python -m pytest -n auto
