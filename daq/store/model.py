@@ -17,6 +17,7 @@ import numpy as np
 
 from daq import __version__
 from daq.store.ids import is_run_id
+from daq.store.layout import SAMPLE_ATTRS
 
 RUN_KINDS = ("simulated", "captured", "replayed", "imported")
 SOFTWARE = f"cantilever-daq {__version__}"
@@ -178,15 +179,7 @@ class Sample:
     sensor_position_m: float | None = None
 
     def __post_init__(self) -> None:
-        for name in (
-            "density_kg_m3",
-            "youngs_modulus_pa",
-            "width_m",
-            "height_m",
-            "length_m",
-            "area_m2",
-            "second_moment_m4",
-        ):
+        for name in SAMPLE_ATTRS:
             setattr(self, name, _finite_float(getattr(self, name), f"sample.{name}", positive=True))
         for name in ("force_position_m", "sensor_position_m"):
             value = getattr(self, name)
