@@ -1,0 +1,77 @@
+"""SIGKILL a real `daq capture --sim` at random moments: the store then holds only whole,
+sealed runs that verify clean, an earlier run is untouched, and every command
+ignores whatever temporary file a killed capture left (docs/run-format.md)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import random
+import signal
+import subprocess
+import time
+
+import pytest
+from cli_helpers import DAQ, ENV, invoke_daq
+
+from daq.store import Store, open_run, verify
+
+KILLS = 50
+
+
+def _capture(store, seed: int, env: dict[str, str]) -> subprocess.Popen:
+    command = ["capture", "--sim", "--yes", "--hits", "3", "--time-scale", "0", "--seed", str(seed)]
+    return subprocess.Popen(
+        [str(DAQ), *command, "--store", str(store)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        stdin=subprocess.DEVNULL,
+        env=env,
+    )
+
+
+@pytest.mark.timeout(300)
+def test_sigkill_of_a_capture_at_random_moments_leaves_only_whole_runs(tmp_path):
+    store = tmp_path / "runs"
+    env = {**os.environ, **ENV, "DAQ_LOCK_DIR": str(tmp_path / "locks"), "DAQ_CONFIG": str(tmp_path / "none")}
+    env.pop("DAQ_DEBUG", None)
+    first = _capture(store, 0, env)
+    assert first.wait(timeout=60) == 0
+    (earlier,) = store.glob("*.h5")
+    earlier_sha = hashlib.sha256(earlier.read_bytes()).hexdigest()
+
+    rng = random.Random(20261123)
+    finished = killed = 0
+    for seed in range(1, KILLS + 1):
+        proc = _capture(store, seed, env)
+        time.sleep(rng.uniform(0.0, 2.0))  # a whole capture takes about 1.7 s here
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGKILL)
+            killed += 1
+        else:
+            finished += 1
+        proc.wait(timeout=30)
+    assert killed >= KILLS // 3, (killed, finished)  # most kills land mid-capture
+
+    runs = sorted(store.glob("*.h5"))
+    assert earlier in runs
+    assert hashlib.sha256(earlier.read_bytes()).hexdigest() == earlier_sha
+    for path in runs:
+        assert verify(path) == [], path
+        run = open_run(path)
+        assert run.kind == "simulated"
+        assert run.complete
+        assert run.hits is not None
+        assert int(run.hits.accepted.sum()) == 3
+    assert len(runs) >= 1 + finished  # every capture that ended on its own sealed its run
+
+    listed = Store(store).list()
+    assert [s.file_name for s in listed] == [p.name for p in runs]  # no temporary file listed
+    assert all(s.error is None for s in listed)
+    no_config = {"DAQ_CONFIG": env["DAQ_CONFIG"]}
+    result = invoke_daq("runs", "list", "--json", "--store", str(store), env=no_config)
+    assert result.returncode == 0, result.stderr
+    assert len(json.loads(result.stdout)) == len(runs)
+    checked = invoke_daq("runs", "verify", "--store", str(store), env=no_config)
+    assert checked.returncode == 0, checked.stdout + checked.stderr
