@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import os
 import sys
 import tomllib
 from pathlib import Path
@@ -19,6 +18,7 @@ import numpy as np
 import typer
 
 from daq.errors import UserError
+from daq.instrument import configured_resource
 from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
 from drivers.errors import DriverError
 from drivers.settings import ChannelSetup, ImpactSettings
@@ -151,16 +151,6 @@ def sparkline(values: np.ndarray, width: int = 32) -> str:
     return "".join(SPARK[min(len(SPARK) - 1, int(p / top * (len(SPARK) - 1) + 0.5))] for p in peaks)
 
 
-def _resource(resource: str | None) -> str | None:
-    from daq.store.config import load_config
-
-    if resource:
-        return resource
-    if os.environ.get("DAQ_RESOURCE"):
-        return os.environ["DAQ_RESOURCE"]
-    return load_config().resource
-
-
 def capture(
     resource: Annotated[
         str | None,
@@ -229,7 +219,7 @@ def capture(
         raise UserError("--hits must be 1..9999", exit_code=2)
     if sim and resource:
         raise UserError("--sim and --resource exclude each other", exit_code=2)
-    real = None if sim else _resource(resource)
+    real = None if sim else configured_resource(resource)
     sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--hammer": hammer}
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
@@ -260,7 +250,7 @@ def run_capture(
     capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
     from rich.console import Console
 
-    from daq.capture import Capture, Configured, Connected, Finished, HitArrived, HitDecided
+    from daq.capture import Capture, CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
     from daq.store import Store, StoreError, resolve_store_dir
     from drivers.hp35660a import HP35660A
 
@@ -333,12 +323,8 @@ def run_capture(
             raise seal_partial(str(exc), 1) from None
         except StoreError as exc:
             raise UserError(str(exc)) from None
-        except Exception as exc:  # CaptureError and the like: keep what was taken
-            from daq.capture import CaptureError
-
-            if isinstance(exc, CaptureError):
-                raise seal_partial(str(exc), 1) from None
-            raise
+        except CaptureError as exc:  # e.g. too many hits failed their checks: keep what was taken
+            raise seal_partial(str(exc), 1) from None
 
 
 def _show_hit(console: Any, hit: Any, hits_wanted: int) -> None:
@@ -358,7 +344,8 @@ def _ask(console: Any, job: Any, hit: Any) -> None:
     from rich.prompt import Prompt
 
     default = "a" if hit.passed else "r"
-    answer = Prompt.ask("  [a]ccept / [r]eject", choices=["a", "r"], default=default, console=console)
+    # Escaped: rich would read "[a]" and "[r]" as markup tags and show "ccept / eject".
+    answer = Prompt.ask(r"  \[a]ccept / \[r]eject", choices=["a", "r"], default=default, console=console)
     if answer == "a":
         job.decide(True)
     else:

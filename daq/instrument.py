@@ -3,10 +3,24 @@ built-in simulator (resource ``sim``, ``sim:seed`` or ``sim:realistic``)."""
 
 from __future__ import annotations
 
+import os
+
 from drivers.hp35660a import HP35660A
 from drivers.loopback import LoopbackTransport
 
 SIM_RESOURCES = ("sim", "sim:seed", "sim:realistic")
+
+
+def configured_resource(option: str | None) -> str | None:
+    """The analyzer to use: the --resource option, else $DAQ_RESOURCE, else the config
+    file's ``resource`` (``daq config`` shows which); None when none names one."""
+    if option:
+        return option
+    if os.environ.get("DAQ_RESOURCE"):
+        return os.environ["DAQ_RESOURCE"]
+    from daq.store.config import load_config
+
+    return load_config().resource
 
 
 def is_simulated(resource: str) -> bool:

@@ -29,12 +29,9 @@ TimeoutOption = Annotated[
 
 
 def _open(resource: str | None, timeout: float):
-    from daq.instrument import open_analyzer
+    from daq.instrument import configured_resource, open_analyzer
 
-    if not resource:
-        from daq.store.config import load_config
-
-        resource = load_config().resource  # the lab PC's config file (daq config shows it)
+    resource = configured_resource(resource)
     if not resource:
         raise UserError(
             "no analyzer given: use --resource (-r), set DAQ_RESOURCE or put resource = ... in the "

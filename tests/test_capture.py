@@ -7,7 +7,7 @@ import tomllib
 import numpy as np
 import pytest
 
-from daq import capture_command, cli
+from daq import capture_command
 from daq.capture import Capture, CaptureError, HitArrived
 from daq.store import Store
 from drivers.hp35660a import HP35660A
@@ -15,22 +15,8 @@ from drivers.settings import ImpactSettings
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
-from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.cli_helpers import assert_one_line_error, invoke_daq, run_daq
 from tests.reference import EXACT_TABULATED_HZ
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _capture_registered():
-    """Register `daq capture` for these tests if daq/cli.py does not yet, and take it
-    away afterwards, so that other tests (docs/cli.md's) see the app as cli.py builds it."""
-    if "capture" in {c.name for c in cli.app.registered_commands}:
-        yield
-        return
-    capture_command.register(cli.app)
-    added = cli.app.registered_commands[-1]
-    yield
-    cli.app.registered_commands.remove(added)
-
 
 NO_CONFIG = {"DAQ_RESOURCE": None, "DAQ_STORE": None}
 
@@ -128,3 +114,38 @@ def test_bad_setup_file_gives_one_line(tmp_path, env, text, fragment):
     result = invoke_daq("capture", "--sim", "--setup", str(path), "--store", str(tmp_path), env=env)
     assert_one_line_error(result, fragment)
     assert result.returncode in (1, 2)
+
+
+@pytest.mark.timeout(60)
+def test_the_technician_accepts_and_rejects_at_the_keyboard(tmp_path, monkeypatch):
+    """Without --yes each hit waits for an answer: a, r, a accept two hits of three."""
+    store = tmp_path / "runs"
+    monkeypatch.setenv("DAQ_CONFIG", str(tmp_path / "none"))
+    monkeypatch.delenv("DAQ_RESOURCE", raising=False)
+    result = run_daq(
+        "capture", "--sim", "--hits", "2", "--time-scale", "0", "--store", str(store),
+        input="a\nr\na\n",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("[a]ccept / [r]eject") == 3
+    run = Store(store).open(Store(store).list()[0].run_id)
+    assert run.complete
+    assert run.hits.accepted.tolist() == [True, False, True]
+    assert run.hits.reject_reason.tolist()[1] == "rejected by operator"
+
+
+@pytest.mark.timeout(60)
+def test_no_answer_on_stdin_keeps_the_hit_as_an_incomplete_run(tmp_path, monkeypatch):
+    store = tmp_path / "runs"
+    monkeypatch.setenv("DAQ_CONFIG", str(tmp_path / "none"))
+    monkeypatch.delenv("DAQ_RESOURCE", raising=False)
+    result = run_daq(
+        "capture", "--sim", "--hits", "2", "--time-scale", "0", "--store", str(store),
+        input="",
+    )  # fmt: skip
+    assert_one_line_error(result, "no answer on stdin", "incomplete run")
+    (summary,) = Store(store).list()
+    run = Store(store).open(summary.run_id)
+    assert not run.complete
+    assert run.hits.n_hits == 1
+    assert not run.hits.accepted[0]
