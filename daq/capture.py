@@ -22,7 +22,7 @@ from analysis.beam import TABLE_1
 from analysis.hit_checks import HitCheck, failed_names, run_checks
 from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, new_run_id
 from drivers.hp35660a import HP35660A
-from drivers.settings import ImpactSettings
+from drivers.settings import ChannelSetup, ImpactSettings
 
 #: The reason stored for a hit rejected by hand with no reason given.
 OPERATOR_REJECT = "rejected by operator"
@@ -94,6 +94,21 @@ def checks_policy(hit: HitArrived) -> tuple[bool, str]:
     return hit.passed, hit.suggested_reason
 
 
+def settings_from_dict(data: dict[str, Any]) -> ImpactSettings:
+    """The inverse of settings_as_dict (e.g. a stored run's settings); UserError if the
+    dict does not describe valid settings."""
+    from daq.errors import UserError
+
+    try:
+        fields = dict(data)
+        for channel in ("hammer", "accelerometer"):
+            if channel in fields:
+                fields[channel] = ChannelSetup(**fields[channel])
+        return ImpactSettings(**fields)
+    except (TypeError, ValueError) as exc:
+        raise UserError(f"stored settings do not describe an impact test: {exc}") from None
+
+
 def utc_now() -> str:
     """Now, ISO 8601 UTC to the millisecond, ending in Z."""
     return datetime.now(UTC).isoformat(timespec="milliseconds").replace("+00:00", "Z")
@@ -133,6 +148,9 @@ class Capture:
     max_hits : give up (CaptureError) after this many hits without enough accepted;
         default 4 x hits_wanted + 10.
     hit_timeout_s : how long to wait for each hit; None = the driver's allowance.
+    stop_after_hits : end after this many hits even if fewer were accepted (replay of
+        an incomplete run); the run is then incomplete, without the analyzer's FRF.
+    replayed_from : the original run's provenance when this is a replay (kind "replayed").
     """
 
     driver: HP35660A
@@ -147,6 +165,8 @@ class Capture:
     sample: Sample = field(default_factory=table1_sample)
     max_hits: int | None = None
     hit_timeout_s: float | None = None
+    stop_after_hits: int | None = None
+    replayed_from: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if not 1 <= self.hits_wanted <= 9999:
@@ -183,6 +203,9 @@ class Capture:
         range_n = None if range_v is None else range_v / self.actual.hammer.sensitivity_v_per_eu
         dsa.start()
         while self.accepted < self.hits_wanted:
+            if self.stop_after_hits is not None and len(self.hits) >= self.stop_after_hits:
+                yield Finished(self._run(complete=False, analyzer=None))
+                return
             if len(self.hits) >= self.max_hits:
                 raise CaptureError(
                     f"{len(self.hits)} hits taken, only {self.accepted} of {self.hits_wanted} accepted: "
@@ -275,9 +298,12 @@ class Capture:
         provenance: dict[str, Any] = {"hits_wanted": self.hits_wanted}
         if self.simulator is not None:
             provenance["simulator"] = self.simulator
+        if self.replayed_from is not None:
+            provenance["replayed_from"] = self.replayed_from
+        kind = "simulated" if self.simulator is not None else "captured"
         return Run(
             run_id=self.run_id,
-            kind="simulated" if self.simulator is not None else "captured",
+            kind="replayed" if self.replayed_from is not None else kind,
             complete=complete,
             start_time=self.start_time,
             end_time=utc_now(),

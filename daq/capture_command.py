@@ -14,16 +14,13 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Any
 
-import numpy as np
 import typer
 
 from daq.errors import UserError
 from daq.instrument import configured_resource
 from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
-from drivers.errors import DriverError
 from drivers.settings import ChannelSetup, ImpactSettings
 
-SPARK = "▁▂▃▄▅▆▇█"
 #: Keys of a setup file: top level, and of each [hammer] / [accelerometer] table.
 TOP_KEYS = {
     "span_hz": float, "center_hz": float, "averages": int, "trigger_source": str,
@@ -140,17 +137,6 @@ def read_setup(path: Path) -> ImpactSettings:
     return settings_from_setup(data, f"setup file {path}")
 
 
-def sparkline(values: np.ndarray, width: int = 32) -> str:
-    """|values| as a bar per bin (max of each), scaled to the largest."""
-    magnitude = np.abs(np.asarray(values))
-    bins = np.array_split(magnitude, min(width, magnitude.size))
-    peaks = np.array([b.max() for b in bins])
-    top = peaks.max()
-    if not top > 0:
-        return SPARK[0] * len(peaks)
-    return "".join(SPARK[min(len(SPARK) - 1, int(p / top * (len(SPARK) - 1) + 0.5))] for p in peaks)
-
-
 def capture(
     resource: Annotated[
         str | None,
@@ -250,9 +236,9 @@ def run_capture(
     capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
     from rich.console import Console
 
-    from daq.capture import Capture, CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
-    from daq.store import Store, StoreError, resolve_store_dir
-    from drivers.hp35660a import HP35660A
+    from daq.capture import Capture
+    from daq.capture_session import drive, open_analyzer, serve_simulator
+    from daq.store import resolve_store_dir
 
     console = Console(highlight=False, soft_wrap=True)
     store_dir, _ = resolve_store_dir(store)
@@ -260,93 +246,20 @@ def run_capture(
         simulator = None
         if resource is None:
             from sims.hammer import HammerModel, adjusted
-            from sims.instrument import Analyzer
             from sims.sources import PhysicsSource
-            from sims.tcp_server import TcpServer
 
             try:
                 hammer_model = adjusted(HammerModel(), hammer) if hammer else HammerModel()
             except ValueError as exc:
                 raise UserError(f"--hammer: {exc}", exit_code=2) from None
             source = PhysicsSource(scenario, hammer=hammer_model, seed=seed)
-            server = stack.enter_context(TcpServer(Analyzer(source, time_scale=time_scale)))
-            resource = server.resource
+            resource = serve_simulator(stack, source, time_scale)
             simulator = {"scenario": scenario, "seed": seed, "time_scale": time_scale, "hammer": hammer or ""}
             why = "--sim" if sim_asked else "no analyzer configured (--resource, $DAQ_RESOURCE, config file)"
             console.print(f"Simulated analyzer ({scenario} beam) at {resource}: {why}")
-        try:
-            dsa = stack.enter_context(HP35660A.open(resource, timeout_s=5.0))
-        except ValueError as exc:
-            raise UserError(f"--resource {resource}: {exc}") from None
+        dsa = open_analyzer(stack, resource)
         job = Capture(
             dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
             simulator=simulator, operator=operator, note=note,
         )  # fmt: skip
-
-        def seal_partial(why: str, exit_code: int) -> UserError:
-            run = job.partial_run()
-            if run is None:
-                return UserError(f"{why}; no hits to keep", exit_code)
-            try:
-                path = Store(store_dir).seal(run)
-            except StoreError as exc:
-                return UserError(f"{why}; the {run.hits.n_hits} hits so far could not be sealed: {exc}", 1)
-            return UserError(
-                f"{why}; {run.hits.n_hits} hits kept as incomplete run {run.run_id} in {path}", exit_code
-            )
-
-        try:
-            for event in job:
-                if isinstance(event, Connected):
-                    console.print(f"Analyzer: {event.identification}")
-                elif isinstance(event, Configured):
-                    s = event.settings
-                    console.print(
-                        f"Span {s.span_hz:g} Hz, {s.record_length_s:g} s records, trigger "
-                        f"{s.trigger_level_eu:g} N, {hits_wanted} hits wanted. Hammer away."
-                    )
-                elif isinstance(event, HitArrived):
-                    _show_hit(console, event, hits_wanted)
-                    if not yes:
-                        _ask(console, job, event)
-                elif isinstance(event, HitDecided):
-                    verdict = "accepted" if event.accepted else f"rejected ({event.reason})"
-                    console.print(f"  -> {verdict}; {event.accepted_so_far}/{hits_wanted} accepted")
-                elif isinstance(event, Finished):
-                    path = Store(store_dir).seal(event.run)
-                    console.print(f"Run {event.run.run_id} sealed: {path}")
-        except KeyboardInterrupt:
-            raise seal_partial("interrupted", 130) from None
-        except EOFError:
-            raise seal_partial("no answer on stdin (use --yes to decide by the checks)", 1) from None
-        except DriverError as exc:
-            raise seal_partial(str(exc), 1) from None
-        except StoreError as exc:
-            raise UserError(str(exc)) from None
-        except CaptureError as exc:  # e.g. too many hits failed their checks: keep what was taken
-            raise seal_partial(str(exc), 1) from None
-
-
-def _show_hit(console: Any, hit: Any, hits_wanted: int) -> None:
-    verdict = "checks pass" if hit.passed else f"FAILS: {hit.suggested_reason}"
-    console.print(
-        f"Hit {hit.index + 1}: peak {hit.peak_force_n:.3g} N, {hit.accepted_so_far}/{hits_wanted} "
-        f"accepted, {verdict}"
-    )
-    for check in hit.checks:
-        if not check.passed:
-            console.print(f"  {check.name}: {check.detail}")
-    console.print(f"  force    {sparkline(hit.force_n)}")
-    console.print(f"  response {sparkline(hit.response_m_s2)}")
-
-
-def _ask(console: Any, job: Any, hit: Any) -> None:
-    from rich.prompt import Prompt
-
-    default = "a" if hit.passed else "r"
-    # Escaped: rich would read "[a]" and "[r]" as markup tags and show "ccept / eject".
-    answer = Prompt.ask(r"  \[a]ccept / \[r]eject", choices=["a", "r"], default=default, console=console)
-    if answer == "a":
-        job.decide(True)
-    else:
-        job.decide(False, hit.suggested_reason or "rejected by operator")
+        drive(console, job, store_dir, ask=not yes)

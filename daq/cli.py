@@ -18,7 +18,7 @@ from typing import Annotated
 
 import typer
 
-from daq import __version__, capture_command, config_command, runs_command
+from daq import __version__, capture_command, config_command, replay_command, runs_command
 from daq import talk_command as talk
 from daq.demo_command import demo
 from daq.errors import UserError
@@ -98,6 +98,7 @@ app.command(name="query")(talk.query)
 app.command(name="demo")(demo)
 capture_command.register(app)
 runs_command.register(app)
+replay_command.register(app)
 config_command.register(app)
 
 

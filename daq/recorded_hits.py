@@ -1,9 +1,16 @@
 """Reading the hits of a recorded run, for the simulator's replay mode.
 
-A run is an HDF5 file laid out as docs/simulator.md (replay) describes:
-``/entry/hits/force`` and ``/entry/hits/response`` (n_hits x n_samples, N and
-m/s^2), ``/entry/hits/time`` (n_samples, s, relative to the trigger), and
-optionally ``/entry/hits/accepted`` and ``/entry/hits/overload`` (n_hits x 2).
+Two kinds of file are accepted:
+
+- a run of the store (it has the ``schema`` root attribute): read whole through
+  ``daq.store.open_run``, so it is checked as every stored run is;
+- a minimal hand-made file laid out as docs/simulator.md (replay) describes:
+  ``/entry/hits/force`` and ``/entry/hits/response`` (n_hits x 1024 float64, or
+  n_hits x 512 complex with a ``center_hz`` attribute on ``/entry/hits``, N and
+  m/s^2), ``/entry/hits/time`` (n_samples, s, relative to the trigger) and optionally
+  ``/entry/hits/accepted`` and ``/entry/hits/overload`` (n_hits x 2).
+
+Either way a file that links or maps data outside itself is refused.
 """
 
 from __future__ import annotations
@@ -13,55 +20,107 @@ from pathlib import Path
 import numpy as np
 
 from daq.errors import UserError
+from daq.store import Hits, StoreError, open_run
+from daq.store.h5io import refuse_outside_references
+from daq.store.layout import ATTR_SCHEMA
 from sims.settings import RECORD_SAMPLES
-from sims.sources import RecordedHit
+from sims.sources import ZOOM_RECORD_SAMPLES, RecordedHit
+
+
+def recorded_hits(hits: Hits, accepted_only: bool = False) -> list[RecordedHit]:
+    """The stored ``hits`` as the replay source serves them, in recorded order."""
+    out = []
+    for i in range(hits.n_hits):
+        if accepted_only and not hits.accepted[i]:
+            continue
+        out.append(
+            RecordedHit(
+                hits.force_n[i],
+                hits.response_m_s2[i],
+                hits.sample_rate_hz,
+                hits.start_s,
+                (bool(hits.overload[i, 0]), bool(hits.overload[i, 1])),
+                hits.center_hz,
+            )
+        )
+    return out
 
 
 def load_recorded_hits(path: Path, accepted_only: bool = False) -> list[RecordedHit]:
-    """The hits of the run at ``path``, in recorded order."""
+    """The hits of the run at ``path``, in recorded order; UserError naming the file."""
     import h5py
 
     if not path.is_file():
         raise UserError(f"{path}: no such run file")
     try:
-        with h5py.File(path, "r") as f:
-            if not isinstance(f.get("entry/hits"), h5py.Group):
-                raise UserError(f"{path}: not a run (no /entry/hits group)")
-            hits = f["entry/hits"]
-
-            def read(name: str, dtype: type, required: bool = True) -> np.ndarray | None:
-                node = hits.get(name)
-                if node is None and not required:
-                    return None
-                if not isinstance(node, h5py.Dataset):
-                    raise UserError(f"{path}: /entry/hits/{name} is missing or not a dataset")
-                try:
-                    return np.asarray(node[()], dtype=dtype)
-                except (TypeError, ValueError) as exc:
-                    raise UserError(f"{path}: /entry/hits/{name} is not numeric ({exc})") from None
-
-            force = read("force", float)
-            response = read("response", float)
-            time_s = read("time", float)
-            accepted = read("accepted", bool, required=False)
-            overload = read("overload", bool, required=False)
+        with h5py.File(path, "r", locking=False) as f:
+            is_store_run = ATTR_SCHEMA in f.attrs
+            if not is_store_run:
+                refuse_outside_references(f)
+                out = _read_minimal(f, path, accepted_only)
+    except StoreError as exc:
+        raise UserError(f"{path}: {exc}") from None
     except OSError as exc:
         raise UserError(f"{path}: not a readable HDF5 file ({exc})") from None
+    if is_store_run:
+        try:
+            run = open_run(path)
+        except StoreError as exc:
+            raise UserError(str(exc)) from None
+        if run.hits is None:
+            raise UserError(f"{path}: run {run.run_id} holds no time records to replay")
+        out = recorded_hits(run.hits, accepted_only)
+    if not out:
+        raise UserError(f"{path}: no hits to replay")
+    return out
+
+
+def _read_minimal(f, path: Path, accepted_only: bool) -> list[RecordedHit]:
+    import h5py
+
+    if not isinstance(f.get("entry/hits"), h5py.Group):
+        raise UserError(f"{path}: not a run (no /entry/hits group)")
+    hits = f["entry/hits"]
+
+    def read(name: str, kinds: str, required: bool = True) -> np.ndarray | None:
+        node = hits.get(name)
+        if node is None and not required:
+            return None
+        if not isinstance(node, h5py.Dataset):
+            raise UserError(f"{path}: /entry/hits/{name} is missing or not a dataset")
+        value = np.asarray(node[()])
+        if value.dtype.kind not in kinds:
+            raise UserError(f"{path}: /entry/hits/{name} is not numeric (dtype {value.dtype})")
+        return value
+
+    force = read("force", "fiuc")
+    response = read("response", "fiuc")
+    time_s = read("time", "fiu")
+    accepted = read("accepted", "b", required=False)
+    overload = read("overload", "b", required=False)
     assert force is not None
     assert response is not None
     assert time_s is not None
-    if force.ndim != 2 or force.shape != response.shape or force.shape[1] != RECORD_SAMPLES:
+    zoom = force.dtype.kind == "c" or response.dtype.kind == "c"
+    n = ZOOM_RECORD_SAMPLES if zoom else RECORD_SAMPLES
+    force = force.astype(complex if zoom else float)
+    response = response.astype(complex if zoom else float)
+    time_s = time_s.astype(float)
+    if force.ndim != 2 or force.shape != response.shape or force.shape[1] != n:
         raise UserError(
-            f"{path}: force and response must both be n_hits x {RECORD_SAMPLES}, "
-            f"got {force.shape} and {response.shape}"
+            f"{path}: force and response must both be n_hits x {n}"
+            f"{' (complex, zoom)' if zoom else ''}, got {force.shape} and {response.shape}"
         )
-    if time_s.shape != (RECORD_SAMPLES,) or not np.all(np.isfinite(time_s)):
-        raise UserError(f"{path}: /entry/hits/time must hold {RECORD_SAMPLES} finite instants")
+    if time_s.shape != (n,) or not np.all(np.isfinite(time_s)):
+        raise UserError(f"{path}: /entry/hits/time must hold {n} finite instants")
     steps = np.diff(time_s)
     if np.any(steps <= 0) or not np.allclose(steps, steps[0], rtol=1e-9, atol=0):
         raise UserError(f"{path}: /entry/hits/time is not evenly spaced")
     if not (np.all(np.isfinite(force)) and np.all(np.isfinite(response))):
         raise UserError(f"{path}: the recorded hits hold non-finite values")
+    center_hz = float(np.asarray(hits.attrs.get("center_hz", 0.0)).real) if zoom else 0.0
+    if zoom and not (np.isfinite(center_hz) and center_hz > 0):
+        raise UserError(f"{path}: complex (zoom) records need a center_hz > 0 attribute on /entry/hits")
     n_hits = force.shape[0]
     if accepted is not None and accepted.shape != (n_hits,):
         raise UserError(f"{path}: /entry/hits/accepted must hold {n_hits} flags, got shape {accepted.shape}")
@@ -69,11 +128,9 @@ def load_recorded_hits(path: Path, accepted_only: bool = False) -> list[Recorded
         raise UserError(f"{path}: /entry/hits/overload must be {n_hits} x 2, got shape {overload.shape}")
     sample_rate_hz = 1.0 / float(steps.mean())
     out = []
-    for i in range(force.shape[0]):
+    for i in range(n_hits):
         if accepted_only and accepted is not None and not accepted[i]:
             continue
         over = (bool(overload[i, 0]), bool(overload[i, 1])) if overload is not None else (False, False)
-        out.append(RecordedHit(force[i], response[i], sample_rate_hz, float(time_s[0]), over))
-    if not out:
-        raise UserError(f"{path}: no hits to replay")
+        out.append(RecordedHit(force[i], response[i], sample_rate_hz, float(time_s[0]), over, center_hz))
     return out

@@ -12,7 +12,10 @@ from sims.acquisition import ChannelChains, NoiseModel, Record, acquire, channel
 from sims.hammer import HammerModel, draw_hit
 from sims.pole_residue import PoleResidueSystem
 from sims.scenarios import Specimen, build_specimen
-from sims.settings import RECORD_SAMPLES, AnalyzerSettings
+from sims.settings import RECORD_SAMPLES, SAMPLE_RATE_PER_SPAN, AnalyzerSettings
+
+#: Samples of a zoom record: complex, half as many as a baseband record.
+ZOOM_RECORD_SAMPLES = RECORD_SAMPLES // 2
 
 #: A technician who sees no trigger hits again; after this many misses the
 #: analyzer waits for ever (the driver's trigger timeout takes over).
@@ -90,13 +93,25 @@ class PhysicsSource:
 
 @dataclass
 class RecordedHit:
-    """One hit of a recorded run: the two channels in engineering units."""
+    """One hit of a recorded run: the two channels in engineering units.
+
+    force_n, acceleration_m_s2 : (1024,) float64 at baseband, or (512,) complex128 for
+        a zoom record (the band mixed down by ``center_hz``), N and m/s^2.
+    sample_rate_hz : Hz (2.56 x span at baseband, 1.28 x span in zoom).
+    start_s : time of the first sample after the trigger, s.
+    center_hz : 0 at baseband, the zoom centre frequency otherwise, Hz.
+    """
 
     force_n: np.ndarray
     acceleration_m_s2: np.ndarray
     sample_rate_hz: float
     start_s: float = 0.0
     overload: tuple[bool, bool] = (False, False)
+    center_hz: float = 0.0
+
+    @property
+    def zoom(self) -> bool:
+        return bool(np.iscomplexobj(self.force_n))
 
 
 @dataclass
@@ -113,8 +128,14 @@ class ReplaySource:
 
     def __post_init__(self) -> None:
         for i, hit in enumerate(self.hits):
-            if hit.force_n.shape != (RECORD_SAMPLES,) or hit.acceleration_m_s2.shape != (RECORD_SAMPLES,):
-                raise ValueError(f"recorded hit {i} does not hold two {RECORD_SAMPLES}-sample channels")
+            n = ZOOM_RECORD_SAMPLES if hit.zoom else RECORD_SAMPLES
+            kind = "complex (zoom)" if hit.zoom else "real"
+            if hit.force_n.shape != (n,) or hit.acceleration_m_s2.shape != (n,):
+                raise ValueError(f"recorded hit {i} does not hold two {n}-sample {kind} channels")
+            if np.iscomplexobj(hit.acceleration_m_s2) != hit.zoom:
+                raise ValueError(f"recorded hit {i} mixes a real and a complex channel")
+            if hit.zoom != (hit.center_hz > 0):
+                raise ValueError(f"recorded hit {i}: a zoom record needs center_hz > 0, baseband 0")
 
     def next_record(self, settings: AnalyzerSettings) -> TimedRecord | None:
         if self.position >= len(self.hits):
@@ -122,17 +143,22 @@ class ReplaySource:
                 return None
             self.position = 0
         hit = self.hits[self.position]
-        if settings.zoom:
+        if hit.zoom:
+            if not (settings.zoom and math.isclose(hit.center_hz, settings.center_hz, rel_tol=1e-12)):
+                raise SourceError(f"replay of a zoom record: set CF to its center, {hit.center_hz:g} Hz")
+        elif settings.zoom:
             raise SourceError("replay serves baseband records: set CF to span/2")
         if not math.isclose(hit.sample_rate_hz, settings.sample_rate_hz, rel_tol=1e-9):
+            per_span = SAMPLE_RATE_PER_SPAN / (2 if hit.zoom else 1)
             raise SourceError(
                 f"replay recorded at {hit.sample_rate_hz:g} Hz sampling (span "
-                f"{hit.sample_rate_hz / 2.56:g} Hz); set FRS to match"
+                f"{hit.sample_rate_hz / per_span:g} Hz); set FRS to match"
             )
         self.position += 1
+        dtype = complex if hit.zoom else float
         record = Record(
-            force_n=np.array(hit.force_n, dtype=float),
-            acceleration_m_s2=np.array(hit.acceleration_m_s2, dtype=float),
+            force_n=np.array(hit.force_n, dtype=dtype),
+            acceleration_m_s2=np.array(hit.acceleration_m_s2, dtype=dtype),
             start_s=hit.start_s,
             sample_rate_hz=hit.sample_rate_hz,
             overload=hit.overload,

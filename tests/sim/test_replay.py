@@ -244,7 +244,7 @@ def test_a_looping_replay_starts_over():
 
 
 @pytest.mark.timeout(5)
-def test_a_zoom_is_refused():
+def test_a_baseband_recording_is_refused_in_zoom():
     hits = make_hits(1)
     client = replay(hits)
     client.send("FRS 200 HZ;CF 500 HZ;STRT")
@@ -257,12 +257,53 @@ def test_a_zoom_is_refused():
     assert_serves(client, hits[0])
 
 
-def test_replay_source_refuses_hits_that_are_not_1024_samples():
+def zoom_hit(center_hz: float, seed: int = 3) -> RecordedHit:
+    """A complex record of 512 samples at 1.28 x 200 Hz (docs/instrument.md), with odd
+    values in both the real and the imaginary parts."""
+    rng = np.random.default_rng(seed)
+    fs = 1.28 * SPAN_HZ
+    force = rng.standard_normal(N // 2) + 1j * rng.standard_normal(N // 2)
+    response = rng.standard_normal(N // 2) + 1j * rng.standard_normal(N // 2)
+    force[-1] = complex(-0.0, 5e-324)
+    return RecordedHit(force, response, fs, START_S, center_hz=center_hz)
+
+
+@pytest.mark.timeout(5)
+def test_a_zoom_recording_is_served_bit_for_bit_at_its_center():
+    hit = zoom_hit(500.0)
+    client = replay([hit])
+    client.send("FRS 200 HZ;CF 500 HZ;UNIF;STRT")
+    assert client.query("SMSD") == b"1\r\n"
+    assert client.error() == (0, "No error")
+    for function, samples in (("TIM1", hit.force_n), ("TIM2", hit.acceleration_m_s2)):
+        header, _, raw = client.trace(function)
+        assert header[36] == 0  # complex
+        assert int(header[1]) == N // 2
+        # A complex trace is (re, im) pairs, big-endian float64.
+        pairs = np.stack([samples.real, samples.imag], axis=1).ravel()
+        assert raw == be64(pairs), function
+
+
+@pytest.mark.timeout(5)
+@pytest.mark.parametrize("setup", ["FRS 200 HZ;CF 600 HZ", "FRS 200 HZ;CF 100 HZ", "FRS 400 HZ;CF 500 HZ"])
+def test_a_zoom_recording_elsewhere_is_refused(setup):
+    client = replay([zoom_hit(500.0)])
+    client.send(f"{setup};STRT")
+    code, _ = client.error()
+    assert code != 0
+    assert client.query("SMSD") == b"0\r\n"
+
+
+def test_replay_source_refuses_hits_that_are_not_1024_real_or_512_complex_samples():
     good = make_hits(1)[0]
     with pytest.raises(ValueError, match="1024"):
         ReplaySource([good, RecordedHit(np.zeros(512), np.zeros(512), FS_HZ)])
     with pytest.raises(ValueError, match="1024"):
         ReplaySource([RecordedHit(good.force_n, good.acceleration_m_s2[:-1], FS_HZ)])
+    with pytest.raises(ValueError, match="512"):
+        ReplaySource([RecordedHit(np.zeros(1024, complex), np.zeros(1024, complex), FS_HZ, center_hz=5.0)])
+    with pytest.raises(ValueError, match="center_hz"):
+        ReplaySource([RecordedHit(np.zeros(512, complex), np.zeros(512, complex), FS_HZ)])
 
 
 # ---------------------------------------------------------------- HDF5 runs

@@ -1,0 +1,130 @@
+"""Running a Capture at the terminal: the live display, the accept/reject prompt, and
+sealing what was taken, however the capture ends. Shared by ``daq capture`` and
+``daq replay``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from daq.errors import UserError
+from daq.store import Run
+
+SPARK = "▁▂▃▄▅▆▇█"
+
+
+def sparkline(values: np.ndarray, width: int = 32) -> str:
+    """|values| as a bar per bin (max of each), scaled to the largest."""
+    magnitude = np.abs(np.asarray(values))
+    bins = np.array_split(magnitude, min(width, magnitude.size))
+    peaks = np.array([b.max() for b in bins])
+    top = peaks.max()
+    if not top > 0:
+        return SPARK[0] * len(peaks)
+    return "".join(SPARK[min(len(SPARK) - 1, int(p / top * (len(SPARK) - 1) + 0.5))] for p in peaks)
+
+
+def serve_simulator(stack: contextlib.ExitStack, source: Any, time_scale: float) -> str:
+    """Start the simulated analyzer serving ``source`` on a loopback TCP socket for as
+    long as ``stack`` lives; its VISA resource string."""
+    from sims.instrument import Analyzer
+    from sims.tcp_server import TcpServer
+
+    server = stack.enter_context(TcpServer(Analyzer(source, time_scale=time_scale)))
+    return server.resource
+
+
+def open_analyzer(stack: contextlib.ExitStack, resource: str) -> Any:
+    """The driver on ``resource``, closed with ``stack``; bad resources are a UserError."""
+    from drivers.hp35660a import HP35660A
+
+    try:
+        return stack.enter_context(HP35660A.open(resource, timeout_s=5.0))
+    except ValueError as exc:
+        raise UserError(f"--resource {resource}: {exc}") from None
+
+
+def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
+    """Run ``job`` (a daq.capture.Capture) to its end with a display, seal the run and
+    return it. With ``ask`` the operator decides each hit at the keyboard, else the
+    job's policy does. Ctrl-C, a dropped link, an instrument error or no answer seal
+    the hits so far as an incomplete run and raise UserError saying where it is."""
+    from daq.capture import CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
+    from daq.store import Store, StoreError
+    from drivers.errors import DriverError
+
+    def seal_partial(why: str, exit_code: int) -> UserError:
+        run = job.partial_run()
+        if run is None:
+            return UserError(f"{why}; no hits to keep", exit_code)
+        try:
+            path = Store(store_dir).seal(run)
+        except StoreError as exc:
+            return UserError(f"{why}; the {run.hits.n_hits} hits so far could not be sealed: {exc}", 1)
+        return UserError(
+            f"{why}; {run.hits.n_hits} hits kept as incomplete run {run.run_id} in {path}", exit_code
+        )
+
+    hits_wanted = job.hits_wanted
+    try:
+        for event in job:
+            if isinstance(event, Connected):
+                console.print(f"Analyzer: {event.identification}")
+            elif isinstance(event, Configured):
+                s = event.settings
+                console.print(
+                    f"Span {s.span_hz:g} Hz, {s.record_length_s:g} s records, trigger "
+                    f"{s.trigger_level_eu:g} N, {hits_wanted} hits wanted. Hammer away."
+                )
+            elif isinstance(event, HitArrived):
+                _show_hit(console, event, hits_wanted)
+                if ask:
+                    _ask(console, job, event)
+            elif isinstance(event, HitDecided):
+                verdict = "accepted" if event.accepted else f"rejected ({event.reason})"
+                console.print(f"  -> {verdict}; {event.accepted_so_far}/{hits_wanted} accepted")
+            elif isinstance(event, Finished):
+                path = Store(store_dir).seal(event.run)
+                state = "" if event.run.complete else " (incomplete, as its original)"
+                console.print(f"Run {event.run.run_id} sealed{state}: {path}")
+                return event.run
+    except KeyboardInterrupt:
+        raise seal_partial("interrupted", 130) from None
+    except EOFError:
+        raise seal_partial("no answer on stdin (use --yes to decide by the checks)", 1) from None
+    except DriverError as exc:
+        raise seal_partial(str(exc), 1) from None
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+    except CaptureError as exc:  # e.g. too many hits failed their checks: keep what was taken
+        raise seal_partial(str(exc), 1) from None
+    raise AssertionError("a capture ends with Finished or an exception")
+
+
+def _show_hit(console: Any, hit: Any, hits_wanted: int) -> None:
+    verdict = "checks pass" if hit.passed else f"FAILS: {hit.suggested_reason}"
+    console.print(
+        f"Hit {hit.index + 1}: peak {hit.peak_force_n:.3g} N, {hit.accepted_so_far}/{hits_wanted} "
+        f"accepted, {verdict}"
+    )
+    for check in hit.checks:
+        if not check.passed:
+            console.print(f"  {check.name}: {check.detail}")
+    console.print(f"  force    {sparkline(hit.force_n)}")
+    console.print(f"  response {sparkline(hit.response_m_s2)}")
+
+
+def _ask(console: Any, job: Any, hit: Any) -> None:
+    from rich.prompt import Prompt
+
+    default = "a" if hit.passed else "r"
+    # Escaped: rich would read "[a]" and "[r]" as markup tags and show "ccept / eject".
+    answer = Prompt.ask(r"  \[a]ccept / \[r]eject", choices=["a", "r"], default=default, console=console)
+    if answer == "a":
+        job.decide(True)
+    else:
+        job.decide(False, hit.suggested_reason or "rejected by operator")

@@ -1,0 +1,199 @@
+"""`daq replay RUN...`: serve a stored run's hits through the simulated analyzer's
+replay mode and capture them again, through the driver and a real TCP socket, into
+a new run (kind "replayed") that records where it came from.
+
+The new run's raw data must equal the original's bit for bit; the command says so,
+or names the first hit that differs and exits 1 (the new run is sealed either way,
+so the evidence is kept). Each hit gets the original's verdict (accepted, or
+rejected with the same reason), so the analyzer averages the same hits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import math
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+
+from daq.errors import UserError
+from daq.runs_command import StoreOption
+from drivers.record import MAX_SPAN_HZ, SAMPLE_RATE_PER_SPAN, TIME_POINTS
+
+#: Spans the 35660A offers: MAX_SPAN_HZ / 2^n (drivers/record.py); the simulator's 20.
+SPANS_HZ = tuple(MAX_SPAN_HZ / 2**n for n in range(20))
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="replay")(replay)
+
+
+def replay(
+    runs: Annotated[
+        list[str],
+        typer.Argument(
+            metavar="RUN...", show_default=False, help="Run ids, unique prefixes, or paths of run files."
+        ),
+    ],
+    store: StoreOption = None,
+    operator: Annotated[
+        str, typer.Option(metavar="<name>", help="Who ran the replay (stored with the new run).")
+    ] = "",
+    note: Annotated[
+        str, typer.Option(metavar="<text>", help='Stored with the new run [default: "replay of <id>"].')
+    ] = "",
+) -> None:
+    """Replay stored runs through the simulated analyzer into new runs, bit for bit.
+
+    Every hit of each run (accepted and rejected) is served by the simulator's replay
+    mode and captured again through the driver over a real socket, with the original's
+    accept/reject verdicts. The new run (kind "replayed") records the original's id and
+    SHA-256; the command checks that its raw data equals the original bit for bit.
+    """
+    from daq.store import Store, resolve_store_dir
+
+    store_dir, _ = resolve_store_dir(store)
+    the_store = Store(store_dir)
+    failures = []
+    for name in runs:
+        try:
+            replay_one(the_store, name, operator, note)
+        except UserError as exc:
+            if len(runs) == 1:
+                raise
+            sys.stderr.write(f"daq replay: {exc}\n")
+            failures.append(name)
+    if failures:
+        raise UserError(f"{len(failures)} of {len(runs)} replays failed: {', '.join(failures)}")
+
+
+def locate(the_store: Any, name: str) -> Path:
+    """A run named by path (an existing file) or by id / unique prefix in the store."""
+    from daq.store import StoreError
+
+    candidate = Path(name).expanduser()
+    if ("/" in name or name.endswith(".h5")) and candidate.is_file():
+        return candidate
+    try:
+        return the_store.resolve(name)
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+
+
+def replay_one(the_store: Any, name: str, operator: str, note: str) -> Any:
+    """Replay the run ``name`` into ``the_store``; the new Run."""
+    from rich.console import Console
+
+    from daq.capture import Capture, settings_from_dict
+    from daq.capture_session import drive, open_analyzer, serve_simulator
+    from daq.recorded_hits import recorded_hits
+    from daq.store import StoreError, open_run
+    from sims.sources import ReplaySource
+
+    path = locate(the_store, name)
+    try:
+        original = open_run(path)
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+    if original.hits is None:
+        raise UserError(f"run {original.run_id} holds FRFs only, no time records: nothing to replay")
+    hits = original.hits
+    settings = replay_settings(original, settings_from_dict)
+    n_accepted = int(hits.accepted.sum())
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    console = Console(highlight=False, soft_wrap=True)
+    with contextlib.ExitStack() as stack:
+        resource = serve_simulator(stack, ReplaySource(recorded_hits(hits)), time_scale=0.0)
+        console.print(
+            f"Replaying run {original.run_id} ({hits.n_hits} hits) through the simulator at {resource}"
+        )
+        dsa = open_analyzer(stack, resource)
+
+        def original_verdict(hit: Any) -> tuple[bool, str]:
+            return bool(hits.accepted[hit.index]), str(hits.reject_reason[hit.index])
+
+        job = Capture(
+            dsa,
+            settings,
+            # A complete run ends at its last accepted hit; an incomplete one at its last hit.
+            max(1, n_accepted if original.complete else n_accepted + 1),
+            policy=original_verdict,
+            resource=resource,
+            transport=type(dsa.transport).__name__,
+            simulator={"replay_of": original.run_id, "time_scale": 0.0},
+            operator=operator,
+            note=note or f"replay of {original.run_id}",
+            sample=original.sample
+            if original.sample is not None
+            else Capture.__dataclass_fields__["sample"].default_factory(),
+            max_hits=hits.n_hits + 1,
+            stop_after_hits=hits.n_hits,
+            replayed_from={
+                "run_id": original.run_id,
+                "kind": original.kind,
+                "file": path.name,
+                "sha256": digest,
+                "complete": original.complete,
+            },
+        )
+        new = drive(console, job, the_store.path, ask=False)
+    difference = first_difference(original.hits, new.hits)
+    if difference:
+        raise UserError(
+            f"replay of {original.run_id} into {new.run_id} differs from the original: {difference}"
+        )
+    console.print(f"Raw data of {new.run_id} equals {original.run_id} bit for bit ({hits.n_hits} hits)")
+    return new
+
+
+def replay_settings(run: Any, from_dict: Any) -> Any:
+    """The analyzer settings that serve ``run``'s records: its stored settings when they
+    fit, else the geometry read off the records. UserError when no 35660A record is
+    shaped like them (the simulator then cannot serve them)."""
+    from drivers.settings import ImpactSettings
+
+    hits = run.hits
+    zoom = hits.is_zoom
+    per_span = SAMPLE_RATE_PER_SPAN / (2 if zoom else 1)
+    span = hits.sample_rate_hz / per_span
+    matching = [s for s in SPANS_HZ if math.isclose(s, span, rel_tol=1e-9)]
+    if hits.n_samples != TIME_POINTS[zoom] or not matching:
+        raise UserError(
+            f"run {run.run_id}: its records ({hits.n_samples} {'complex' if zoom else 'real'} samples "
+            f"at {hits.sample_rate_hz:g} Hz) are not what a 35660A records (1024 real samples at "
+            f"2.56 x span, or 512 complex at 1.28 x span, span = 102.4 kHz / 2^n); replay cannot serve them"
+        )
+    span = matching[0]
+    stored = None
+    if run.instrument is not None and run.instrument.settings:
+        with contextlib.suppress(UserError):
+            stored = from_dict(run.instrument.settings)
+    center = hits.center_hz if zoom else None
+    if stored is not None and stored.span_hz == span and stored.center_hz == center:
+        return stored
+    pre_trigger = min(max(0.0, -hits.start_s), hits.n_samples / hits.sample_rate_hz)
+    return ImpactSettings(span_hz=span, center_hz=center, pre_trigger_s=pre_trigger)
+
+
+def first_difference(a: Any, b: Any) -> str:
+    """ "" when hits ``a`` and ``b`` hold the same raw data bit for bit, else what differs."""
+    if b is None:
+        return "the new run has no hits"
+    if a.force_n.shape != b.force_n.shape or a.force_n.dtype != b.force_n.dtype:
+        return f"records {a.force_n.shape} {a.force_n.dtype} became {b.force_n.shape} {b.force_n.dtype}"
+    for name in ("sample_rate_hz", "start_s", "center_hz"):
+        if np.float64(getattr(a, name)).tobytes() != np.float64(getattr(b, name)).tobytes():
+            return f"{name} {getattr(a, name)!r} became {getattr(b, name)!r}"
+    for i in range(a.n_hits):
+        for what in ("force_n", "response_m_s2"):
+            if getattr(a, what)[i].tobytes() != getattr(b, what)[i].tobytes():
+                return f"hit {i + 1} {what.split('_')[0]} differs"
+        if bool(a.accepted[i]) != bool(b.accepted[i]) or str(a.reject_reason[i]) != str(b.reject_reason[i]):
+            return f"hit {i + 1} verdict differs"
+        if a.overload[i].tolist() != b.overload[i].tolist():
+            return f"hit {i + 1} overload flags differ"
+    return ""
