@@ -18,7 +18,15 @@ from typing import Annotated
 
 import typer
 
-from daq import __version__, capture_command, config_command, replay_command, runs_command
+from daq import (
+    __version__,
+    capture_command,
+    config_command,
+    export_command,
+    import_command,
+    replay_command,
+    runs_command,
+)
 from daq import talk_command as talk
 from daq.demo_command import demo
 from daq.errors import UserError
@@ -99,6 +107,8 @@ app.command(name="demo")(demo)
 capture_command.register(app)
 runs_command.register(app)
 replay_command.register(app)
+import_command.register(app)
+export_command.register(app)
 config_command.register(app)
 
 

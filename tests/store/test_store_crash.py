@@ -32,6 +32,8 @@ SEAL_FOREVER = textwrap.dedent(
         run = runs[i % 3]
         run.run_id = new_run_id()
         seal(run, store)
+        if i == 0:
+            print("sealed", flush=True)
         i += 1
     """
 )
@@ -56,6 +58,9 @@ def test_sigkill_at_random_moments_leaves_only_whole_runs(tmp_path):
             env=env,
         )
         assert child.stdout.readline().strip() == "ready"
+        # Wait for one whole seal, so every child contributes a run however loaded
+        # the machine is; the kill then lands at a random point of later seals.
+        assert child.stdout.readline().strip() == "sealed"
         time.sleep(rng.uniform(0.0, 0.06))  # a seal of this run takes a few ms
         os.kill(child.pid, signal.SIGKILL)
         child.wait(timeout=30)

@@ -1,0 +1,68 @@
+"""`daq export RUN --format csv|uff [-o PATH]`: a stored run written for other tools.
+
+CSV holds the time records (every hit, its number in a ``hit`` column); UFF holds
+them as dataset 58 time records plus the FRFs and coherence, in binary 58 so that
+float64 values come back exactly (daq/formats/). An existing file is never
+overwritten without --force, and the file appears whole or not at all.
+"""
+
+from __future__ import annotations
+
+import enum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from daq.errors import UserError
+from daq.runs_command import StoreOption
+
+
+class ExportFormat(enum.StrEnum):
+    csv = "csv"
+    uff = "uff"
+
+
+SUFFIX = {"csv": ".csv", "uff": ".uff"}
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="export")(export)
+
+
+def export(
+    run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="Run id or unique prefix.")],
+    format: Annotated[ExportFormat, typer.Option("--format", "-f", help="csv or uff (dataset 58).")],
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "--output", "-o", metavar="<path>", help="Where to write [default: ./<run id>.csv|uff]."
+        ),
+    ] = None,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite an existing output file.")] = False,
+    store: StoreOption = None,
+) -> None:
+    """Write a stored run as CSV (time records) or UFF 58 (time records, FRFs, coherence)."""
+    from daq.store import Store, StoreError, resolve_store_dir
+
+    store_dir, _ = resolve_store_dir(store)
+    try:
+        the_run = Store(store_dir).open(run)
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+    target = output if output is not None else Path(f"{the_run.run_id}{SUFFIX[format.value]}")
+    if target.is_dir():
+        target = target / f"{the_run.run_id}{SUFFIX[format.value]}"
+    if (target.exists() or target.is_symlink()) and not force:
+        raise UserError(f"{target} exists; give --force to overwrite it or -o another path")
+    if not target.parent.is_dir():
+        raise UserError(f"{target.parent}: no such folder")
+    if format is ExportFormat.csv:
+        from daq.formats.csv_text import write_csv
+
+        write_csv(the_run, target)
+    else:
+        from daq.formats.uff58_export import write_uff
+
+        write_uff(the_run, target)
+    typer.echo(f"Run {the_run.run_id} written as {format.value.upper()}: {target}")

@@ -1,0 +1,300 @@
+"""UFF dataset 58 (function at nodal DOF) through pyuff: time records and FRFs, in and out.
+
+Export is binary 58 ("58b"): pyuff writes ASCII 58 abscissa and data with %13.5e /
+%20.11e, which loses float64 precision, while 58b stores every value as an IEEE double,
+so values come back exactly (only the sign of a complex part that is zero may flip:
+pyuff's reader forms complex values as re + 1j * im).
+The header's abscissa minimum and increment are still %13.5e text, so the exact
+sample rate, pre-trigger start and zoom centre go into the ID lines as well
+(``sample_rate_hz=... start_s=...``, ``center_hz=...``); the reader uses them when they
+agree with the header. FRF frequency axes are written with even spacing when pyuff's
+%13.5e minimum and increment rebuild them exactly, else as uneven (x stored as doubles).
+
+Records written (all func types as pyuff names them):
+- func_type 1 (time response): per hit, force (node 1 +Z, ordinate type 13, N), then
+  response (node 2 +Z, type 12, m/s^2); abscissa time, s.
+- func_type 4 (FRF): analyzer then measured FRFs, (m/s^2)/N, reference node 1 +Z, response node 2 +Z.
+- func_type 6 (coherence): after all FRFs, in the same order, for FRF sets that have it.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyuff
+
+from daq.errors import UserError
+from daq.formats.imported import (
+    MAX_IMPORT_BYTES,
+    ImportedData,
+    check_regular_file,
+    make_frfs,
+    make_hits,
+    mtime_utc,
+    one_line,
+    show_path,
+)
+from daq.formats.units import parse_unit
+
+FUNC_TIME, FUNC_FRF, FUNC_COHERENCE = 1, 4, 6
+FORCE_TYPES = (13, 9)  # excitation force, reaction force
+RESPONSE_TYPES = (12,)  # acceleration
+HEADER_TOLERANCE = 1e-5  # %13.5e keeps 6 significant digits: relative error <= 5e-6
+AXIS_TOLERANCE = 1e-9  # relative to the step: all records of the hits share one time axis
+STEP_TOLERANCE = 1e-6  # uneven time abscissa: every step within this of the mean step
+_KEY_VALUE = re.compile(r"([a-z_]+)=(\S+)")
+_NO_UNIT = ("", "NONE")
+
+
+@dataclass
+class _Record:
+    """One dataset 58 as read: data (n,) float64 or complex128, x (n,) abscissa."""
+
+    index: int
+    func: int
+    kind: int  # ordinate specific data type
+    data: np.ndarray
+    x: np.ndarray
+    even: bool
+    x_min: float
+    x_inc: float
+    ids: list[str]
+    keys: dict[str, str]
+    unit: str
+    denominator_unit: str
+    nodes: tuple[Any, Any, Any, Any]
+
+
+def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
+    """Read dataset 58 records: time records as hits (N, m/s^2) and FRFs ((m/s^2)/N).
+
+    Any problem, including whatever pyuff raises on a damaged file: one-line UserError.
+    """
+    path = Path(path)
+    name = show_path(path)
+    info = check_regular_file(path, max_bytes)
+    records = [_record(d, k, name) for k, d in enumerate(read_uff_sets(path, name))]
+    details: dict[str, Any] = {"n_datasets_58": len(records), "notes": []}
+    by_func: dict[int, list[_Record]] = {}
+    for rec in records:
+        by_func.setdefault(rec.func, []).append(rec)
+    skipped = sorted({r.func for r in records} - {FUNC_TIME, FUNC_FRF, FUNC_COHERENCE})
+    if skipped:
+        details["notes"].append(f"skipped records of func_type {', '.join(map(str, skipped))}")
+    hits = _hits(path, name, by_func.get(FUNC_TIME, []), mtime_utc(info), details)
+    frfs = _frfs(path, name, by_func.get(FUNC_FRF, []), by_func.get(FUNC_COHERENCE, []), details)
+    if hits is None and frfs is None:
+        raise UserError(f"{name}: no force/acceleration time records and no FRFs among its datasets 58")
+    return ImportedData(hits=hits, measured_frfs=frfs, format="uff", details=details)
+
+
+def read_uff_sets(path: Path, name: str) -> list[dict]:
+    # pyuff raises bare Exception, IndexError, struct.error, ValueError... on damaged
+    # input, and its numpy calls may warn: the one place a broad except is right, since
+    # every failure inside pyuff means "this file cannot be read" and must become one line.
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            uff = pyuff.UFF(str(path))
+            wanted = [i for i, t in enumerate(uff.get_set_types()) if int(t) == 58]
+            sets = uff.read_sets(wanted) if wanted else []
+    except Exception as exc:
+        raise UserError(f"{name}: not a readable UFF file ({one_line(str(exc))[:100]})") from None
+    if not wanted:
+        raise UserError(f"no dataset 58 in {name}")
+    return [sets] if isinstance(sets, dict) else list(sets)
+
+
+def _record(d: Any, k: int, name: str) -> _Record:
+    """Check one pyuff dict and keep what the import needs."""
+    if not isinstance(d, dict):
+        raise UserError(f"{name}: dataset 58 #{k} could not be read")
+    data = np.asarray(d.get("data"))
+    x = np.asarray(d.get("x"))
+    if data.ndim != 1 or data.dtype.kind not in "fc" or data.size == 0:
+        raise UserError(f"{name}: dataset 58 #{k} has no data values")
+    if x.shape != data.shape or x.dtype.kind not in "fi":
+        raise UserError(f"{name}: dataset 58 #{k} has {x.size} abscissa values for {data.size} data values")
+    data = data.astype(np.complex128 if data.dtype.kind == "c" else np.float64)
+    x = x.astype(np.float64)
+    if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
+        raise UserError(f"{name}: dataset 58 #{k} holds NaN or infinite values")
+    ids = [str(d.get(f"id{i}", "")).strip() for i in range(1, 6)]
+    keys = dict(match for text in ids for match in _KEY_VALUE.findall(text))
+    return _Record(
+        index=k,
+        func=_int(d.get("func_type"), -1),
+        kind=_int(d.get("ordinate_spec_data_type"), 0),
+        data=data,
+        x=x,
+        even=_int(d.get("abscissa_spacing"), 0) == 1,
+        x_min=_float(d.get("abscissa_min")),
+        x_inc=_float(d.get("abscissa_inc")),
+        ids=ids,
+        keys=keys,
+        unit=str(d.get("ordinate_axis_units_lab", "")).strip(),
+        denominator_unit=str(d.get("orddenom_axis_units_lab", "")).strip(),
+        nodes=(d.get("ref_node"), d.get("ref_dir"), d.get("rsp_node"), d.get("rsp_dir")),
+    )
+
+
+def _hits(path: Path, name: str, records: list[_Record], stamp: str, details: dict):
+    forces = [r for r in records if r.kind in FORCE_TYPES]
+    responses = [r for r in records if r.kind in RESPONSE_TYPES]
+    other = sorted({r.kind for r in records} - set(FORCE_TYPES) - set(RESPONSE_TYPES))
+    if other:
+        details["notes"].append(f"skipped time records of ordinate type {', '.join(map(str, other))}")
+    if not forces and not responses:
+        return None
+    if len(forces) != len(responses):
+        raise UserError(
+            f"{name}: {len(forces)} force and {len(responses)} acceleration time records; "
+            "they must pair up (k-th force with k-th response)"
+        )
+    first = forces[0]
+    n = first.data.size
+    if n < 2:
+        raise UserError(f"{name}: time record #{first.index} has fewer than 2 samples")
+    start, step = _time_axis(name, first)
+    for rec in forces + responses:
+        if rec.data.size != n:
+            raise UserError(
+                f"{name}: time record #{rec.index} has {rec.data.size} samples, #{first.index} has {n}"
+            )
+        if rec.data.dtype != first.data.dtype:
+            raise UserError(f"{name}: time records #{first.index} and #{rec.index} mix real and complex data")
+        s0, d0 = _time_axis(name, rec)
+        if abs(s0 - start) > AXIS_TOLERANCE * step or abs(d0 - step) > AXIS_TOLERANCE * step:
+            raise UserError(f"{name}: time record #{rec.index} has a different time axis from #{first.index}")
+    rate, start = _exact_axis(first, start, step, details)
+    center = 0.0
+    if first.data.dtype == np.complex128:
+        text = first.keys.get("center_hz")
+        center = _float(text)
+        if text is None or not math.isfinite(center):
+            raise UserError(f"{name}: complex (zoom) time records need 'center_hz=...' in an ID line")
+    units = {}
+    force = np.stack([_to_si(r, "force", units) for r in forces])
+    response = np.stack([_to_si(r, "response", units) for r in responses])
+    details.update(n_records=len(forces), n_samples=n, time_units=units, zoom=force.dtype.kind == "c")
+    return make_hits(path, force, response, rate, start, center, stamp)
+
+
+def _time_axis(name: str, rec: _Record) -> tuple[float, float]:
+    """(start s, step s) of a time record, from the header (even) or its x values (uneven)."""
+    if rec.even:
+        start, step = rec.x_min, rec.x_inc
+    else:
+        d = np.diff(rec.x)
+        start, step = float(rec.x[0]), float((rec.x[-1] - rec.x[0]) / (rec.x.size - 1))
+        if np.any(d <= 0) or np.any(np.abs(d - step) > STEP_TOLERANCE * step):
+            raise UserError(f"{name}: time record #{rec.index} has uneven or non-increasing time steps")
+    if not (math.isfinite(start) and math.isfinite(step) and step > 0):
+        raise UserError(f"{name}: time record #{rec.index} has no usable time axis (step {step!r} s)")
+    return start, step
+
+
+def _exact_axis(rec: _Record, start: float, step: float, details: dict) -> tuple[float, float]:
+    """(sample rate Hz, start s): our exporter's exact ID-line values when they fit the header."""
+    rate, exact_start = _float(rec.keys.get("sample_rate_hz")), _float(rec.keys.get("start_s"))
+    if math.isfinite(rate) and rate > 0 and abs(1.0 / rate - step) <= HEADER_TOLERANCE * step:
+        out_rate = rate
+    else:
+        out_rate = 1.0 / step
+    if math.isfinite(exact_start) and abs(exact_start - start) <= HEADER_TOLERANCE * max(abs(start), step):
+        start = exact_start
+    details["exact_axis_from_id_lines"] = out_rate == rate and start == exact_start
+    return out_rate, start
+
+
+def _to_si(rec: _Record, quantity: str, units: dict) -> np.ndarray:
+    factor = 1.0
+    if rec.unit in _NO_UNIT:
+        units.setdefault(quantity, "none given, SI assumed")
+    else:
+        try:
+            factor = parse_unit(rec.unit, quantity)
+            units.setdefault(quantity, rec.unit)
+        except UserError:
+            units.setdefault(quantity, f"unknown label {rec.unit!r}, values kept")
+    return _scaled(rec.data, factor)
+
+
+def _scaled(values: np.ndarray, factor: float) -> np.ndarray:
+    # Skip the multiplication by 1.0: for complex values numpy multiplies by (1+0j),
+    # which can flip the sign of a zero part.
+    return values * factor if factor != 1.0 else values
+
+
+def _dof_label(rec: _Record) -> str:
+    return "ref{}{}->rsp{}{}".format(*rec.nodes)
+
+
+def _frfs(path: Path, name: str, frf_recs: list[_Record], coh_recs: list[_Record], details: dict):
+    if not frf_recs:
+        if coh_recs:
+            details["notes"].append("coherence records without FRFs ignored")
+        return None
+    freq = frf_recs[0].x
+    for rec in frf_recs:
+        if not np.array_equal(rec.x, freq):
+            raise UserError(
+                f"{name}: FRF record #{rec.index} has a different frequency axis from #{frf_recs[0].index}"
+            )
+    units: list[str] = []
+    frf = np.stack([_scaled(rec.data.astype(np.complex128), _frf_factor(rec, units)) for rec in frf_recs])
+    labels = [rec.ids[0] if rec.ids[0] not in _NO_UNIT else _dof_label(rec) for rec in frf_recs]
+    coherence = None
+    if coh_recs:
+        if len(coh_recs) != len(frf_recs):
+            details["notes"].append(
+                f"{len(coh_recs)} coherence records for {len(frf_recs)} FRFs: coherence ignored"
+            )
+        elif not all(np.array_equal(rec.x, freq) for rec in coh_recs):
+            details["notes"].append("coherence on a different frequency axis: ignored")
+        elif any(rec.data.dtype.kind == "c" and np.any(rec.data.imag) for rec in coh_recs):
+            details["notes"].append("complex coherence values: ignored")
+        else:
+            coherence = np.stack([rec.data.real for rec in coh_recs])
+    details.update(n_frf=len(frf_recs), n_lines=int(freq.size), frf_units=sorted(set(units)))
+    return make_frfs(path, freq, frf, coherence, labels)
+
+
+def _frf_factor(rec: _Record, units: list[str]) -> float:
+    """SI factor of an FRF record from its numerator / denominator unit labels."""
+    num, den = rec.unit, rec.denominator_unit
+    if num in _NO_UNIT and den in _NO_UNIT:
+        units.append("none given, SI assumed")
+        return 1.0
+    pairs = [(num, den)] if den not in _NO_UNIT else []
+    # Some tools put the whole unit into the numerator label, e.g. "g/N" or "(m/s^2)/N".
+    pairs += [(num[:i].strip(" ()"), num[i + 1 :].strip(" ()")) for i, ch in enumerate(num) if ch == "/"]
+    for top, bottom in pairs:
+        try:
+            factor = parse_unit(top, "response") / parse_unit(bottom, "force")
+        except UserError:
+            continue
+        units.append(f"{top}/{bottom}")
+        return factor
+    units.append(f"unknown label {num!r}/{den!r}, values kept")
+    return 1.0
+
+
+def _int(value: Any, default: int) -> int:
+    try:
+        return int(value)
+    except (TypeError, ValueError, OverflowError):
+        return default
+
+
+def _float(value: Any) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError, OverflowError):
+        return math.nan

@@ -1,0 +1,108 @@
+"""Units of imported columns and their conversion to SI (N for force, m/s^2 for response).
+
+A unit is either a physical unit or a voltage with the sensor's sensitivity:
+
+- force: ``N``, ``kN``, ``lbf``
+- response: ``m/s^2`` (also ``m/s2``), ``mm/s^2`` (also ``mm/s2``), ``g`` (9.80665 m/s^2)
+- voltage: ``mV@10.2mV/g`` means "the column is in mV; the sensor gives 10.2 mV per g";
+  ``V@2.25mV/N`` means "the column is in V; the sensor gives 2.25 mV per N".
+  The column may be in ``V`` or ``mV``, the sensitivity in ``V/<unit>`` or ``mV/<unit>``
+  with any physical unit of the same quantity.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from daq.errors import UserError
+
+STANDARD_GRAVITY_M_S2 = 9.80665  # exact by definition (CGPM 1901)
+POUND_FORCE_N = 0.45359237 * STANDARD_GRAVITY_M_S2  # exact: international pound x standard gravity
+
+QUANTITIES = ("force", "response")
+
+# SI factor of each physical unit: value_in_SI = value_in_unit * factor.
+_PHYSICAL: dict[str, dict[str, float]] = {
+    "force": {"N": 1.0, "kN": 1000.0, "lbf": POUND_FORCE_N},
+    "response": {
+        "m/s^2": 1.0,
+        "m/s2": 1.0,
+        "mm/s^2": 1e-3,
+        "mm/s2": 1e-3,
+        "g": STANDARD_GRAVITY_M_S2,
+    },
+}
+_VOLTS = {"V": 1.0, "mV": 1e-3}
+_NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|[-+]?(?:nan|inf|infinity)", re.I)
+
+
+def accepted_forms(quantity: str) -> str:
+    """The unit spellings accepted for ``quantity``, for error messages."""
+    physical = ", ".join(_PHYSICAL[quantity])
+    example = "mV@2.25mV/N" if quantity == "force" else "mV@10.2mV/g"
+    return f"{physical}, or a voltage with sensitivity such as {example}"
+
+
+def parse_unit(unit: str, quantity: str) -> float:
+    """The factor that turns values in ``unit`` into SI (N or m/s^2) for ``quantity``.
+
+    quantity: "force" or "response". Raises UserError (one line) for an unknown unit or a
+    sensitivity that is not a positive finite number.
+    """
+    if quantity not in QUANTITIES:
+        raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
+    if not isinstance(unit, str):
+        raise UserError(f"{quantity} unit must be text, got {type(unit).__name__}")
+    text = unit.strip()
+    table = _PHYSICAL[quantity]
+    if text in table:
+        return table[text]
+    if "@" in text:
+        return _voltage_factor(text, quantity)
+    raise UserError(f"unknown {quantity} unit {_show(unit)}: use {accepted_forms(quantity)}")
+
+
+def to_si(values: np.ndarray, unit: str, quantity: str) -> np.ndarray:
+    """``values`` (any shape, float or complex) in ``unit`` converted to SI, a new array.
+
+    A factor of exactly 1 leaves every value bit for bit as it was.
+    """
+    factor = parse_unit(unit, quantity)
+    array = np.asarray(values)
+    if array.dtype.kind not in "fc":
+        array = array.astype(np.float64)
+    return array * factor if factor != 1.0 else array.copy()
+
+
+def _voltage_factor(text: str, quantity: str) -> float:
+    column, _, sensitivity = text.partition("@")
+    column = column.strip()
+    if column not in _VOLTS:
+        raise UserError(
+            f"{quantity} unit {_show(text)}: the column unit before '@' must be V or mV, "
+            f"e.g. {accepted_forms(quantity).split('such as ')[-1]}"
+        )
+    number = _NUMBER.match(sensitivity.strip())
+    if number is None:
+        raise UserError(
+            f"{quantity} unit {_show(text)}: sensitivity must be a number with mV/<unit> or V/<unit> "
+            f"after '@'; use {accepted_forms(quantity)}"
+        )
+    rest = sensitivity.strip()[number.end() :].strip()
+    volts, slash, physical = rest.partition("/")
+    volts, physical = volts.strip(), physical.strip()
+    if not slash or volts not in _VOLTS or physical not in _PHYSICAL[quantity]:
+        raise UserError(f"unknown {quantity} unit {_show(text)}: use {accepted_forms(quantity)}")
+    value = float(number.group(0))
+    if not math.isfinite(value) or value <= 0:
+        raise UserError(f"{quantity} unit {_show(text)}: sensitivity must be positive and finite")
+    # column volts -> sensor volts; divided by (volts per physical unit) -> physical unit -> SI.
+    return _VOLTS[column] / (value * _VOLTS[volts]) * _PHYSICAL[quantity][physical]
+
+
+def _show(text: str) -> str:
+    # repr() escapes newlines; long input is cut so the message stays one readable line.
+    return repr(text if len(text) <= 40 else text[:40] + "...")

@@ -1,0 +1,196 @@
+"""`daq import FILE`: time records or FRFs from another system become a run.
+
+Formats: CSV / whitespace text (daq/formats/csv_text.py), UFF dataset 58
+(daq/formats/uff58.py) and a run file of another store (``run``: checked as every
+stored run is, then sealed here as a new run). The file is read and checked whole
+before anything is written: a file that is not what it claims leaves the store
+untouched. The new run is marked ``imported`` with the source's name, size and
+SHA-256, so it can always be traced back to the bytes it came from.
+"""
+
+from __future__ import annotations
+
+import enum
+import hashlib
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from daq.errors import UserError
+from daq.runs_command import StoreOption
+
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+TEXT_SUFFIXES = (".csv", ".txt", ".tsv", ".dat", ".asc")
+UFF_SUFFIXES = (".uff", ".unv", ".uf")
+
+
+class ImportFormat(enum.StrEnum):
+    auto = "auto"
+    csv = "csv"
+    uff = "uff"
+    run = "run"
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="import")(import_file)
+
+
+def import_file(
+    file: Annotated[Path, typer.Argument(metavar="FILE", show_default=False, help="The file to import.")],
+    format: Annotated[
+        ImportFormat,
+        typer.Option(
+            "--format",
+            "-f",
+            help="csv (or whitespace text), uff (dataset 58), run (a run file of another store); "
+            "auto guesses from the content and the name.",
+        ),
+    ] = ImportFormat.auto,
+    columns: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<t,F,a>",
+            help="CSV: the time, force and response columns, by header name or 0-based index "
+            "[default: the first three].",
+        ),
+    ] = None,
+    force_unit: Annotated[
+        str, typer.Option(metavar="<unit>", help="CSV: N, kN, lbf, or volts with a sensitivity: mV@2.25mV/N.")
+    ] = "N",
+    response_unit: Annotated[
+        str,
+        typer.Option(metavar="<unit>", help="CSV: m/s^2, g, mm/s^2, or volts with a sensitivity: mV@10mV/g."),
+    ] = "m/s^2",
+    operator: Annotated[str, typer.Option(metavar="<name>", help="Stored with the run.")] = "",
+    note: Annotated[str, typer.Option(metavar="<text>", help="Stored with the run.")] = "",
+    store: StoreOption = None,
+) -> None:
+    """Import a CSV, UFF 58 or run file into the store as a new run (kind "imported").
+
+    CSV: columns time (s), force, response; one hit, or several (a `hit` column, or
+    time starting over). UFF: dataset 58 time records (force and acceleration) and/or
+    FRFs with coherence. Nothing is written unless the whole file reads cleanly.
+    """
+    from daq.capture import utc_now
+    from daq.store import Run, Store, StoreError, new_run_id, resolve_store_dir
+
+    chosen = format.value if format is not ImportFormat.auto else guess_format(file)
+    if chosen != "csv" and (columns is not None or force_unit != "N" or response_unit != "m/s^2"):
+        raise UserError("--columns, --force-unit and --response-unit apply to CSV files only", exit_code=2)
+    started = utc_now()
+    digest, size = sha256_of(file)
+    if chosen == "run":
+        parts = _from_run_file(file)
+    else:
+        data = _read(file, chosen, columns, force_unit, response_unit)
+        parts = {"hits": data.hits, "measured_frfs": data.measured_frfs, "details": data.details}
+    provenance: dict[str, Any] = {
+        "imported_from": {
+            "file": file.name,
+            "sha256": digest,
+            "size_bytes": size,
+            "format": chosen,
+            **parts.pop("details"),
+        }
+    }
+    try:
+        run = Run(
+            run_id=new_run_id(), kind="imported", complete=True, start_time=started, end_time=utc_now(),
+            operator=operator, note=note, provenance=provenance, **parts,
+        )  # fmt: skip
+    except ValueError as exc:
+        raise UserError(f"{file}: cannot make a run of it: {exc}") from None
+    store_dir, _ = resolve_store_dir(store)
+    try:
+        path = Store(store_dir).seal(run)
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+    what = []
+    if run.hits is not None:
+        what.append(
+            f"{run.hits.n_hits} hits of {run.hits.n_samples} samples at {run.hits.sample_rate_hz:g} Hz"
+        )
+    for frfs in (run.analyzer, run.measured_frfs):
+        if frfs is not None:
+            what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} lines")
+    typer.echo(f"Imported {file.name} ({chosen}: {', '.join(what)}) as run {run.run_id}: {path}")
+
+
+def guess_format(path: Path) -> str:
+    """csv, uff or run from the file's first bytes and its name; UserError if unsure."""
+    from daq.formats.imported import check_regular_file, show_path
+
+    check_regular_file(path)
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(4096)
+    except OSError as exc:
+        raise UserError(f"{show_path(path)}: cannot read it ({exc.strerror or exc})") from None
+    if head.startswith(HDF5_SIGNATURE):
+        return "run"
+    suffix = path.suffix.lower()
+    if (
+        suffix in UFF_SUFFIXES
+        or head.lstrip(b" ").startswith(b"-1\n")
+        or head.lstrip(b" ").startswith(b"-1\r")
+    ):
+        return "uff"
+    if suffix in TEXT_SUFFIXES:
+        return "csv"
+    raise UserError(
+        f"{show_path(path)}: cannot tell its format from its name or content; give --format csv, uff or run"
+    )
+
+
+def sha256_of(path: Path) -> tuple[str, int]:
+    """SHA-256 (hex) and size of the regular file at ``path``; UserError otherwise."""
+    from daq.formats.imported import check_regular_file, show_path
+
+    check_regular_file(path)
+    digest = hashlib.sha256()
+    size = 0
+    try:
+        with open(path, "rb") as handle:
+            while chunk := handle.read(1 << 20):
+                digest.update(chunk)
+                size += len(chunk)
+    except OSError as exc:
+        raise UserError(f"{show_path(path)}: cannot read it ({exc.strerror or exc})") from None
+    return digest.hexdigest(), size
+
+
+def _read(file: Path, chosen: str, columns: str | None, force_unit: str, response_unit: str) -> Any:
+    if chosen == "csv":
+        from daq.formats.csv_text import read_csv
+
+        return read_csv(file, columns, force_unit, response_unit)
+    from daq.formats.uff58 import read_uff
+
+    return read_uff(file)
+
+
+def _from_run_file(file: Path) -> dict[str, Any]:
+    """The data parts of another store's run file, checked as every run is."""
+    from daq.formats.imported import check_regular_file
+    from daq.store import StoreError, open_run
+
+    check_regular_file(file)
+    try:
+        other = open_run(file)
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+    return {
+        "instrument": other.instrument,
+        "sample": other.sample,
+        "hits": other.hits,
+        "analyzer": other.analyzer,
+        "measured_frfs": other.measured_frfs,
+        "details": {
+            "run_id": other.run_id,
+            "kind": other.kind,
+            "complete": other.complete,
+            "operator": other.operator,
+            "note": other.note,
+        },
+    }

@@ -1,0 +1,77 @@
+"""Unit conversion: factors checked against hand-computed values, errors are one line."""
+
+import numpy as np
+import pytest
+
+from daq.errors import UserError
+from daq.formats.units import parse_unit, to_si
+
+
+@pytest.mark.parametrize(
+    ("unit", "quantity", "factor"),
+    [
+        ("N", "force", 1.0),
+        ("kN", "force", 1000.0),
+        # 1 lbf = 0.45359237 kg * 9.80665 m/s^2 (both exact by definition)
+        ("lbf", "force", 4.4482216152605),
+        ("m/s^2", "response", 1.0),
+        ("m/s2", "response", 1.0),
+        ("mm/s^2", "response", 0.001),
+        ("g", "response", 9.80665),
+        (" g ", "response", 9.80665),
+        # 10.2 mV per g: 1 mV is 1/10.2 g = 0.9614362745... m/s^2
+        ("mV@10.2mV/g", "response", 9.80665 / 10.2),
+        # the column in V, the sensor 2.25 mV per N: 1 V is 444.44... N
+        ("V@2.25mV/N", "force", 1000 / 2.25),
+        ("V@0.1V/lbf", "force", 10 * 4.4482216152605),
+        ("mV @ 100 mV/m/s^2", "response", 0.01),
+        ("mV@1e1mV/N", "force", 0.1),
+    ],
+)
+def test_factor(unit, quantity, factor):
+    assert parse_unit(unit, quantity) == pytest.approx(factor, rel=1e-14)
+
+
+def test_to_si_values():
+    assert to_si(np.array([1.0, -2.0]), "g", "response").tolist() == pytest.approx([9.80665, -19.6133])
+    # 10.2 mV from a 10.2 mV/g accelerometer is exactly one g
+    assert to_si(np.array([10.2]), "mV@10.2mV/g", "response")[0] == pytest.approx(9.80665, rel=1e-14)
+    assert to_si(np.array([2.25e-3]), "V@2.25mV/N", "force")[0] == pytest.approx(1.0, rel=1e-14)
+
+
+def test_to_si_identity_keeps_bits_and_copies():
+    values = np.array([-0.0, 1e-300, 0.1, 3 + 4j])
+    out = to_si(values, "N", "force")
+    assert out.tobytes() == values.tobytes()
+    assert out is not values
+
+
+@pytest.mark.parametrize(
+    ("unit", "quantity"),
+    [
+        ("newton", "force"),
+        ("g", "force"),
+        ("N", "response"),
+        ("", "force"),
+        ("mV@10.2mV/N", "response"),
+        ("uV@10mV/g", "response"),
+        ("mV@mV/g", "response"),
+        ("mV@10.2mV", "response"),
+        ("mV@0mV/g", "response"),
+        ("mV@-3mV/g", "response"),
+        ("mV@nanmV/g", "response"),
+        ("mV@infmV/g", "response"),
+        ("mV@1e999mV/g", "response"),
+        ("g\nm/s^2", "response"),
+    ],
+)
+def test_bad_units_are_one_line_user_errors(unit, quantity):
+    with pytest.raises(UserError) as info:
+        parse_unit(unit, quantity)
+    assert "\n" not in str(info.value)
+    assert quantity in str(info.value)
+
+
+def test_unknown_unit_lists_accepted_forms():
+    with pytest.raises(UserError, match=r"N, kN, lbf.*mV@"):
+        parse_unit("dyn", "force")
