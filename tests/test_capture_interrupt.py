@@ -23,9 +23,11 @@ def test_ctrl_c_keeps_the_hits_so_far_as_an_incomplete_run(tmp_path):
     env.pop("DAQ_DEBUG", None)
     # Real-time pacing (time scale 0.5) so that hits arrive while we watch.
     command = ["capture", "--sim", "--yes", "--hits", "50", "--time-scale", "0.5", "--store", str(store)]
+    # A shell starts background jobs with SIGINT ignored and children inherit that;
+    # restore the default so that this test works however pytest itself was started.
     proc = subprocess.Popen(
         [str(DAQ), *command], stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
-        env=env, text=True, bufsize=1,
+        env=env, text=True, bufsize=1, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
     decided = 0
     deadline = time.monotonic() + 40

@@ -19,6 +19,7 @@ Records written (all func types as pyuff names them):
 
 from __future__ import annotations
 
+import gc
 import math
 import re
 import warnings
@@ -98,14 +99,22 @@ def read_uff_sets(path: Path, name: str) -> list[dict]:
     # pyuff raises bare Exception, IndexError, struct.error, ValueError... on damaged
     # input, and its numpy calls may warn: the one place a broad except is right, since
     # every failure inside pyuff means "this file cannot be read" and must become one line.
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+    failure = ""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
             uff = pyuff.UFF(str(path))
             wanted = [i for i, t in enumerate(uff.get_set_types()) if int(t) == 58]
             sets = uff.read_sets(wanted) if wanted else []
-    except Exception as exc:
-        raise UserError(f"{name}: not a readable UFF file ({one_line(str(exc))[:100]})") from None
+        except Exception as exc:
+            failure = one_line(str(exc))[:100] or type(exc).__name__
+            del exc
+        if failure:
+            # pyuff leaves its open file in the frames of the traceback; collect it
+            # here, where its ResourceWarning is silenced, not in some later test or call.
+            gc.collect()
+    if failure:
+        raise UserError(f"{name}: not a readable UFF file ({failure})")
     if not wanted:
         raise UserError(f"no dataset 58 in {name}")
     return [sets] if isinstance(sets, dict) else list(sets)

@@ -8,6 +8,7 @@ back unchanged is never left at ``path``.
 
 from __future__ import annotations
 
+import gc
 import warnings
 from pathlib import Path
 from typing import Any
@@ -39,16 +40,19 @@ def write_uff(run: Run, path: Path) -> None:
     expected = [(d["data"].copy(), d["x"].copy(), d["abscissa_spacing"]) for d in sets]
     temp = atomic_temp(path)
     try:
-        try:
-            with warnings.catch_warnings():
-                # pyuff's binary writer leaves a file object for the garbage collector.
-                warnings.simplefilter("ignore", ResourceWarning)
+        failure = ""
+        with warnings.catch_warnings():
+            # pyuff's binary writer leaves a file object for the garbage collector.
+            warnings.simplefilter("ignore", ResourceWarning)
+            try:
                 pyuff.UFF(str(temp)).write_sets(sets, mode="add")  # "overwrite" + binary truncates
-                back = read_uff_sets(temp, name)
-        except UserError:
-            raise
-        except Exception as exc:  # pyuff raises bare Exception on any write problem
-            raise UserError(f"cannot write {name}: {one_line(str(exc))[:100]}") from None
+            except Exception as exc:  # pyuff raises bare Exception on any write problem
+                failure = one_line(str(exc))[:100] or type(exc).__name__
+                del exc
+            gc.collect()  # close what pyuff left open while its warning is silenced
+        if failure:
+            raise UserError(f"cannot write {name}: {failure}")
+        back = read_uff_sets(temp, name)
         if len(back) != len(expected) or not all(
             _equal(b.get("data"), data) and (not _exact_x(spacing, b) or _equal(b.get("x"), x))
             for b, (data, x, spacing) in zip(back, expected, strict=False)
