@@ -56,3 +56,17 @@ def test_a_prefix_that_matches_two_runs_names_both(tmp_path):
     seal(b, tmp_path)
     result = invoke_daq("export", "20261123T1015", "-f", "csv", "--store", str(tmp_path))
     assert_one_line_error(result, "matches 2 runs")
+
+
+def test_latest_names_the_newest_run(tmp_path):
+    older = make_run(run_id="20261123T101503.123Z-3f9c1a2b")
+    newer = make_run(run_id="20261124T090000.000Z-00000000")
+    seal(newer, tmp_path)
+    seal(older, tmp_path)  # sealed last, yet not the newest by id (= by start)
+    out = tmp_path / "x.csv"
+    result = invoke_daq("export", "latest", "-f", "csv", "-o", str(out), "--store", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    assert newer.run_id in result.stdout
+    assert_one_line_error(
+        invoke_daq("export", "latest", "-f", "csv", "--store", str(tmp_path / "empty")), "no runs"
+    )

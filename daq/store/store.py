@@ -26,6 +26,10 @@ from daq.store.verify import verify
 from daq.store.writer import seal
 
 
+#: The name of the newest run in every command that takes a run.
+LATEST = "latest"
+
+
 def resolve_store_dir(option: str | None, env: Mapping[str, str] | None = None) -> tuple[Path, str]:
     """The store folder and where that choice came from, in order of precedence:
 
@@ -80,12 +84,17 @@ class Store:
     def resolve(self, name: str) -> Path:
         """The file of the run whose id is ``name`` or starts with ``name``.
 
-        Accepts ``<id>.h5`` too. StoreError if no run or several runs match.
+        Accepts ``<id>.h5`` too, and ``latest`` for the newest run (ids sort by time,
+        and a run id never starts with a letter). StoreError if no run or several match.
         """
         if isinstance(name, str) and name.endswith(layout.RUN_SUFFIX):
             name = name[: -len(layout.RUN_SUFFIX)]
-        prefix = validate_run_id_prefix(name)
         ids = sorted(e.name[: -len(layout.RUN_SUFFIX)] for e, _ in self._entries(is_run_file_name))
+        if name == LATEST:
+            if not ids:
+                raise StoreError(f"no runs in {self.path}")
+            return self.path / f"{ids[-1]}{layout.RUN_SUFFIX}"
+        prefix = validate_run_id_prefix(name)
         if prefix in ids:
             return self.path / f"{prefix}{layout.RUN_SUFFIX}"
         matches = [run_id for run_id in ids if run_id.startswith(prefix)]
