@@ -238,10 +238,14 @@ def run_capture(
 
     from daq.capture import Capture
     from daq.capture_session import drive, open_analyzer, serve_simulator
-    from daq.store import resolve_store_dir
+    from daq.store import Store, StoreError, resolve_store_dir
 
     console = Console(highlight=False, soft_wrap=True)
     store_dir, _ = resolve_store_dir(store)
+    try:
+        Store(store_dir).ensure_writable()
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
     with contextlib.ExitStack() as stack:
         simulator = None
         if resource is None:

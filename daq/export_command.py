@@ -9,6 +9,7 @@ overwritten without --force, and the file appears whole or not at all.
 from __future__ import annotations
 
 import enum
+import os
 from pathlib import Path
 from typing import Annotated
 
@@ -26,6 +27,28 @@ class ExportFormat(enum.StrEnum):
 SUFFIX = {"csv": ".csv", "uff": ".uff"}
 
 
+def export_target(output: str | None, default_name: str, force: bool) -> Path:
+    """Where to write: ``output`` (a file, or a folder to put ``default_name`` in) or
+    ./default_name. UserError for what must not be written over."""
+    if output == "-":
+        raise UserError("-o -: writing to stdout is not supported; give a file name", exit_code=2)
+    # Kept as text until here: Path("x/") forgets the slash that says "a folder".
+    if output is not None and output.endswith(os.sep) and not Path(output).is_dir():
+        raise UserError(f"{output}: no such folder")
+    target = Path(output).expanduser() if output is not None else Path(default_name)
+    if target.is_dir():
+        target = target / default_name
+    if target.is_symlink() or (target.exists() and not target.is_file()):
+        # A device, FIFO or link: replacing it would not write "a file" (as root,
+        # `-o /dev/null --force` would put a regular file in place of the device).
+        raise UserError(f"{target} is not a regular file; export writes only files")
+    if target.exists() and not force:
+        raise UserError(f"{target} exists; give --force to overwrite it or -o another path")
+    if not target.parent.is_dir():
+        raise UserError(f"{target.parent}: no such folder")
+    return target
+
+
 def register(app: typer.Typer) -> None:
     app.command(name="export")(export)
 
@@ -34,7 +57,7 @@ def export(
     run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="Run id or unique prefix.")],
     format: Annotated[ExportFormat, typer.Option("--format", "-f", help="csv or uff (dataset 58).")],
     output: Annotated[
-        Path | None,
+        str | None,
         typer.Option(
             "--output", "-o", metavar="<path>", help="Where to write [default: ./<run id>.csv|uff]."
         ),
@@ -50,13 +73,7 @@ def export(
         the_run = Store(store_dir).open(run)
     except StoreError as exc:
         raise UserError(str(exc)) from None
-    target = output if output is not None else Path(f"{the_run.run_id}{SUFFIX[format.value]}")
-    if target.is_dir():
-        target = target / f"{the_run.run_id}{SUFFIX[format.value]}"
-    if (target.exists() or target.is_symlink()) and not force:
-        raise UserError(f"{target} exists; give --force to overwrite it or -o another path")
-    if not target.parent.is_dir():
-        raise UserError(f"{target.parent}: no such folder")
+    target = export_target(output, f"{the_run.run_id}{SUFFIX[format.value]}", force)
     if format is ExportFormat.csv:
         from daq.formats.csv_text import write_csv
 

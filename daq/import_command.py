@@ -73,12 +73,18 @@ def import_file(
     FRFs with coherence. Nothing is written unless the whole file reads cleanly.
     """
     from daq.capture import utc_now
+    from daq.formats.imported import show_path
     from daq.store import Run, Store, StoreError, new_run_id, resolve_store_dir
 
     chosen = format.value if format is not ImportFormat.auto else guess_format(file)
     if chosen != "csv" and (columns is not None or force_unit != "N" or response_unit != "m/s^2"):
         raise UserError("--columns, --force-unit and --response-unit apply to CSV files only", exit_code=2)
     started = utc_now()
+    store_dir, _ = resolve_store_dir(store)
+    try:
+        Store(store_dir).ensure_writable()
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
     digest, size = sha256_of(file)
     if chosen == "run":
         parts = _from_run_file(file)
@@ -101,7 +107,6 @@ def import_file(
         )  # fmt: skip
     except ValueError as exc:
         raise UserError(f"{file}: cannot make a run of it: {exc}") from None
-    store_dir, _ = resolve_store_dir(store)
     try:
         path = Store(store_dir).seal(run)
     except StoreError as exc:
@@ -114,7 +119,7 @@ def import_file(
     for frfs in (run.analyzer, run.measured_frfs):
         if frfs is not None:
             what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} lines")
-    typer.echo(f"Imported {file.name} ({chosen}: {', '.join(what)}) as run {run.run_id}: {path}")
+    typer.echo(f"Imported {show_path(file.name)} ({chosen}: {', '.join(what)}) as run {run.run_id}: {path}")
 
 
 def guess_format(path: Path) -> str:

@@ -54,14 +54,21 @@ def replay(
     accept/reject verdicts. The new run (kind "replayed") records the original's id and
     SHA-256; the command checks that its raw data equals the original bit for bit.
     """
-    from daq.store import Store, resolve_store_dir
+    from daq.store import Store, StoreError, resolve_store_dir
 
     store_dir, _ = resolve_store_dir(store)
     the_store = Store(store_dir)
+    # Every name is resolved, and the store checked, before anything is replayed: a
+    # typo in the third name must not leave two new runs behind.
+    paths = [locate(the_store, name) for name in runs]
+    try:
+        the_store.ensure_writable()
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
     failures = []
-    for name in runs:
+    for name, path in zip(runs, paths, strict=True):
         try:
-            replay_one(the_store, name, operator, note)
+            replay_one(the_store, path, operator, note)
         except UserError as exc:
             if len(runs) == 1:
                 raise
@@ -76,7 +83,11 @@ def locate(the_store: Any, name: str) -> Path:
     from daq.store import StoreError
 
     candidate = Path(name).expanduser()
-    if ("/" in name or name.endswith(".h5")) and candidate.is_file():
+    if "/" in name or (name.endswith(".h5") and candidate.exists()):
+        if not candidate.exists():
+            raise UserError(f"{name}: no such run file")
+        if not candidate.is_file():
+            raise UserError(f"{name} is not a regular file (a run file is one HDF5 file)")
         return candidate
     try:
         return the_store.resolve(name)
@@ -84,8 +95,8 @@ def locate(the_store: Any, name: str) -> Path:
         raise UserError(str(exc)) from None
 
 
-def replay_one(the_store: Any, name: str, operator: str, note: str) -> Any:
-    """Replay the run ``name`` into ``the_store``; the new Run."""
+def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
+    """Replay the run file at ``path`` into ``the_store``; the new Run."""
     from rich.console import Console
 
     from daq.capture import Capture, settings_from_dict
@@ -94,7 +105,6 @@ def replay_one(the_store: Any, name: str, operator: str, note: str) -> Any:
     from daq.store import StoreError, open_run
     from sims.sources import ReplaySource
 
-    path = locate(the_store, name)
     try:
         original = open_run(path)
     except StoreError as exc:

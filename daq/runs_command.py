@@ -120,13 +120,16 @@ def _print_table(summaries, store_dir: Path) -> None:
     from rich.table import Table
 
     table = Table(box=None, header_style="bold", pad_edge=False)
-    table.add_column("run id", no_wrap=True)
-    table.add_column("started (UTC)", no_wrap=True)
-    table.add_column("kind", no_wrap=True)
-    table.add_column("status", no_wrap=True)
+    # The id is what a user copies into every other command: never cut it (nor the
+    # date, kind and counts); operator and note take what width is left.
+    id_width = max(len(s.run_id) for s in summaries)
+    table.add_column("run id", no_wrap=True, min_width=id_width)
+    table.add_column("started (UTC)", no_wrap=True, min_width=19)
+    table.add_column("kind", no_wrap=True, min_width=9)
+    table.add_column("status", no_wrap=True, min_width=10)
     table.add_column("hits", justify="right", no_wrap=True)
     table.add_column("accepted", justify="right", no_wrap=True)
-    table.add_column("operator")
+    table.add_column("operator", overflow="fold")
     table.add_column("note", overflow="fold")
     for s in summaries:
         if s.error is not None:
@@ -142,7 +145,11 @@ def _print_table(summaries, store_dir: Path) -> None:
             escape(s.operator),
             escape(" ".join(s.note.split())),
         )
-    Console().print(table)
+    console = Console()
+    if not console.is_terminal:
+        # Piped into grep or a file: no terminal width to respect, so cut nothing.
+        console = Console(width=1000)
+    console.print(table)
     damaged = [s for s in summaries if s.error is not None]
     for s in damaged:
         # Plain print: a long error must not be wrapped or cut by the table.

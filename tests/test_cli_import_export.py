@@ -65,6 +65,11 @@ def test_capture_export_import_gives_the_same_records(captured, tmp_path, fmt):
     imported = Store(store).open(only_new(store, set()))
     # repr() text and binary 58 both carry float64 exactly: bit for bit, not "close".
     assert_same_hits(imported.hits, original.hits)
+    # Rejected hits stay rejected, with their reasons: an average of the "accepted"
+    # hits of the imported run must not take in a double impact.
+    assert not original.hits.accepted.all()
+    assert imported.hits.accepted.tolist() == original.hits.accepted.tolist()
+    assert list(imported.hits.reject_reason) == list(original.hits.reject_reason)
     assert imported.kind == "imported"
     source = imported.provenance["imported_from"]
     assert source["file"] == out.name
@@ -222,7 +227,7 @@ def test_a_run_file_with_an_external_link_is_refused_on_import(tmp_path):
         f["entry/extra"] = h5py.ExternalLink(str(outside), "/x")
     result = daq_in(tmp_path / "store", "import", str(path))
     assert_one_line_error(result, "external link")
-    assert not (tmp_path / "store").exists()
+    assert Store(tmp_path / "store").list() == []
 
 
 def test_import_json_free_provenance_is_valid_json(captured, tmp_path):
@@ -235,3 +240,50 @@ def test_import_json_free_provenance_is_valid_json(captured, tmp_path):
     with h5py.File(store / f"{only_new(store, set())}.h5", "r") as f:
         provenance = json.loads(f["entry"].attrs["provenance_json"])
     assert provenance["imported_from"]["size_bytes"] == out.stat().st_size
+
+
+def test_a_uff_file_cut_short_anywhere_is_refused(captured, tmp_path):
+    source_store, run_id = captured
+    out = tmp_path / "whole.uff"
+    assert daq_in(source_store, "export", run_id, "-f", "uff", "-o", str(out)).returncode == 0
+    data = out.read_bytes()
+    store = tmp_path / "store"
+    for fraction in (0.05, 0.3, 0.5, 0.7, 0.9, 0.99, 0.9999):
+        cut = tmp_path / f"cut-{fraction}.uff"
+        cut.write_bytes(data[: int(len(data) * fraction)])
+        assert_one_line_error(daq_in(store, "import", str(cut)), "truncated")
+    assert not store.exists() or Store(store).list() == []
+
+
+def test_export_never_writes_over_a_device_or_fifo_even_with_force(captured, tmp_path):
+    source_store, run_id = captured
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    result = daq_in(source_store, "export", run_id, "-f", "csv", "-o", str(fifo), "--force")
+    assert_one_line_error(result, "not a regular file")
+    assert fifo.is_fifo()
+    assert_one_line_error(daq_in(source_store, "export", run_id, "-f", "csv", "-o", "-"), "stdout")
+    missing = f"{tmp_path}/missing/"
+    assert_one_line_error(
+        daq_in(source_store, "export", run_id, "-f", "csv", "-o", missing), "no such folder"
+    )
+    assert not (tmp_path / "missing").exists()
+
+
+def test_exported_files_get_the_umask_mode_not_0600(captured, tmp_path):
+    source_store, run_id = captured
+    out = tmp_path / "shared.csv"
+    old = os.umask(0o022)
+    try:
+        assert daq_in(source_store, "export", run_id, "-f", "csv", "-o", str(out)).returncode == 0
+    finally:
+        os.umask(old)
+    assert out.stat().st_mode & 0o777 == 0o644
+
+
+def test_a_store_that_is_a_file_fails_before_any_hit(tmp_path):
+    not_a_folder = tmp_path / "store.csv"
+    not_a_folder.write_text("x\n")
+    result = invoke_daq("capture", "--sim", "--yes", "--hits", "2", "--store", str(not_a_folder))
+    assert_one_line_error(result, "is a file, not a folder")
+    assert "Hit 1" not in result.stdout

@@ -182,7 +182,7 @@ def test_a_run_file_linking_outside_itself_is_refused(tmp_path):
         del f["entry/hits/force"]
         f["entry/hits/force"] = h5py.ExternalLink(str(outside), "/force")
     assert_one_line_error(replay(tmp_path / "store", str(linked)), "external link")
-    assert not (tmp_path / "store").exists()
+    assert Store(tmp_path / "store").list() == []
 
 
 @pytest.mark.timeout(60)
@@ -196,3 +196,12 @@ def test_several_runs_replay_and_a_bad_one_is_named(tmp_path):
     assert f"daq replay: run {bad.run_id}" in result.stderr
     assert "1 of 2 replays failed" in result.stderr
     assert len(new_runs(tmp_path, {good.run_id, bad.run_id})) == 1
+
+
+def test_an_unknown_name_among_several_replays_nothing(tmp_path):
+    good = make_run(kind="imported", hits=sim_like_hits(1, [True], [""]))
+    seal(good, tmp_path)
+    assert_one_line_error(replay(tmp_path, good.run_id, "2031"), "no run matches")
+    assert_one_line_error(replay(tmp_path, good.run_id, f"{tmp_path}/nope.h5"), "no such run file")
+    assert_one_line_error(replay(tmp_path, good.run_id, f"{tmp_path}/"), "not a regular file")
+    assert new_runs(tmp_path, {good.run_id}) == []

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from array import array
 from pathlib import Path
 
@@ -44,6 +45,7 @@ from daq.store.model import Run
 STEP_TOLERANCE = 1e-6  # relative to the mean step: uneven sampling within one hit
 AXIS_TOLERANCE = 1e-9  # relative to the step: hits must share one time axis
 COMPLEX_COLUMNS = ("force_re", "force_im", "response_re", "response_im")
+_REJECTED = re.compile(r"rejected hit ([0-9]{1,6}):(.*)")
 
 
 def read_csv(
@@ -78,6 +80,7 @@ class _Table:
     def __init__(self, name: str) -> None:
         self.name = name
         self.comments: dict[str, str] = {}
+        self.rejected: dict[int, str] = {}
         self.header: list[str] | None = None
         self.delimiter: str | None = None  # None: runs of whitespace
         self.n_cols = 0
@@ -106,7 +109,12 @@ class _Table:
             raise UserError(f"{self.name} holds no data rows")
 
     def _comment(self, text: str) -> None:
-        # "# key = value" or "# key: value"; anything else is prose and ignored.
+        # "# rejected hit <k>: <reason>" (write_csv), "# key = value" or "# key: value";
+        # anything else is prose and ignored.
+        verdict = _REJECTED.fullmatch(text.strip())
+        if verdict:
+            self.rejected[int(verdict.group(1))] = verdict.group(2)
+            return
         for sep in ("=", ":"):
             key, found, value = text.partition(sep)
             if found and key.strip() and " " not in key.strip():
@@ -169,10 +177,13 @@ class _Table:
         picked = []
         for item in items:
             if item.isdigit():
-                index = int(item)
+                # Only ASCII digits count, and at most 6 of them (int() of a 5000-digit
+                # string raises, and no file has a million columns).
+                index = int(item) if item.isascii() and len(item) <= 6 else 10**6
                 if index >= self.n_cols:
                     raise UserError(
-                        f"{self.name}: column index {index} is out of range (the file has "
+                        f"{self.name}: column index {index if index < 10**6 else _show(item)} "
+                        f"is out of range (the file has "
                         f"{self.n_cols} columns, 0..{self.n_cols - 1})"
                     )
             else:
@@ -231,7 +242,7 @@ class _Table:
             # Multiplying by exactly 1.0 keeps every bit; other units scale once here.
             force = data[order, picked[1]].reshape(len(groups), n) * factors[0]
             response = data[order, picked[2]].reshape(len(groups), n) * factors[1]
-        hits = make_hits(path, force, response, sample_rate_hz, start_s, center, stamp)
+        hits = make_hits(path, force, response, sample_rate_hz, start_s, center, stamp, self.rejected)
         names = [header[i] if header else str(i) for i in picked]
         details = {
             "columns": names,
@@ -295,7 +306,8 @@ class _Table:
             ):
                 raise UserError(
                     f"{self.name}: hit {k} (line {lines[rows[0]]}) has a different time axis from hit 0 "
-                    f"(start {t[0]!r} s, step {step!r} s vs {starts[0]!r} s, {steps[0]!r} s)"
+                    f"(start {float(t[0])!r} s, step {float(step)!r} s vs "
+                    f"{starts[0]!r} s, {float(steps[0])!r} s)"
                 )
             starts.append(float(t[0]))
             steps.append(float(step))
@@ -314,7 +326,7 @@ def write_csv(run: Run, path: Path) -> None:
         raise UserError(f"run {run.run_id} has no time records; export FRFs as UFF")
     if not (np.all(np.isfinite(hits.force_n)) and np.all(np.isfinite(hits.response_m_s2))):
         raise UserError(f"run {run.run_id} has non-finite samples; they cannot be exported as CSV")
-    rejected = [str(i) for i in range(hits.n_hits) if not hits.accepted[i]]
+    rejected = [i for i in range(hits.n_hits) if not hits.accepted[i]]
     head = [
         "# cantilever-daq time records",
         f"# run_id: {run.run_id}",
@@ -324,8 +336,9 @@ def write_csv(run: Run, path: Path) -> None:
         f"# center_hz = {float(hits.center_hz)!r}",
         "# units: time s, force N, response m/s^2",
     ]
-    if rejected:
-        head.append(f"# rejected hits: {', '.join(rejected)}")
+    # One line per rejected hit with its reason: read back by read_csv, so that
+    # export then import keeps every verdict.
+    head += [f"# rejected hit {i}: {one_line(str(hits.reject_reason[i]))}" for i in rejected]
     head.append(
         "hit,time," + ("force_re,force_im,response_re,response_im" if hits.is_zoom else "force,response")
     )

@@ -120,9 +120,17 @@ def make_hits(
     start_s: float,
     center_hz: float,
     timestamp_utc: str,
+    rejected: dict[int, str] | None = None,
 ) -> Hits:
-    """Hits for imported records (n_hits, n_samples): all accepted, model errors -> UserError."""
+    """Hits for imported records (n_hits, n_samples), model errors -> UserError.
+
+    rejected : {hit index: reason} for hits the source file marks as rejected (our own
+        exports do, so that export then import keeps every verdict); the others are accepted.
+    """
     n_hits = force.shape[0]
+    rejected = {
+        k: (r.strip() or "rejected in the source file") for k, r in (rejected or {}).items() if k < n_hits
+    }
     try:
         return Hits(
             force_n=force,
@@ -130,8 +138,8 @@ def make_hits(
             sample_rate_hz=sample_rate_hz,
             start_s=start_s,
             center_hz=center_hz,
-            accepted=np.ones(n_hits, dtype=bool),
-            reject_reason=[""] * n_hits,
+            accepted=np.array([k not in rejected for k in range(n_hits)], dtype=bool),
+            reject_reason=[rejected.get(k, "") for k in range(n_hits)],
             overload=np.zeros((n_hits, 2), dtype=bool),
             peak_force_n=np.max(np.abs(force), axis=1) if force.size else np.zeros(n_hits),
             timestamp_utc=[timestamp_utc] * n_hits,
@@ -163,6 +171,12 @@ def atomic_temp(path: Path) -> Path:
     except OSError as exc:
         raise UserError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
     os.close(fd)
+    # mkstemp makes the file 0600; an exported file is for colleagues and other
+    # tools, so it gets the mode a plain open() would give it (0666 less the umask).
+    umask = os.umask(0)
+    os.umask(umask)
+    with contextlib.suppress(OSError):
+        os.chmod(temp, 0o666 & ~umask)
     return Path(temp)
 
 

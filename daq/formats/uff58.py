@@ -80,6 +80,7 @@ def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     path = Path(path)
     name = show_path(path)
     info = check_regular_file(path, max_bytes)
+    _check_ends_whole(path, name)
     records = [_record(d, k, name) for k, d in enumerate(read_uff_sets(path, name))]
     details: dict[str, Any] = {"n_datasets_58": len(records), "notes": []}
     by_func: dict[int, list[_Record]] = {}
@@ -93,6 +94,20 @@ def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     if hits is None and frfs is None:
         raise UserError(f"{name}: no force/acceleration time records and no FRFs among its datasets 58")
     return ImportedData(hits=hits, measured_frfs=frfs, format="uff", details=details)
+
+
+def _check_ends_whole(path: Path, name: str) -> None:
+    """Every UFF dataset ends with a "-1" delimiter line: a file cut short does not, and
+    pyuff would read the records before the cut as if they were all there."""
+    try:
+        with open(path, "rb") as handle:
+            handle.seek(max(0, handle.seek(0, 2) - 256))
+            tail = handle.read()
+    except OSError as exc:
+        raise UserError(f"{name}: cannot read it ({exc.strerror or exc})") from None
+    # "    -1" in columns 1-6; after binary data (58b) it follows the last value directly.
+    if not tail.rstrip(b" \t\r\n").endswith(b"    -1"):
+        raise UserError(f"{name}: truncated UFF file (it does not end with a -1 delimiter line)")
 
 
 def read_uff_sets(path: Path, name: str) -> list[dict]:
@@ -130,6 +145,11 @@ def _record(d: Any, k: int, name: str) -> _Record:
         raise UserError(f"{name}: dataset 58 #{k} has no data values")
     if x.shape != data.shape or x.dtype.kind not in "fi":
         raise UserError(f"{name}: dataset 58 #{k} has {x.size} abscissa values for {data.size} data values")
+    declared = _int(d.get("num_pts"), data.size)
+    if declared != data.size:
+        raise UserError(
+            f"{name}: dataset 58 #{k} declares {declared} values but holds {data.size}: truncated or damaged"
+        )
     data = data.astype(np.complex128 if data.dtype.kind == "c" else np.float64)
     x = x.astype(np.float64)
     if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
@@ -192,7 +212,12 @@ def _hits(path: Path, name: str, records: list[_Record], stamp: str, details: di
     force = np.stack([_to_si(r, "force", units) for r in forces])
     response = np.stack([_to_si(r, "response", units) for r in responses])
     details.update(n_records=len(forces), n_samples=n, time_units=units, zoom=force.dtype.kind == "c")
-    return make_hits(path, force, response, rate, start, center, stamp)
+    rejected = {}
+    for k, rec in enumerate(forces):
+        _, found, reason = rec.ids[0].partition(" rejected:")
+        if found:
+            rejected[k] = reason
+    return make_hits(path, force, response, rate, start, center, stamp, rejected)
 
 
 def _time_axis(name: str, rec: _Record) -> tuple[float, float]:

@@ -89,7 +89,11 @@ def _time_sets(run: Run) -> list[dict]:
             ("force", hits.force_n[k], 1, 13, "N"),
             ("response", hits.response_m_s2[k], 2, 12, "m/s^2"),
         ):
-            head = (f"{run.run_id} hit {k} {what}", run.run_id, *ids)
+            title = f"{run.run_id} hit {k} {what}"
+            if not hits.accepted[k]:
+                # The verdict travels in ID line 1 (80 characters), read back by read_uff.
+                title = f"{title} rejected: {one_line(str(hits.reject_reason[k]))}"[:80]
+            head = (title, run.run_id, *ids)
             kinds = ((kind, unit), (0, "NONE"))
             sets.append(_dset(FUNC_TIME, k, head, node, True, (17, "s"), *kinds, data, hits.time_s()))
     return sets

@@ -25,7 +25,6 @@ from daq.store.results import read_result, write_result
 from daq.store.verify import verify
 from daq.store.writer import seal
 
-
 #: The name of the newest run in every command that takes a run.
 LATEST = "latest"
 
@@ -67,6 +66,18 @@ class Store:
 
     def __repr__(self) -> str:
         return f"Store({str(self.path)!r})"
+
+    def ensure_writable(self) -> None:
+        """Create the folder if need be and check that runs can be sealed into it, so
+        that a capture fails before the first hit rather than after the last."""
+        if self.path.exists() and not self.path.is_dir():
+            raise StoreError(f"store {self.path} is a file, not a folder; give --store a folder")
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise StoreError(f"cannot create store folder {self.path}: {exc.strerror or exc}") from None
+        if not os.access(self.path, os.W_OK | os.X_OK):
+            raise StoreError(f"store folder {self.path} is not writable by this user")
 
     def seal(self, run: Run) -> Path:
         """Write ``run`` atomically into the store (never overwriting); its path."""

@@ -74,9 +74,9 @@ def test_round_trip_is_bit_exact(tmp_path, zoom):
     assert hits.sample_rate_hz == 256.0
     assert hits.start_s == -0.125
     assert hits.center_hz == (1234.5 if zoom else 0.0)
-    # imported hits: all accepted (the rejected-hits comment is only a note)
-    assert hits.accepted.all()
-    assert list(hits.reject_reason) == ["", "", ""]
+    # the verdicts come back from the "# rejected hit k: reason" comments
+    assert hits.accepted.tolist() == run.hits.accepted.tolist()
+    assert list(hits.reject_reason) == list(run.hits.reject_reason)
     assert not hits.overload.any()
     assert hits.peak_force_n.tolist() == np.abs(run.hits.force_n).max(axis=1).tolist()
     assert all(str(s).endswith("Z") for s in hits.timestamp_utc)
@@ -100,7 +100,7 @@ def test_export_layout(tmp_path):
     write_csv(run, path)
     lines = path.read_text().splitlines()
     assert f"# run_id: {run.run_id}" in lines
-    assert "# rejected hits: 1" in lines
+    assert "# rejected hit 1: double hit" in lines
     assert "# units: time s, force N, response m/s^2" in lines
     header = lines.index("hit,time,force,response")
     assert lines[header + 1].startswith("0,-0.125,")

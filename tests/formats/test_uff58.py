@@ -78,7 +78,9 @@ def test_round_trip_hits_and_frfs_exact(tmp_path, zoom):
     assert got.hits.sample_rate_hz == 256.0
     assert got.hits.start_s == -0.125
     assert got.hits.center_hz == (1234.5 if zoom else 0.0)
-    assert got.hits.accepted.all()
+    # the verdicts come back from ID line 1 of each force record
+    assert got.hits.accepted.tolist() == run.hits.accepted.tolist()
+    assert list(got.hits.reject_reason) == list(run.hits.reject_reason)
     assert got.hits.peak_force_n.tolist() == np.abs(run.hits.force_n).max(axis=1).tolist()
     assert same_bits(got.measured_frfs.frequency_hz, freq)
     assert same_bits(got.measured_frfs.frf, run.analyzer.frf)
