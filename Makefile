@@ -28,6 +28,8 @@ demo: $(VENV)/.installed-run
 	$(BIN)/daq capture --sim --hits 5 --yes --operator demo --note "make demo" --store $(DEMO_STORE)
 	$(BIN)/daq runs list --store $(DEMO_STORE)
 	$(BIN)/daq runs verify --store $(DEMO_STORE)
+	$(BIN)/daq analyze latest --store $(DEMO_STORE)
+	$(BIN)/daq report latest --store $(DEMO_STORE) -o $(VENV)/demo-report
 
 test: lint
 	$(BIN)/python -m pytest -n auto
@@ -40,11 +42,14 @@ format: $(VENV)/.installed-dev
 	$(BIN)/ruff check --fix .
 	$(BIN)/ruff format .
 
-bench: $(VENV)/.installed-run
+bench: $(VENV)/.installed-dev
 	$(BIN)/python bench/bench_model.py
 	$(BIN)/python bench/bench_driver.py
 	$(BIN)/python bench/sim_frf_accuracy.py
 	$(BIN)/python bench/bench_store.py
+	$(BIN)/python bench/bench_spectra.py
+	$(BIN)/python bench/bench_modal.py
+	$(BIN)/python bench/bench_analysis.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis

@@ -105,3 +105,58 @@ def damping_summary(
         symmetric_eigenvalues=np.linalg.eigvalsh(0.5 * (r + r.T)),
         modes=damped_modes(model, r),
     )
+
+
+@dataclass(frozen=True)
+class IdentifiedTable2:
+    """The seed's Table 2 for one run: the analytical columns beside the modes the run
+    identified. Every column has shape (n_rows,); NaN where a column has no such mode.
+
+    identified_hz, damping_ratio : the run's mode matched to each analytical mode
+        (nearest in frequency, within ``tolerance`` relative of the exact beam).
+    """
+
+    n_functions: int
+    section: SectionSource
+    ritz_hz: np.ndarray
+    exact_hz: np.ndarray
+    identified_hz: np.ndarray
+    damping_ratio: np.ndarray
+
+    def difference_pct(self, column: np.ndarray) -> np.ndarray:
+        """100 (identified - column) / column: how far the run is from a model."""
+        return 100.0 * (self.identified_hz - column) / column
+
+
+def identified_table2(
+    frequency_hz: np.ndarray,
+    damping_ratio: np.ndarray,
+    beam: BeamProperties = TABLE_1,
+    n_functions: int = 3,
+    section: SectionSource = "tabulated",
+    n_rows: int | None = None,
+    tolerance: float = 0.25,
+) -> IdentifiedTable2:
+    """Ritz (N functions) and exact-beam frequencies (Hz) beside identified modes.
+
+    frequency_hz, damping_ratio : (n_modes,) the run's modes. Each analytical mode
+    takes the nearest identified mode within ``tolerance`` (relative to the exact
+    frequency), each identified mode used once, lowest modes first.
+    """
+    n_rows = n_rows or max(n_functions, 3)
+    ritz = _padded(RitzBeam.build(beam, n_functions, section).frequencies_hz(), n_rows)
+    exact = cantilever_frequencies_hz(beam.with_section(section), n_rows)
+    freqs = np.asarray(frequency_hz, dtype=float)
+    zetas = np.asarray(damping_ratio, dtype=float)
+    identified = np.full(n_rows, np.nan)
+    damping = np.full(n_rows, np.nan)
+    free = np.ones(freqs.size, dtype=bool)
+    for row in range(n_rows):
+        if not free.any():
+            break
+        distance = np.where(free, np.abs(freqs - exact[row]) / exact[row], np.inf)
+        best = int(np.argmin(distance))
+        if distance[best] <= tolerance:
+            identified[row], damping[row] = freqs[best], zetas[best]
+            free[best] = False
+    return IdentifiedTable2(n_functions, section, ritz, exact, identified, damping)

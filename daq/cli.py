@@ -16,15 +16,23 @@ import os
 import sys
 from typing import Annotated
 
+# Before numpy loads: the analysis solves many small matrices, where BLAS threads cost
+# more than they give (one thread is twice as fast here), and `daq analyze` runs
+# one worker process per core instead. A user's own setting wins.
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
 import typer
 
 from daq import (
     __version__,
+    analyze_command,
     capture_command,
     config_command,
     export_command,
     import_command,
     replay_command,
+    report_command,
     runs_command,
 )
 from daq import talk_command as talk
@@ -109,6 +117,8 @@ runs_command.register(app)
 replay_command.register(app)
 import_command.register(app)
 export_command.register(app)
+analyze_command.register(app)
+report_command.register(app)
 config_command.register(app)
 
 

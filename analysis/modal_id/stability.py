@@ -1,0 +1,264 @@
+"""Stability diagram and automatic selection of physical modes.
+
+Pairing rule (the point of this module): a pole of order n is compared with ONE pole
+of order n-1, its partner, found by a one-to-one assignment (Hungarian algorithm,
+scipy.optimize.linear_sum_assignment) minimising the relative frequency distance; each
+pole of order n-1 serves at most one pole of order n. Frequency, damping and modal
+vector must all agree with that same partner. sdypy-EMA instead counts a pole stable
+when its frequency matches any earlier pole and its damping matches any (possibly
+other) earlier pole, which lets two neighbouring modes vouch for each other.
+
+Status codes per pole:
+  "new"       no partner within the frequency tolerance;
+  "frequency" frequency agrees with the partner, damping does not;
+  "damping"   frequency and damping agree, the modal vector does not;
+  "stable"    frequency, damping and modal vector agree.
+
+Modal vector agreement: ||A_n - A_{n-1}|| / ||A_{n-1}|| <= vector_tol, with A the
+(n_frf,) complex residues of the pole (from the LSCF numerators). For one FRF this is
+the relative change of the complex modal constant; for several it also checks the
+shape (a stricter test than MAC, which ignores scale). Default 10 %: the residues of
+15-20 % damped modes under 1 % noise change by 2-6 % from one order to the next, while
+those of noise and numerical poles change by tens of per cent or more.
+
+Clusters: a stable pole links to its partner; the links form chains through
+consecutive orders, one chain per mode. Chains broken by one noisy order are merged
+back when their median frequency and damping agree and they never share an order.
+A cluster is rejected when
+  * it is stable over fewer than ``min_stable_orders`` orders (noise and numerical poles
+    come and go);
+  * its median damping is <= 0 or > ``max_damping`` (spurious: a structure this
+    stiff is not that damped; the paper's damped model peaks at 20 %);
+  * its frequency wanders: max - min over the chain exceeds 2 x freq_tol (relative);
+  * its frequency lies in the guard, 2 % of the band width, inside a band edge that
+    is above 0 Hz (there, poles stand in for modes outside the band).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+STATUSES = ("new", "frequency", "damping", "stable")
+
+
+def frequency_damping(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Undamped natural frequency (Hz) and damping ratio of poles in rad/s."""
+    p = np.asarray(poles, dtype=complex)
+    wn = np.abs(p)
+    with np.errstate(all="ignore"):
+        return wn / (2 * np.pi), np.where(wn > 0, -p.real / wn, 0.0)
+
+
+def classify_order(
+    prev_poles: np.ndarray,
+    poles: np.ndarray,
+    prev_vectors: np.ndarray | None = None,
+    vectors: np.ndarray | None = None,
+    freq_tol: float = 0.01,
+    damping_tol: float = 0.05,
+    vector_tol: float = 0.1,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Status of each pole of order n against its own partner among the poles of order n-1.
+
+    prev_poles (m,), poles (k,): complex rad/s. prev_vectors (m, n_frf), vectors
+    (k, n_frf): residues, or None to skip the vector test (then "damping" never occurs).
+    Returns status (k,) str and partner (k,) int index into prev_poles (-1: none).
+    """
+    poles = np.asarray(poles, dtype=complex)
+    prev_poles = np.asarray(prev_poles, dtype=complex)
+    status = np.full(poles.size, "new", dtype=object)
+    partner = np.full(poles.size, -1, dtype=int)
+    if poles.size == 0 or prev_poles.size == 0:
+        return status.astype(str), partner
+    f, z = frequency_damping(poles)
+    fp, zp = frequency_damping(prev_poles)
+    cost = np.abs(f[:, None] - fp[None, :]) / fp[None, :]
+    rows, cols = linear_sum_assignment(cost)
+    close = cost[rows, cols] <= freq_tol
+    rows, cols = rows[close], cols[close]
+    partner[rows] = cols
+    status[rows] = "frequency"
+    with np.errstate(all="ignore"):
+        damp_ok = np.abs(z[rows] - zp[cols]) <= damping_tol * np.abs(zp[cols])
+    rows_d, cols_d = rows[damp_ok], cols[damp_ok]
+    status[rows_d] = "damping"
+    if vectors is None or prev_vectors is None:
+        status[rows_d] = "stable"
+    else:
+        a = np.asarray(vectors)[rows_d]
+        b = np.asarray(prev_vectors)[cols_d]
+        with np.errstate(all="ignore"):
+            change = np.linalg.norm(a - b, axis=-1) / np.linalg.norm(b, axis=-1)
+        status[rows_d[change <= vector_tol]] = "stable"
+    return status.astype(str), partner
+
+
+@dataclass
+class Cluster:
+    """A chain of mutually stable poles across orders (one candidate mode).
+
+    members : list of (order index, pole index). frequency_hz, damping_ratio: medians.
+    n_stable_orders : number of stable links. *_scatter_rel : std / median.
+    accepted : passed every rejection rule; reason says why not otherwise.
+    """
+
+    members: list[tuple[int, int]] = field(default_factory=list)
+    frequency_hz: float = np.nan
+    damping_ratio: float = np.nan
+    frequency_scatter_rel: float = np.nan
+    damping_scatter_rel: float = np.nan
+    n_stable_orders: int = 0
+    accepted: bool = False
+    reason: str = ""
+
+    @property
+    def pole(self) -> complex:
+        wn = 2 * np.pi * self.frequency_hz
+        z = self.damping_ratio
+        return complex(-z * wn, wn * np.sqrt(max(1.0 - z * z, 0.0)))
+
+
+def stability_diagram(
+    poles: list[np.ndarray],
+    vectors: list[np.ndarray] | None = None,
+    freq_tol: float = 0.01,
+    damping_tol: float = 0.05,
+    vector_tol: float = 0.1,
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Status (str) and partner index of every pole, order by order (first order: "new")."""
+    status = [np.full(len(poles[0]), "new")]
+    partner = [np.full(len(poles[0]), -1)]
+    for k in range(1, len(poles)):
+        s, p = classify_order(
+            poles[k - 1],
+            poles[k],
+            None if vectors is None else vectors[k - 1],
+            None if vectors is None else vectors[k],
+            freq_tol,
+            damping_tol,
+            vector_tol,
+        )
+        status.append(s)
+        partner.append(p)
+    return status, partner
+
+
+def cluster_poles(
+    poles: list[np.ndarray],
+    status: list[np.ndarray],
+    partner: list[np.ndarray],
+    band: tuple[float, float],
+    freq_tol: float = 0.01,
+    damping_tol: float = 0.05,
+    min_stable_orders: int = 5,
+    max_damping: float = 0.3,
+    guard: float = 0.02,
+) -> tuple[list[Cluster], list[np.ndarray]]:
+    """Chain stable poles into clusters, merge broken chains, apply the rejection rules.
+
+    Returns the clusters (accepted or not, with reasons) and, per order, the index of
+    the cluster each pole belongs to (-1: none).
+    """
+    label = [np.full(len(p), -1) for p in poles]
+    chains: list[list[tuple[int, int]]] = []
+    links: list[int] = []
+    for k in range(1, len(poles)):
+        for i in np.flatnonzero(status[k] == "stable"):
+            j = partner[k][i]
+            c = label[k - 1][j]
+            if c < 0:  # the partner opens a new chain
+                c = len(chains)
+                chains.append([(k - 1, j)])
+                links.append(0)
+                label[k - 1][j] = c
+            chains[c].append((k, i))
+            links[c] += 1
+            label[k][i] = c
+    clusters = [_summarise(poles, members, n) for members, n in zip(chains, links, strict=True)]
+    # Merge chains of one mode broken by a noisy order: same frequency and damping, no shared order.
+    order = sorted(range(len(clusters)), key=lambda c: -clusters[c].n_stable_orders)
+    target = list(range(len(clusters)))
+    kept: list[int] = []
+    for c in order:
+        cc = clusters[c]
+        for k in kept:
+            ck = clusters[k]
+            orders_k = {m[0] for m in ck.members}
+            if (
+                abs(cc.frequency_hz - ck.frequency_hz) <= freq_tol * ck.frequency_hz
+                and abs(cc.damping_ratio - ck.damping_ratio) <= 2 * damping_tol * ck.damping_ratio
+                and not orders_k.intersection(m[0] for m in cc.members)
+            ):
+                clusters[k] = _summarise(
+                    poles, ck.members + cc.members, ck.n_stable_orders + cc.n_stable_orders
+                )
+                target[c] = k
+                break
+        else:
+            kept.append(c)
+    renumber = {c: n for n, c in enumerate(kept)}
+    final = [clusters[c] for c in kept]
+    label = [np.array([renumber[target[c]] if c >= 0 else -1 for c in lab], dtype=int) for lab in label]
+    f1, f2 = band
+    g = guard * (f2 - f1)
+    for c in final:
+        freqs, _ = frequency_damping(np.array([poles[k][i] for k, i in c.members]))
+        if c.n_stable_orders < min_stable_orders:
+            c.reason = f"stable over {c.n_stable_orders} < {min_stable_orders} orders"
+        elif not 0.0 < c.damping_ratio <= max_damping:
+            c.reason = f"damping {c.damping_ratio:.3g} outside (0, {max_damping}]"
+        elif (freqs.max() - freqs.min()) > 2 * freq_tol * c.frequency_hz:
+            c.reason = "frequency wanders across orders"
+        elif (f1 > 0 and c.frequency_hz < f1 + g) or c.frequency_hz > f2 - g:
+            c.reason = "inside the band-edge guard"
+        else:
+            c.accepted = True
+    # Two accepted chains closer than the smaller half-power half-width (zeta f) are one
+    # mode split at some orders into two poles: keep the chain stable over more orders.
+    kept_modes: list[Cluster] = []
+    for c in sorted((c for c in final if c.accepted), key=lambda c: -c.n_stable_orders):
+        for k in kept_modes:
+            width = min(c.damping_ratio, k.damping_ratio) * k.frequency_hz
+            if abs(c.frequency_hz - k.frequency_hz) < width:
+                c.accepted, c.reason = False, "duplicate of a chain stable over more orders"
+                break
+        else:
+            kept_modes.append(c)
+    return final, label
+
+
+def _summarise(poles: list[np.ndarray], members: list[tuple[int, int]], n_links: int) -> Cluster:
+    p = np.array([poles[k][i] for k, i in members])
+    f, z = frequency_damping(p)
+    fm, zm = float(np.median(f)), float(np.median(z))
+    return Cluster(
+        members=sorted(members),
+        frequency_hz=fm,
+        damping_ratio=zm,
+        frequency_scatter_rel=float(np.std(f) / fm),
+        damping_scatter_rel=float(np.std(z) / abs(zm)) if zm != 0 else np.inf,
+        n_stable_orders=n_links,
+    )
+
+
+def pick_clusters(clusters: list[Cluster], frequencies_hz: np.ndarray | None = None) -> list[int]:
+    """Indices of the selected clusters, sorted by frequency.
+
+    Without frequencies of interest: every accepted cluster. With them: for each
+    frequency the nearest accepted cluster (relative distance), or, when none is
+    accepted, the nearest cluster with a physical damping; each cluster at most once.
+    """
+    accepted = [i for i, c in enumerate(clusters) if c.accepted]
+    if frequencies_hz is None:
+        chosen = accepted
+    else:
+        pool = accepted or [i for i, c in enumerate(clusters) if c.damping_ratio > 0]
+        chosen = []
+        for f in np.atleast_1d(frequencies_hz):
+            free = [i for i in pool if i not in chosen]
+            if free:
+                chosen.append(min(free, key=lambda i: abs(clusters[i].frequency_hz - f) / f))
+    return sorted(chosen, key=lambda i: clusters[i].frequency_hz)

@@ -1,0 +1,184 @@
+"""Analysing stored runs: which data of a run to analyse, with which windows, and the
+analysis result file beside the run (``<run_id>.analysis.h5``) with its cache key.
+
+The run's raw data is only read. A result is reused when its cache key (the run
+file's identity, the options and the software version) matches; otherwise the run
+is analysed again and the result file replaced atomically.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from analysis.beam import TABLE_1, BeamProperties
+from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits
+from analysis.table2 import identified_table2
+from analysis.windows import WindowSpec
+from daq.store import Run, Store, StoreError
+from daq.store.model import SOFTWARE
+
+RESULT_NAME = "analysis"
+#: Bumped when the analysis changes what it computes from the same run and options.
+ANALYSIS_VERSION = 1
+#: The analyzer's window mnemonics (stored settings) as analysis window kinds.
+WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
+STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
+
+
+def window_specs(run: Run) -> tuple[WindowSpec, WindowSpec, str]:
+    """(force window, response window, where they came from) for a run's hits: the
+    analyzer's settings as stored, else uniform (an imported record is taken as is)."""
+    settings = run.instrument.settings if run.instrument is not None else {}
+    specs = []
+    for channel in ("hammer", "accelerometer"):
+        setup = settings.get(channel) if isinstance(settings, dict) else None
+        kind = WINDOW_KINDS.get(setup.get("window")) if isinstance(setup, dict) else None
+        if kind is None:
+            specs.append(WindowSpec("uniform"))
+        elif kind == "force":
+            specs.append(WindowSpec("force", force_width_s=float(setup["force_width_s"])))
+        elif kind == "exponential":
+            specs.append(WindowSpec("exponential", exp_decay_s=float(setup["exp_decay_s"])))
+        else:
+            specs.append(WindowSpec(kind))
+    origin = "analyzer settings" if any(s.kind != "uniform" for s in specs) else "uniform (none recorded)"
+    return specs[0], specs[1], origin
+
+
+def beam_of(run: Run) -> tuple[BeamProperties, str]:
+    if run.sample is None:
+        return TABLE_1, "Table 1 (the run records no test article)"
+    fields = {name: getattr(run.sample, name) for name in BeamProperties.__dataclass_fields__}
+    return BeamProperties(**fields), "the run's test article"
+
+
+def analyze(run: Run, options: AnalysisOptions) -> tuple[RunAnalysis, dict[str, Any]]:
+    """The analysis of ``run`` and notes on what was analysed (JSON-able)."""
+    notes: dict[str, Any] = {}
+    if run.hits is not None and run.hits.accepted.any():
+        force_window, response_window, origin = window_specs(run)
+        result = analyze_hits(
+            run.hits.force_n, run.hits.response_m_s2, run.hits.sample_rate_hz, run.hits.accepted,
+            force_window, response_window, run.hits.center_hz, options,
+        )  # fmt: skip
+        windows = {"force": asdict(force_window), "response": asdict(response_window)}
+        notes["windows"] = {**windows, "from": origin}
+    elif run.measured_frfs is not None or run.analyzer is not None:
+        source = "measured_frf" if run.measured_frfs is not None else "analyzer"
+        frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
+        result = analyze_frfs(frfs.frequency_hz, frfs.frf, frfs.coherence, source, options)
+        notes["windows"] = {"from": "none: FRFs analysed as stored"}
+    else:
+        raise ValueError("the run has no accepted hit and no FRF to analyse")
+    return result, notes
+
+
+def cache_key(path: Path, options: AnalysisOptions) -> str:
+    stat = path.stat()
+    identity = {
+        "file": path.name, "size": stat.st_size, "mtime_ns": stat.st_mtime_ns, "options": asdict(options),
+        "software": SOFTWARE, "analysis_version": ANALYSIS_VERSION,
+    }  # fmt: skip
+    return hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
+
+
+def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: AnalysisOptions) -> dict[str, Any]:
+    """The JSON-able summary stored in the result and printed by ``daq analyze --json``."""
+    beam, beam_origin = beam_of(run)
+    freqs = np.array([m.frequency_hz for m in result.modes])
+    zetas = np.array([m.damping_ratio for m in result.modes])
+    table = identified_table2(freqs, zetas, beam, n_rows=max(3, min(6, freqs.size)))
+    rows = []
+    for k in range(table.identified_hz.size):
+        rows.append(
+            {
+                "mode": k + 1,
+                "ritz_hz": _num(table.ritz_hz[k]),
+                "exact_hz": _num(table.exact_hz[k]),
+                "identified_hz": _num(table.identified_hz[k]),
+                "difference_exact_pct": _num(table.difference_pct(table.exact_hz)[k]),
+                "difference_ritz_pct": _num(table.difference_pct(table.ritz_hz)[k]),
+                "damping_ratio": _num(table.damping_ratio[k]),
+            }
+        )
+    return {
+        "run_id": run.run_id,
+        "kind": run.kind,
+        "source": result.source,
+        "estimator": result.estimator if result.source == "hits" else None,
+        "n_averages": result.n_averages,
+        "added_decay_1_s": result.added_decay_1_s,
+        "synthesis_error": _num(result.modal.synthesis_error),
+        "modes": [
+            {
+                "frequency_hz": m.frequency_hz,
+                "damping_ratio": _num(m.damping_ratio),
+                "damping_ratio_windowed": _num(m.damping_ratio_windowed),
+                "frequency_std_hz": _num(m.frequency_std_hz),
+                "damping_std": _num(m.damping_std),
+                "n_hits_matched": m.n_hits_matched,
+                "modal_constant": [[float(c.real), float(c.imag)] for c in m.modal_constant],
+                "quality": m.quality,
+            }
+            for m in result.modes
+        ],
+        "table2": {"beam": beam_origin, "n_functions": table.n_functions, "rows": rows},
+        "options": asdict(options),
+        **notes,
+    }
+
+
+def _num(value: float) -> float | None:
+    """JSON has no NaN: an unknown number is null."""
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
+def payload(result: RunAnalysis, info: dict[str, Any], key: str) -> dict[str, Any]:
+    """What the result file holds: the arrays a report plots and the summary."""
+    stab = result.modal.stability
+    orders = np.concatenate([np.full(len(p), o) for o, p in zip(stab.orders, stab.poles, strict=True)])
+    out: dict[str, Any] = {
+        "summary": info,
+        "cache_key": key,
+        "frequency_hz": result.frequency_hz,
+        "frf": result.frf,
+        "synthesized_frequency_hz": result.modal.frequency_hz,
+        "synthesized": result.modal.synthesized,
+    }
+    if result.coherence is not None:
+        out["coherence"] = result.coherence
+    if orders.size:
+        out["stability_order"] = orders.astype(np.int64)
+        out["stability_pole"] = np.concatenate(stab.poles).astype(complex)
+        out["stability_status"] = np.concatenate(
+            [np.array([STATUS_CODES.get(str(s), 0) for s in codes], dtype=np.int64) for codes in stab.status]
+        )
+        out["stability_mode"] = np.concatenate([np.asarray(c, dtype=np.int64) for c in stab.selected_cluster])
+    return out
+
+
+def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, force: bool = False) -> dict:
+    """Analyse run ``run_id`` of the store (or reuse its up-to-date result); its summary
+    with ``cached`` saying which. StoreError / ValueError name what is wrong."""
+    store = Store(store_dir)
+    path = store.resolve(run_id)
+    key = cache_key(path, options)
+    if not force:
+        try:
+            stored = store.read_result(path.stem, RESULT_NAME)
+        except StoreError:
+            stored = None
+        if stored is not None and stored.get("cache_key") == key:
+            return {**stored["summary"], "cached": True}
+    run = store.open(path.stem)
+    result, notes = analyze(run, options)
+    info = summary(run, result, notes, options)
+    store.write_result(run.run_id, RESULT_NAME, payload(result, info, key), overwrite=True)
+    return {**info, "cached": False}

@@ -1,0 +1,202 @@
+"""`daq analyze RUN... | --all`: FRFs, modes and Table 2 of stored runs, kept beside each
+run (daq/analysis_store.py), in parallel over the cores, with a progress bar.
+
+Without --json it prints each run's modes; with --json a list with one object per
+run (``run_id``, ``modes`` sorted by frequency, ``table2``, ...). A run that cannot
+be analysed gets one line on stderr and the others go on; the exit status is 1 if
+any failed.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from daq.errors import UserError
+from daq.runs_command import JsonOption, StoreOption
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="analyze")(analyze)
+
+
+def parse_band(text: str | None) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        low, high = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise UserError(f"--band {text!r}: give two frequencies in Hz as LOW:HIGH, e.g. 2:150", 2) from None
+    if not (0 <= low < high < float("inf")):
+        raise UserError(f"--band {text!r}: need 0 <= LOW < HIGH", 2)
+    return low, high
+
+
+def parse_frequencies(text: str | None) -> tuple[float, ...] | None:
+    if text is None:
+        return None
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise UserError(
+            f"--frequencies {text!r}: give Hz values separated by commas, e.g. 5.6,36,97", 2
+        ) from None
+    if not values or not all(0 < v < float("inf") for v in values):
+        raise UserError(f"--frequencies {text!r}: every frequency must be positive", 2)
+    return values
+
+
+def analyze(
+    runs: Annotated[
+        list[str] | None,
+        typer.Argument(metavar="[RUN]...", show_default=False, help="Run ids or unique prefixes."),
+    ] = None,
+    all_runs: Annotated[bool, typer.Option("--all", help="Analyse every run of the store.")] = False,
+    band: Annotated[
+        str | None, typer.Option(metavar="<low:high>", help="Identify modes in this band only, Hz.")
+    ] = None,
+    frequencies: Annotated[
+        str | None,
+        typer.Option(metavar="<f1,f2,...>", help="Frequencies of interest, Hz (else found automatically)."),
+    ] = None,
+    max_order: Annotated[
+        int, typer.Option(metavar="<2-200>", help="Highest model order of the stability diagram.")
+    ] = 40,
+    estimator: Annotated[
+        str, typer.Option(metavar="<h1|h2|hv>", help="FRF estimator for time records.")
+    ] = "h1",
+    jobs: Annotated[
+        int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
+    ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Analyse again even if a result is up to date.")
+    ] = False,
+    json_output: JsonOption = False,
+    store: StoreOption = None,
+) -> None:
+    """Analyse runs: FRFs over the accepted hits, modes from the stability diagram, Table 2.
+
+    Each result is stored beside its run (<run id>.analysis.h5; the run file is never
+    written). An unchanged run analysed with unchanged options is a cache hit.
+    """
+    from analysis.run_analysis import AnalysisOptions
+    from daq.store import Store, StoreError, resolve_store_dir
+
+    if bool(runs) == all_runs:
+        raise UserError("name the runs to analyse, or give --all", exit_code=2)
+    try:
+        options = AnalysisOptions(
+            band_hz=parse_band(band), max_order=max_order, frequencies_hz=parse_frequencies(frequencies),
+            estimator=estimator.lower(),
+        )  # fmt: skip
+    except ValueError as exc:
+        raise UserError(str(exc), exit_code=2) from None
+    if jobs is not None and jobs < 1:
+        raise UserError("--jobs must be at least 1", exit_code=2)
+    store_dir, _ = resolve_store_dir(store)
+    the_store = Store(store_dir)
+    try:
+        if all_runs:
+            ids = [s.run_id for s in the_store.list() if s.error is None]
+        else:
+            ids = list(dict.fromkeys(the_store.resolve(name).stem for name in runs or []))
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+    if not ids:
+        raise UserError(f"no runs to analyse in {store_dir}")
+    results, failures = run_all(store_dir, ids, options, force, jobs)
+    if json_output:
+        typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
+    else:
+        for run_id in ids:
+            if run_id in results:
+                _print(results[run_id])
+    if failures:
+        raise UserError(f"{len(failures)} of {len(ids)} runs could not be analysed")
+
+
+def run_all(
+    store_dir: Path, ids: list[str], options: Any, force: bool, jobs: int | None
+) -> tuple[dict[str, dict], list[str]]:
+    """Analyse ``ids``; (summaries by run id, failed ids). Failures are reported on stderr."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    workers = min(jobs or os.cpu_count() or 1, len(ids))
+    results: dict[str, dict] = {}
+    failures: list[str] = []
+    console = Console(stderr=True)
+    columns = (TextColumn("analysing"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+    with Progress(*columns, console=console, transient=True, disable=not console.is_terminal) as progress:
+        task = progress.add_task("runs", total=len(ids))
+
+        def done(run_id: str, outcome: dict | str) -> None:
+            if isinstance(outcome, str):
+                sys.stderr.write(f"daq analyze: run {run_id}: {outcome}\n")
+                failures.append(run_id)
+            else:
+                results[run_id] = outcome
+            progress.advance(task)
+
+        if workers == 1:
+            for run_id in ids:
+                done(run_id, analyze_one(store_dir, run_id, options, force))
+        else:
+            with ProcessPoolExecutor(max_workers=workers) as pool:
+                futures = {pool.submit(analyze_one, store_dir, r, options, force): r for r in ids}
+                for future in as_completed(futures):
+                    done(futures[future], future.result())
+    return results, failures
+
+
+def analyze_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:
+    """The summary of one run's analysis, or a one-line reason it failed (picklable)."""
+    from daq.analysis_store import analyze_stored
+    from daq.store import StoreError
+
+    try:
+        return analyze_stored(store_dir, run_id, options, force)
+    except (StoreError, ValueError) as exc:
+        return " ".join(str(exc).split())
+    except np_errors() as exc:
+        return f"numerical failure ({type(exc).__name__}: {' '.join(str(exc).split())})"
+
+
+def np_errors() -> tuple[type[BaseException], ...]:
+    import numpy as np
+
+    return (np.linalg.LinAlgError, FloatingPointError, ZeroDivisionError)
+
+
+def _print(info: dict) -> None:
+    cached = " (cached)" if info.get("cached") else ""
+    source = {"hits": f"{info['n_averages']} hits, {info.get('estimator', '')}".rstrip(", ")}.get(
+        info["source"], info["source"]
+    )
+    typer.echo(f"Run {info['run_id']} ({info['kind']}, {source}){cached}: {len(info['modes'])} modes")
+    for k, mode in enumerate(info["modes"], 1):
+        zeta = mode["damping_ratio"]
+        f_std, z_std = mode["frequency_std_hz"], mode["damping_std"]
+        spread = f" ± {f_std:.3g} Hz" if f_std is not None else ""
+        zspread = f" ± {100 * z_std:.2g} %" if z_std is not None else ""
+        zeta_text = f"{100 * zeta:.3g} %{zspread}" if zeta is not None else "n/a (window decay larger)"
+        q = mode["quality"]
+        typer.echo(
+            f"  mode {k}: {mode['frequency_hz']:.4f} Hz{spread}, damping {zeta_text}; "
+            f"stable over {q['n_stable_orders']} orders, {100 * q['synthesis_share']:.2g} % of the synthesis"
+        )
+    rows = [r for r in info["table2"]["rows"] if r["identified_hz"] is not None]
+    if rows:
+        typer.echo(f"  Table 2 ({info['table2']['beam']}):  mode  Ritz Hz  exact Hz  run Hz  vs exact")
+        for r in rows:
+            ritz = f"{r['ritz_hz']:.3f}" if r["ritz_hz"] is not None else "-"
+            typer.echo(
+                f"    {r['mode']:>4}  {ritz:>8}  {r['exact_hz']:>8.3f}  {r['identified_hz']:>7.3f}  "
+                f"{r['difference_exact_pct']:+.2f} %"
+            )

@@ -1,0 +1,74 @@
+"""`daq report RUN [-o DIR]`: PNG figures and one self-contained HTML page of a run
+and its analysis (analysed first if its stored analysis is missing or stale)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from daq.errors import UserError
+from daq.runs_command import StoreOption
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="report")(report)
+
+
+def report(
+    run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="Run id or unique prefix.")],
+    output: Annotated[
+        Path | None,
+        typer.Option("--output", "-o", metavar="<dir>", help="Folder to write [default: ./report-<run id>]."),
+    ] = None,
+    store: StoreOption = None,
+) -> None:
+    """Write a run's report: hits, FRF and coherence, stability diagram, synthesis, Table 2.
+
+    PNG files and index.html (everything embedded: it opens from disk, no network).
+    """
+    from analysis.run_analysis import AnalysisOptions
+    from daq.analysis_store import RESULT_NAME, analyze_stored
+    from daq.report import figures, page
+    from daq.store import Store, StoreError, resolve_store_dir
+
+    store_dir, _ = resolve_store_dir(store)
+    the_store = Store(store_dir)
+    try:
+        run_id = the_store.resolve(run).stem
+        analyze_stored(store_dir, run_id, AnalysisOptions())
+        the_run = the_store.open(run_id)
+        result = the_store.read_result(run_id, RESULT_NAME)
+    except (StoreError, ValueError) as exc:
+        raise UserError(" ".join(str(exc).split())) from None
+    folder = output if output is not None else Path(f"report-{run_id}")
+    if folder.exists() and not folder.is_dir():
+        raise UserError(f"{folder} exists and is not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"cannot create {folder}: {exc.strerror or exc}") from None
+    pngs = {
+        "frf": figures.frf_figure(result),
+        "stability": figures.stability_figure(result),
+        "synthesis": figures.synthesis_figure(result),
+    }
+    if the_run.hits is not None:
+        pngs["hits"] = figures.hits_figure(the_run)
+    for name, png in pngs.items():
+        _write(folder / f"{name}.png", png)
+    _write(folder / "index.html", page.render(the_run, result, pngs).encode("utf-8"))
+    typer.echo(f"Report of run {run_id}: {folder / 'index.html'} ({len(pngs)} figures)")
+
+
+def _write(path: Path, data: bytes) -> None:
+    """Whole or not at all: a temporary beside it, then a rename."""
+    temp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        temp.write_bytes(data)
+        os.replace(temp, path)
+    except OSError as exc:
+        temp.unlink(missing_ok=True)
+        raise UserError(f"cannot write {path}: {exc.strerror or exc}") from None

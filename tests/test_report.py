@@ -1,0 +1,57 @@
+"""`daq report`: PNG figures and one self-contained HTML page per run."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from cli_helpers import assert_one_line_error, invoke_daq
+from store.store_helpers import make_run
+
+from daq.store import MeasuredFrf, Store, seal
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def test_report_of_a_captured_run(tmp_path):
+    store = tmp_path / "store"
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--hits", "3", "--time-scale", "0",
+        "--hammer", "double_hit_probability=0.4", "--seed", "7",
+        "--operator", "<script>alert(1)</script>", "--store", str(store),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    (run,) = Store(store).list()
+    out = tmp_path / "report"
+    result = invoke_daq("report", run.run_id, "-o", str(out), "--store", str(store))
+    assert result.returncode == 0, result.stderr
+    page = (out / "index.html").read_text()
+    for name in ("hits", "frf", "stability", "synthesis"):
+        png = (out / f"{name}.png").read_bytes()
+        assert png.startswith(PNG_SIGNATURE)
+        assert len(png) > 10_000  # a drawn figure, not an empty canvas
+    # Self-contained: every image is embedded, nothing is fetched.
+    assert len(re.findall(r'src="data:image/png;base64,', page)) == 4
+    assert not re.search(r'(src|href)="(https?:|//)', page)
+    assert "<script>" not in page
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page
+    assert "Table 2" in page
+    if run.n_accepted < run.n_hits:
+        assert "rejected: " in page
+
+
+def test_report_of_an_frf_only_run_has_no_hits_figure(tmp_path):
+    f = np.linspace(0, 100, 401)
+    w = 2 * np.pi * f
+    wn = 2 * np.pi * 30.0
+    h = -(w**2) / (wn**2 - w**2 + 2j * 0.02 * wn * w)
+    run = make_run(kind="imported", measured=MeasuredFrf(f, h[np.newaxis, :], None, ["H"]))
+    seal(run, tmp_path)
+    result = invoke_daq("report", run.run_id, "-o", str(tmp_path / "r"), "--store", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    assert not (tmp_path / "r" / "hits.png").exists()
+    assert (tmp_path / "r" / "index.html").read_text().count("data:image/png;base64,") == 3
+
+
+def test_report_of_an_unknown_run_is_one_line(tmp_path):
+    assert_one_line_error(invoke_daq("report", "2031", "--store", str(tmp_path)), "no run matches")
