@@ -147,7 +147,9 @@ def visa(resource: str):
 def assert_stopped_cleanly(server: Server, status: int, seconds: float) -> None:
     stderr = server.stderr.decode(errors="replace")
     assert status == 0, stderr
-    assert seconds < 3.0
+    # Prompt, not instant: a loaded 2-core machine took 3.02 s once (starting the
+    # interpreter's shutdown under the whole parallel suite); a hang takes the timeout.
+    assert seconds < 8.0
     assert "Stopped." in stderr.splitlines()
     assert "Traceback" not in stderr
     # The resource is the only line on stdout.
