@@ -103,7 +103,7 @@ class Server:
         assert rest == b"", buffer
         return line.decode()
 
-    def stop(self, signum: int, timeout: float = 5.0) -> tuple[int, float]:
+    def stop(self, signum: int, timeout: float = 10.0) -> tuple[int, float]:
         """Send ``signum``; (exit status, seconds it took). Output is collected."""
         t0 = time.monotonic()
         self.proc.send_signal(signum)
