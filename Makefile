@@ -29,6 +29,7 @@ demo: $(VENV)/.installed-run
 	$(BIN)/daq runs list --store $(DEMO_STORE)
 	$(BIN)/daq runs verify --store $(DEMO_STORE)
 	$(BIN)/daq analyze latest --store $(DEMO_STORE)
+	$(BIN)/daq fit latest --store $(DEMO_STORE)
 	$(BIN)/daq report latest --store $(DEMO_STORE) -o $(VENV)/demo-report
 
 test: lint
@@ -50,6 +51,7 @@ bench: $(VENV)/.installed-dev
 	$(BIN)/python bench/bench_spectra.py
 	$(BIN)/python bench/bench_modal.py
 	$(BIN)/python bench/bench_analysis.py
+	$(BIN)/python bench/bench_damping.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis

@@ -122,9 +122,19 @@ def analyze(
 
 
 def run_all(
-    store_dir: Path, ids: list[str], options: Any, force: bool, jobs: int | None
+    store_dir: Path,
+    ids: list[str],
+    options: Any,
+    force: bool,
+    jobs: int | None,
+    worker: Any = None,
+    label: str = "analysing",
 ) -> tuple[dict[str, dict], list[str]]:
-    """Analyse ``ids``; (summaries by run id, failed ids). Failures are reported on stderr."""
+    """Run ``worker(store_dir, run_id, options, force)`` (default: analyze_one) on
+    ``ids`` in worker processes; (summaries by run id, failed ids). A worker returns a
+    summary dict or a one-line reason; failures are reported on stderr."""
+    worker = worker or analyze_one
+    command = "fit" if worker is not analyze_one else "analyze"
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -132,13 +142,13 @@ def run_all(
     results: dict[str, dict] = {}
     failures: list[str] = []
     console = Console(stderr=True)
-    columns = (TextColumn("analysing"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+    columns = (TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True, disable=not console.is_terminal) as progress:
         task = progress.add_task("runs", total=len(ids))
 
         def done(run_id: str, outcome: dict | str) -> None:
             if isinstance(outcome, str):
-                sys.stderr.write(f"daq analyze: run {run_id}: {outcome}\n")
+                sys.stderr.write(f"daq {command}: run {run_id}: {outcome}\n")
                 failures.append(run_id)
             else:
                 results[run_id] = outcome
@@ -146,10 +156,10 @@ def run_all(
 
         if workers == 1:
             for run_id in ids:
-                done(run_id, analyze_one(store_dir, run_id, options, force))
+                done(run_id, worker(store_dir, run_id, options, force))
         else:
             with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = {pool.submit(analyze_one, store_dir, r, options, force): r for r in ids}
+                futures = {pool.submit(worker, store_dir, r, options, force): r for r in ids}
                 for future in as_completed(futures):
                     done(futures[future], future.result())
     return results, failures

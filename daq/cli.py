@@ -30,6 +30,7 @@ from daq import (
     capture_command,
     config_command,
     export_command,
+    fit_command,
     import_command,
     replay_command,
     report_command,
@@ -118,6 +119,7 @@ replay_command.register(app)
 import_command.register(app)
 export_command.register(app)
 analyze_command.register(app)
+fit_command.register(app)
 report_command.register(app)
 config_command.register(app)
 

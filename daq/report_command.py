@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -57,10 +57,39 @@ def report(
     }
     if the_run.hits is not None:
         pngs["hits"] = figures.hits_figure(the_run)
+    fits = stored_fits(the_store, run_id)
+    with_response = [f for f in fits.values() if "model_response" in f]
+    if with_response and the_run.hits is not None:
+        pngs["response_fit"] = figures.response_fit_figure(the_run, with_response[0])
+    if any("history" in f for f in fits.values()):
+        pngs["convergence"] = figures.convergence_figure(fits)
     for name, png in pngs.items():
         _write(folder / f"{name}.png", png)
-    _write(folder / "index.html", page.render(the_run, result, pngs).encode("utf-8"))
+    _write(folder / "index.html", page.render(the_run, result, pngs, fits).encode("utf-8"))
     typer.echo(f"Report of run {run_id}: {folder / 'index.html'} ({len(pngs)} figures)")
+
+
+def stored_fits(the_store: Any, run_id: str) -> dict[str, dict]:
+    """The damping fits stored beside the run (``<id>.fit-*.h5``), by result name; the
+    least-squares fit is made first when there is none (a report shows the matrix)."""
+    from daq.store import StoreError
+
+    names = sorted(p.name[len(run_id) + 1 : -3] for p in the_store.path.glob(f"{run_id}.fit-*.h5"))
+    if not names:
+        from daq.fit_store import FitOptions, fit_stored
+
+        try:
+            fit_stored(the_store.path, run_id, FitOptions())
+        except (StoreError, ValueError):
+            return {}  # e.g. an FRF-only run: the report goes without a fit
+        names = [FitOptions().result_name]
+    fits = {}
+    for name in names:
+        try:
+            fits[name] = the_store.read_result(run_id, name)
+        except StoreError:
+            continue
+    return fits
 
 
 def _write(path: Path, data: bytes) -> None:

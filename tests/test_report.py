@@ -26,12 +26,15 @@ def test_report_of_a_captured_run(tmp_path):
     result = invoke_daq("report", run.run_id, "-o", str(out), "--store", str(store))
     assert result.returncode == 0, result.stderr
     page = (out / "index.html").read_text()
-    for name in ("hits", "frf", "stability", "synthesis"):
+    for name in ("hits", "frf", "stability", "synthesis", "response_fit"):
         png = (out / f"{name}.png").read_bytes()
         assert png.startswith(PNG_SIGNATURE)
         assert len(png) > 10_000  # a drawn figure, not an empty canvas
     # Self-contained: every image is embedded, nothing is fetched.
-    assert len(re.findall(r'src="data:image/png;base64,', page)) == 4
+    # The four analysis figures, the measured and model response of the damping fit
+    # (made for the report, none was stored), and its convergence.
+    assert len(re.findall(r'src="data:image/png;base64,', page)) == 6
+    assert "Damping matrix" in page
     assert not re.search(r'(src|href)="(https?:|//)', page)
     assert "<script>" not in page
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page

@@ -143,3 +143,40 @@ def synthesis_figure(result: dict[str, Any]) -> bytes:
     shown = f", error {100 * error:.2g} %" if error is not None else ""
     fig.suptitle(f"Run {result['summary']['run_id']}: synthesis from the identified modes{shown}")
     return _png(fig)
+
+
+def response_fit_figure(run: Any, fit: dict[str, Any]) -> bytes:
+    """Like the seed's Fig. 5: the measured tip acceleration of one hit and the fitted
+    model's response to that hit's measured force."""
+    plt = _pyplot()
+    hits = run.hits
+    k = int(fit["hit_index"][0])
+    t_ms = hits.time_s() * 1e3
+    fig, ax = plt.subplots(figsize=(10, 4))
+    ax.plot(t_ms, hits.response_m_s2[k], color="#1f4e9c", lw=0.8, label="measured")
+    ax.plot(t_ms, fit["model_response"], color="#c0392b", lw=0.8, ls="--", label="model with the fitted R")
+    ax.set_xlabel("time after trigger (ms)")
+    ax.set_ylabel("tip acceleration (m/s²)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    s = fit["summary"]
+    ax.set_title(
+        f"Run {run.run_id}, hit {k + 1}: measured and model response ({s['method']}, Psi {s['psi']:.3g})"
+    )
+    return _png(fig)
+
+
+def convergence_figure(fits: dict[str, dict[str, Any]]) -> bytes:
+    """Best Psi per generation (GA) or iteration (DE) of every fit that has a history."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for name, fit in fits.items():
+        if "history" in fit:
+            history = np.asarray(fit["history"], dtype=float)
+            ax.semilogy(np.arange(1, history.size + 1), history, marker=".", lw=0.9, label=name)
+    ax.set_xlabel("generation / iteration")
+    ax.set_ylabel("best Psi (eq 17)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title("Convergence of the fits: best Psi per generation (GA) or iteration")
+    return _png(fig)

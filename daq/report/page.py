@@ -47,8 +47,11 @@ def _img(png: bytes, alt: str) -> str:
     return f'<img alt="{_e(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">'
 
 
-def render(run: Any, result: dict[str, Any], figures: dict[str, bytes]) -> str:
-    """The page for ``run`` with its analysis ``result`` and ``figures`` (name -> PNG)."""
+def render(
+    run: Any, result: dict[str, Any], figures: dict[str, bytes], fits: dict[str, dict] | None = None
+) -> str:
+    """The page for ``run`` with its analysis ``result``, its damping fits (result name
+    -> stored fit) and ``figures`` (name -> PNG)."""
     s = result["summary"]
     info = [
         ("run", run.run_id), ("kind", run.kind + ("" if run.complete else ", INCOMPLETE")),
@@ -120,5 +123,49 @@ def render(run: Any, result: dict[str, Any], figures: dict[str, bytes]) -> str:
                         ("synthesis", "Synthesis")):  # fmt: skip
         if name in figures:
             parts += [f"<h2>{_e(title)}</h2>", _img(figures[name], title)]
+    if fits:
+        parts += _fit_section(fits, figures)
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def _fit_section(fits: dict[str, dict], figures: dict[str, bytes]) -> list[str]:
+    """The damping matrix of each fit with its uncertainty, the modes it implies, and
+    the figures of the fit."""
+    parts = ["<h2>Damping matrix</h2>"]
+    for name, fit in fits.items():
+        s = fit["summary"]
+        floor = s.get("psi_noise_floor")
+        floor_text = f"; noise floor {floor:.3g}" if floor is not None else ""
+        scale = s["stiffness"].get("scale")
+        stiffness = s["stiffness"].get("update", "") + ("" if scale is None else f" x {scale:.5f}")
+        parts.append(
+            f"<p><b>{_e(name)}</b>: Psi = {s['psi']:.4g}{_e(floor_text)}, {s['n_evaluations']} model "
+            f"evaluations, stiffness: {_e(stiffness)}.</p>"
+        )
+        unc = s["uncertainty"]
+        by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
+        r = s["damping_matrix"]
+        rows = []
+        for i in range(len(r)):
+            cells = [f"<th>{i + 1}</th>"]
+            for j in range(len(r)):
+                std, determined = by_name.get(f"R{min(i, j) + 1}{max(i, j) + 1}", (None, True))
+                spread = f" ± {std:.2g}" if std is not None else ""
+                mark = "" if determined else " <b>?</b>"
+                cells.append(f"<td class='num'>{r[i][j]:.4f}{spread}{mark}</td>")
+            rows.append(cells)
+        parts.append(_table(["R (N s/m)", *[str(j + 1) for j in range(len(r))]], rows))
+        for direction in unc["null_directions"]:
+            combo = " ".join(f"{w:+.2f} {k}" for k, w in direction["combination"].items() if abs(w) >= 0.05)
+            parts.append(f"<p class='note'>Not determined by the data (? above): {_e(combo)}.</p>")
+        mode_rows = [
+            [f"<td class='num'>{k}</td>", f"<td class='num'>{m['frequency_hz']:.4f}</td>",
+             f"<td class='num'>{100 * m['damping_ratio']:.3g}</td>"]
+            for k, m in enumerate(s["modes"], 1)
+        ]  # fmt: skip
+        parts.append(_table(["mode", "frequency (Hz)", "damping (%)"], mode_rows))
+    for key, title in (("response_fit", "Measured and model response"), ("convergence", "Convergence")):
+        if key in figures:
+            parts += [f"<h2>{_e(title)}</h2>", _img(figures[key], title)]
+    return parts

@@ -1,0 +1,126 @@
+"""`daq fit RUN... | --all`: the damping matrix of stored runs (daq/fit_store.py), each
+result beside its run, in worker processes with a progress bar."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from daq.errors import UserError
+from daq.runs_command import JsonOption, StoreOption
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="fit")(fit)
+
+
+def fit(
+    runs: Annotated[
+        list[str] | None,
+        typer.Argument(metavar="[RUN]...", show_default=False, help="Run ids or unique prefixes."),
+    ] = None,
+    all_runs: Annotated[bool, typer.Option("--all", help="Fit every run of the store.")] = False,
+    method: Annotated[
+        str,
+        typer.Option(
+            metavar="<modal|ls|ga|de|pilkey-inman>",
+            help="modal: proportional estimate from the identified modes; ls: least squares from it; "
+            "ga: the seed's genetic algorithm; de: differential evolution; pilkey-inman: from the poles.",
+        ),
+    ] = "ls",
+    seed: Annotated[int, typer.Option(metavar="<int>", help="Random seed of ga and de.")] = 0,
+    psd: Annotated[bool, typer.Option("--psd", help="Keep R positive semi-definite (R = L L^T).")] = False,
+    stiffness: Annotated[
+        str, typer.Option(metavar="<scale|none>", help="Scale E to the identified frequencies first.")
+    ] = "scale",
+    jobs: Annotated[
+        int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
+    ] = None,
+    force: Annotated[bool, typer.Option("--force", help="Fit again even if a result is up to date.")] = False,
+    json_output: JsonOption = False,
+    store: StoreOption = None,
+) -> None:
+    """Fit the damping matrix R of the beam model to runs (the seed's section 6).
+
+    Reports R, the frequencies and damping ratios it implies, the fit error Psi (eq 17)
+    beside the noise floor, and the uncertainty of every term of R, naming the
+    combinations the data does not determine.
+    """
+    from daq.analyze_command import run_all
+    from daq.fit_store import FitOptions
+    from daq.store import Store, StoreError, resolve_store_dir
+
+    if bool(runs) == all_runs:
+        raise UserError("name the runs to fit, or give --all", exit_code=2)
+    try:
+        options = FitOptions(method=method.lower(), seed=seed, psd=psd, stiffness=stiffness.lower())
+    except ValueError as exc:
+        raise UserError(str(exc), exit_code=2) from None
+    if jobs is not None and jobs < 1:
+        raise UserError("--jobs must be at least 1", exit_code=2)
+    store_dir, _ = resolve_store_dir(store)
+    the_store = Store(store_dir)
+    try:
+        if all_runs:
+            ids = [s.run_id for s in the_store.list() if s.error is None]
+        else:
+            ids = list(dict.fromkeys(the_store.resolve(name).stem for name in runs or []))
+    except StoreError as exc:
+        raise UserError(str(exc)) from None
+    if not ids:
+        raise UserError(f"no runs to fit in {store_dir}")
+    results, failures = run_all(store_dir, ids, options, force, jobs, worker=fit_one, label="fitting")
+    if json_output:
+        typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
+    else:
+        for run_id in ids:
+            if run_id in results:
+                print_fit(results[run_id])
+    if failures:
+        raise UserError(f"{len(failures)} of {len(ids)} runs could not be fitted")
+
+
+def fit_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:
+    """The summary of one run's fit, or a one-line reason it failed (picklable)."""
+    import numpy as np
+
+    from daq.fit_store import fit_stored
+    from daq.store import StoreError
+
+    try:
+        return fit_stored(store_dir, run_id, options, force)
+    except (StoreError, ValueError) as exc:
+        return " ".join(str(exc).split())
+    except (np.linalg.LinAlgError, FloatingPointError, ZeroDivisionError) as exc:
+        return f"numerical failure ({type(exc).__name__}: {' '.join(str(exc).split())})"
+
+
+def print_fit(info: dict) -> None:
+    cached = " (cached)" if info.get("cached") else ""
+    floor = info.get("psi_noise_floor")
+    floor_text = f" (noise floor {floor:.3g})" if floor is not None else ""
+    typer.echo(
+        f"Run {info['run_id']}: {info['method']}{' (R = L L^T)' if info['psd'] else ''}{cached}, "
+        f"Psi = {info['psi']:.4g}{floor_text}, {info['n_evaluations']} evaluations"
+    )
+    unc = info["uncertainty"]
+    by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
+    r = info["damping_matrix"]
+    n = len(r)
+    typer.echo("  R (N s/m), ± one standard deviation; ? = not determined by the data:")
+    for i in range(n):
+        cells = []
+        for j in range(n):
+            name = f"R{min(i, j) + 1}{max(i, j) + 1}"
+            std, determined = by_name.get(name, (None, True))
+            spread = f" ± {std:.2g}" if std is not None else ""
+            cells.append(f"{r[i][j]:9.4f}{spread:<10}{'' if determined else ' ?'}")
+        typer.echo("    " + "  ".join(cells))
+    for k, mode in enumerate(info["modes"], 1):
+        typer.echo(f"  mode {k}: {mode['frequency_hz']:.4f} Hz, damping {100 * mode['damping_ratio']:.3g} %")
+    for direction in unc["null_directions"]:
+        combo = " ".join(f"{w:+.2f} {name}" for name, w in direction["combination"].items() if abs(w) >= 0.05)
+        typer.echo(f"  not determined by the data: {combo}")

@@ -1,0 +1,81 @@
+"""`daq fit` on simulated captures: the damping the fitted matrix implies against the
+simulator's truth (eq (18) for the seed beam, docs/method.md; the realistic beam's
+modal damping), the JSON it prints, reproducibility, and bad arguments."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from cli_helpers import assert_one_line_error, invoke_daq
+from reference import EQ18_DAMPING_RATIOS
+
+from daq.store import Store
+
+REALISTIC_DAMPING = (0.010, 0.006, 0.004)
+
+
+def capture(store: Path, scenario: str, seed: int) -> str:
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--scenario", scenario, "--seed", str(seed), "--hits", "5",
+        "--time-scale", "0", "--store", str(store),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    return max(s.run_id for s in Store(store).list())
+
+
+def fit_json(store: Path, *args: str) -> list[dict]:
+    result = invoke_daq("fit", *args, "--json", "--store", str(store))
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)
+
+
+@pytest.fixture(scope="module")
+def seed_run(tmp_path_factory) -> tuple[Path, str]:
+    store = tmp_path_factory.mktemp("seed")
+    return store, capture(store, "seed", seed=5)
+
+
+def test_seed_run_least_squares_gives_the_eq18_damping_at_the_noise_level(seed_run):
+    store, run_id = seed_run
+    (info,) = fit_json(store, run_id)
+    assert info["run_id"] == run_id
+    assert info["method"] == "ls"
+    assert len(info["damping_matrix"]) == 3
+    zetas = [m["damping_ratio"] for m in info["modes"]]
+    assert zetas == pytest.approx(EQ18_DAMPING_RATIOS, rel=0.05)
+    floor = info["psi_noise_floor"]
+    assert floor is not None
+    assert info["psi"] < 2.0 * floor  # the fit leaves little more than the sensor noise
+
+
+def test_the_seed_ga_is_reproducible_and_reported_as_it_comes_out(seed_run):
+    store, run_id = seed_run
+    first = fit_json(store, run_id, "--method", "ga", "--seed", "3")[0]
+    again = fit_json(store, run_id, "--method", "ga", "--seed", "3", "--force")[0]
+    other = fit_json(store, run_id, "--method", "ga", "--seed", "4", "--force")[0]
+    assert first["damping_matrix"] == again["damping_matrix"]
+    assert other["damping_matrix"] != first["damping_matrix"]
+    assert first["n_evaluations"] >= 1500  # the seed's budget: 50 x 30 (+ the first generation)
+
+
+def test_realistic_run_gives_the_first_three_modal_dampings(tmp_path):
+    run_id = capture(tmp_path, "realistic", seed=6)
+    (info,) = fit_json(tmp_path, run_id)
+    zetas = [m["damping_ratio"] for m in info["modes"]]
+    assert zetas == pytest.approx(REALISTIC_DAMPING, rel=0.15)
+    assert info["stiffness"]["update"] == "scale on E"
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        ((), "name the runs"),
+        (("--method", "magic", "x"), "method"),
+        (("--stiffness", "wild", "x"), "stiffness"),
+        (("nosuchrun",), "nosuchrun"),
+    ],
+)
+def test_bad_fit_arguments_are_one_line(tmp_path, args, fragment):
+    assert_one_line_error(invoke_daq("fit", *args, "--store", str(tmp_path)), fragment)
