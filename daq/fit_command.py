@@ -36,6 +36,9 @@ def fit(
     stiffness: Annotated[
         str, typer.Option(metavar="<scale|none>", help="Scale E to the identified frequencies first.")
     ] = "scale",
+    functions: Annotated[
+        int, typer.Option(metavar="<1-10>", help="Ritz functions of the model: R is N x N.")
+    ] = 3,
     jobs: Annotated[
         int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
     ] = None,
@@ -56,7 +59,9 @@ def fit(
     if bool(runs) == all_runs:
         raise UserError("name the runs to fit, or give --all", exit_code=2)
     try:
-        options = FitOptions(method=method.lower(), seed=seed, psd=psd, stiffness=stiffness.lower())
+        options = FitOptions(
+            method=method.lower(), seed=seed, psd=psd, stiffness=stiffness.lower(), n_functions=functions
+        )
     except ValueError as exc:
         raise UserError(str(exc), exit_code=2) from None
     if jobs is not None and jobs < 1:
@@ -119,7 +124,17 @@ def print_fit(info: dict) -> None:
             spread = f" ± {std:.2g}" if std is not None else ""
             cells.append(f"{r[i][j]:9.4f}{spread:<10}{'' if determined else ' ?'}")
         typer.echo("    " + "  ".join(cells))
+    from_hits = unc.get("std_from_hits")
+    if from_hits:
+        ratios = [
+            f"{name} {h / f:.2g}" if h is not None and f else f"{name} -"
+            for name, h, f in zip(unc["names"], from_hits, unc["std"], strict=True)
+        ]
+        typer.echo("  spread of per-hit refits / sqrt(n) over the Fisher std: " + ", ".join(ratios))
     for k, mode in enumerate(info["modes"], 1):
+        if mode["frequency_hz"] is None or mode["damping_ratio"] is None:
+            typer.echo(f"  mode {k}: overdamped or unstable with this R (no oscillating pole)")
+            continue
         typer.echo(f"  mode {k}: {mode['frequency_hz']:.4f} Hz, damping {100 * mode['damping_ratio']:.3g} %")
     for direction in unc["null_directions"]:
         combo = " ".join(f"{w:+.2f} {name}" for name, w in direction["combination"].items() if abs(w) >= 0.05)

@@ -55,7 +55,8 @@ class FitOptions:
 
     @property
     def result_name(self) -> str:
-        return f"fit-{self.method}{'-psd' if self.psd else ''}"
+        size = "" if self.n_functions == 3 else f"-n{self.n_functions}"
+        return f"fit-{self.method}{'-psd' if self.psd else ''}{size}"
 
 
 def model_of(run: Run, n_functions: int) -> tuple[Any, str]:
@@ -117,6 +118,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     r = np.asarray(result.damping_matrix, dtype=float)
     jac, res = _jacobian(batched, residual_fn, r)
     ident = damping.identifiability(jac, res, damping.matrix_to_theta(r), n)
+    per_hit = _per_hit_std(data, r) if options.method in ("ls", "de") else None
     implied = damped_modes(model, r)
     summary = {
         "run_id": run.run_id,
@@ -132,7 +134,8 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
         "n_evaluations": int(result.n_evaluations),
         "seconds": time.perf_counter() - started,
         "modes": [
-            {"frequency_hz": float(f), "damping_ratio": float(z)}
+            # NaN pads a mode the fitted R makes overdamped: null in JSON.
+            {"frequency_hz": _num(f), "damping_ratio": _num(z)}
             for f, z in zip(implied.natural_frequencies_hz, implied.damping_ratios, strict=True)
         ],
         "start": {"damping_matrix": _matrix_json(start), "matching": _jsonable(matching)},
@@ -145,6 +148,9 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
             "determined": [bool(v) for v in ident.determined],
             "null_directions": _jsonable(ident.null_directions),
             "noise_std": _num(ident.noise_std),
+            # The Fisher figures checked another way: R refitted to each hit alone; the
+            # spread of those fits over sqrt(n_hits) is the uncertainty of the mean.
+            "std_from_hits": None if per_hit is None else [_num(v) for v in per_hit],
         },
         "options": {"method": options.method, "seed": options.seed, "psd": options.psd,
                     "n_functions": n, "stiffness": options.stiffness, "domain": options.domain},
@@ -159,6 +165,29 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     if not arrays["history"].size:
         arrays.pop("history")
     return summary, arrays
+
+
+def _per_hit_std(data: Any, r: np.ndarray) -> np.ndarray | None:
+    """(P,) standard deviation of each parameter of R over least-squares fits to each
+    accepted hit alone (started from the joint fit), divided by sqrt(n_hits); None
+    with fewer than 3 hits."""
+    from dataclasses import replace
+
+    from analysis import damping
+    from analysis.damping import bandlimited
+
+    n_hits = data.force_n.shape[0]
+    if n_hits < 3:
+        return None
+    thetas = []
+    for k in range(n_hits):
+        one = replace(data, force_n=data.force_n[k : k + 1], response_m_s2=data.response_m_s2[k : k + 1])
+        fit = damping.fit_least_squares(
+            lambda m, d=one: bandlimited.residuals(d, m), r,
+            batched_residuals=lambda m, d=one: bandlimited.batched_residuals(d, m),
+        )  # fmt: skip
+        thetas.append(damping.matrix_to_theta(np.asarray(fit.damping_matrix)))
+    return np.std(np.array(thetas), axis=0, ddof=1) / np.sqrt(n_hits)
 
 
 def _fixed(damping: Any, method: str, r: np.ndarray, objective: Any, n_eval: int, ok: bool, message: str):
@@ -264,7 +293,20 @@ def _num(value: float) -> float | None:
 
 
 def _jsonable(value: Any) -> Any:
-    return json.loads(json.dumps(value, default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v)))
+    """``value`` as plain JSON types; NaN and infinities (a model mode with no
+    identified partner, say) become null."""
+    plain = json.loads(json.dumps(value, default=lambda v: v.tolist() if hasattr(v, "tolist") else str(v)))
+
+    def clean(v: Any) -> Any:
+        if isinstance(v, float):
+            return v if np.isfinite(v) else None
+        if isinstance(v, list):
+            return [clean(x) for x in v]
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        return v
+
+    return clean(plain)
 
 
 def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = False) -> dict[str, Any]:

@@ -79,3 +79,19 @@ def test_realistic_run_gives_the_first_three_modal_dampings(tmp_path):
 )
 def test_bad_fit_arguments_are_one_line(tmp_path, args, fragment):
     assert_one_line_error(invoke_daq("fit", *args, "--store", str(tmp_path)), fragment)
+
+
+def test_any_model_size_and_the_per_hit_cross_check(seed_run):
+    store, run_id = seed_run
+    (info,) = fit_json(store, run_id, "--functions", "4")
+    assert len(info["damping_matrix"]) == 4
+    assert all(len(row) == 4 for row in info["damping_matrix"])
+    assert len(info["uncertainty"]["names"]) == 10  # 4 x 5 / 2 symmetric terms
+    (three,) = fit_json(store, run_id)
+    from_hits = three["uncertainty"]["std_from_hits"]
+    assert from_hits is not None
+    assert len(from_hits) == 6
+    # Refitting each hit alone gives a spread of the same order as the Fisher figure
+    # (both measure how noise moves R; they need not agree closely, see docs/damping.md).
+    for fisher, hits in zip(three["uncertainty"]["std"], from_hits, strict=True):
+        assert 0.1 < hits / fisher < 10

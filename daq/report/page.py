@@ -160,8 +160,8 @@ def _fit_section(fits: dict[str, dict], figures: dict[str, bytes]) -> list[str]:
             combo = " ".join(f"{w:+.2f} {k}" for k, w in direction["combination"].items() if abs(w) >= 0.05)
             parts.append(f"<p class='note'>Not determined by the data (? above): {_e(combo)}.</p>")
         mode_rows = [
-            [f"<td class='num'>{k}</td>", f"<td class='num'>{m['frequency_hz']:.4f}</td>",
-             f"<td class='num'>{100 * m['damping_ratio']:.3g}</td>"]
+            [f"<td class='num'>{k}</td>", f"<td class='num'>{_num(m['frequency_hz'], '.4f')}</td>",
+             f"<td class='num'>{_num(_pct(m['damping_ratio']), '.3g')}</td>"]
             for k, m in enumerate(s["modes"], 1)
         ]  # fmt: skip
         parts.append(_table(["mode", "frequency (Hz)", "damping (%)"], mode_rows))
