@@ -36,6 +36,13 @@ def fit(
     stiffness: Annotated[
         str, typer.Option(metavar="<scale|none>", help="Scale E to the identified frequencies first.")
     ] = "scale",
+    domain: Annotated[
+        str,
+        typer.Option(
+            metavar="<time|frequency>",
+            help="Fit the hits' time records (eq 17) or the analysed FRF (zoom, FRF-only runs: the FRF).",
+        ),
+    ] = "time",
     functions: Annotated[
         int, typer.Option(metavar="<1-10>", help="Ritz functions of the model: R is N x N.")
     ] = 3,
@@ -60,7 +67,12 @@ def fit(
         raise UserError("name the runs to fit, or give --all", exit_code=2)
     try:
         options = FitOptions(
-            method=method.lower(), seed=seed, psd=psd, stiffness=stiffness.lower(), n_functions=functions
+            method=method.lower(),
+            seed=seed,
+            psd=psd,
+            stiffness=stiffness.lower(),
+            n_functions=functions,
+            domain=domain.lower(),
         )
     except ValueError as exc:
         raise UserError(str(exc), exit_code=2) from None

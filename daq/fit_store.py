@@ -118,7 +118,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     r = np.asarray(result.damping_matrix, dtype=float)
     jac, res = _jacobian(batched, residual_fn, r)
     ident = damping.identifiability(jac, res, damping.matrix_to_theta(r), n)
-    per_hit = _per_hit_std(data, r) if options.method in ("ls", "de") else None
+    per_hit = _per_hit_std(data, r) if options.method in ("ls", "de") and domain == "time" else None
     implied = damped_modes(model, r)
     summary = {
         "run_id": run.run_id,
@@ -205,33 +205,47 @@ def _identified_poles(f_hz: np.ndarray, zeta: np.ndarray) -> np.ndarray:
 
 
 def _data(run: Run, analysis: dict[str, Any], model: Any, options: FitOptions) -> tuple[Any, str]:
-    """The accepted hits as the band-limited time-domain data of eq (17)."""
+    """The data the fit compares with: the accepted hits (band-limited, time domain,
+    eq 17), or the FRF the run's analysis stored (frequency domain, with the
+    exponential window put into the model). Zoom and FRF-only runs have no baseband
+    hits and always use the FRF."""
     from analysis.damping.bandlimited import BandLimitedData
+    from analysis.damping.windowed_frf import WindowedFrfData
 
     hits = run.hits
-    if options.domain != "time":
-        raise ValueError("the frequency-domain fit is not offered by daq fit yet; use the time domain")
-    if hits is None or hits.is_zoom or not hits.accepted.any():
-        raise ValueError(
-            "this run has no accepted baseband time records to fit (zoom and FRF-only runs cannot be)"
-        )
-    pick = hits.accepted
-    return BandLimitedData(model, hits.force_n[pick], hits.response_m_s2[pick], hits.sample_rate_hz), "time"
+    time_ok = hits is not None and not hits.is_zoom and hits.accepted.any()
+    if options.domain == "time" and time_ok:
+        pick = hits.accepted
+        return BandLimitedData(
+            model, hits.force_n[pick], hits.response_m_s2[pick], hits.sample_rate_hz
+        ), "time"
+    arrays = analysis["arrays"]
+    coherence = arrays.get("coherence")
+    pulse_s = max(0.0, -hits.start_s) if hits is not None else 0.0
+    data = WindowedFrfData(
+        model, arrays["frequency_hz"], np.atleast_2d(arrays["frf"])[0],
+        None if coherence is None else np.atleast_2d(coherence)[0],
+        float(analysis.get("added_decay_1_s") or 0.0), pulse_s,
+    )  # fmt: skip
+    return data, "frequency"
 
 
 def _objective(data: Any, domain: str):
-    """Psi (eq 17) and the residuals with the band-limited model response
-    (analysis/damping/bandlimited.py), single and batched."""
-    from analysis.damping import bandlimited
+    """Psi (eq 17's form) and the residuals, single and batched: band-limited time
+    records (analysis/damping/bandlimited.py) or the windowed FRF
+    (analysis/damping/windowed_frf.py)."""
+    from analysis.damping import bandlimited, windowed_frf
+
+    module = bandlimited if domain == "time" else windowed_frf
 
     def objective(r: np.ndarray) -> np.ndarray:
-        return bandlimited.psi(data, r)
+        return module.psi(data, r)
 
     def residual_fn(r: np.ndarray) -> np.ndarray:
-        return bandlimited.residuals(data, r)
+        return module.residuals(data, r)
 
     def batched(r: np.ndarray) -> np.ndarray:
-        return bandlimited.batched_residuals(data, r)
+        return module.batched_residuals(data, r)
 
     return objective, residual_fn, batched
 
@@ -314,9 +328,11 @@ def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = 
     store = Store(store_dir)
     path = store.resolve(run_id)
     analysis = analyze_stored(store_dir, path.stem, AnalysisOptions())
+    stored_analysis = store.read_result(path.stem, ANALYSIS_RESULT)
+    analysis["arrays"] = {k: v for k, v in stored_analysis.items() if isinstance(v, np.ndarray)}
     stat = path.stat()
     identity = {
-        "analysis": analysis.get("modes"), "options": asdict(options), "software": SOFTWARE,
+        "analysis": stored_analysis.get("cache_key"), "options": asdict(options), "software": SOFTWARE,
         "fit_version": FIT_VERSION, "size": stat.st_size, "mtime_ns": stat.st_mtime_ns,
     }  # fmt: skip
     key = hashlib.sha256(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()
