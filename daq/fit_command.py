@@ -43,6 +43,10 @@ def fit(
             help="Fit the hits' time records (eq 17) or the analysed FRF (zoom, FRF-only runs: the FRF).",
         ),
     ] = "time",
+    starts: Annotated[
+        int,
+        typer.Option(metavar="<0-100>", help="Also fit from this many random starts: is the optimum global?"),
+    ] = 0,
     functions: Annotated[
         int, typer.Option(metavar="<1-10>", help="Ritz functions of the model: R is N x N.")
     ] = 3,
@@ -73,6 +77,7 @@ def fit(
             stiffness=stiffness.lower(),
             n_functions=functions,
             domain=domain.lower(),
+            starts=starts,
         )
     except ValueError as exc:
         raise UserError(str(exc), exit_code=2) from None
@@ -136,6 +141,13 @@ def print_fit(info: dict) -> None:
             spread = f" ± {std:.2g}" if std is not None else ""
             cells.append(f"{r[i][j]:9.4f}{spread:<10}{'' if determined else ' ?'}")
         typer.echo("    " + "  ".join(cells))
+    check = info.get("multi_start")
+    if check:
+        verdict = "a better optimum exists" if check["better_psi_found"] else "no better optimum found"
+        typer.echo(
+            f"  {check['starts']} random starts: {check['reached_same_psi']} reach the same Psi, {verdict} "
+            f"(best {check['best_psi']:.4g})"
+        )
     from_hits = unc.get("std_from_hits")
     if from_hits:
         ratios = [

@@ -42,6 +42,7 @@ class FitOptions:
     n_functions: int = 3
     stiffness: str = "scale"
     domain: str = "time"
+    starts: int = 0
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -52,6 +53,8 @@ class FitOptions:
             raise ValueError(f"domain must be time or frequency, got {self.domain!r}")
         if not 1 <= self.n_functions <= 10:
             raise ValueError(f"n_functions must be 1..10, got {self.n_functions}")
+        if not 0 <= self.starts <= 100:
+            raise ValueError(f"starts must be 0..100, got {self.starts}")
 
     @property
     def result_name(self) -> str:
@@ -119,6 +122,9 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     jac, res = _jacobian(batched, residual_fn, r)
     ident = damping.identifiability(jac, res, damping.matrix_to_theta(r), n)
     per_hit = _per_hit_std(data, r) if options.method in ("ls", "de") and domain == "time" else None
+    global_check = (
+        _multi_start_check(residual_fn, batched, r, result.psi, options) if options.starts else None
+    )
     implied = damped_modes(model, r)
     summary = {
         "run_id": run.run_id,
@@ -139,6 +145,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
             for f, z in zip(implied.natural_frequencies_hz, implied.damping_ratios, strict=True)
         ],
         "start": {"damping_matrix": _matrix_json(start), "matching": _jsonable(matching)},
+        "multi_start": global_check,
         "stiffness": stiffness_info,
         "model": {"ritz_functions": n, "beam": beam_origin},
         "uncertainty": {
@@ -165,6 +172,31 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     if not arrays["history"].size:
         arrays.pop("history")
     return summary, arrays
+
+
+def _multi_start_check(
+    residual_fn: Any, batched: Any, r: np.ndarray, psi: float, options: FitOptions
+) -> dict:
+    """Local fits from ``options.starts`` random starts beside the chosen fit: how many
+    reach its Psi (to 0.1 %), whether any does better, and the largest distance of the
+    equally good ones from its R (a flat direction shows as equal Psi, other R)."""
+    from analysis import damping
+
+    fits = damping.multi_start(residual_fn, batched, r.shape[0], starts=options.starts, seed=options.seed)
+    psis = np.array([f.psi for f in fits])
+    same = np.abs(psis - psi) <= 1e-3 * psi
+    distances = [
+        float(np.linalg.norm(np.asarray(f.damping_matrix) - r) / np.linalg.norm(r))
+        for f, ok in zip(fits, same, strict=True)
+        if ok
+    ]
+    return {
+        "starts": int(options.starts),
+        "reached_same_psi": int(same.sum()),
+        "better_psi_found": bool(np.any(psis < psi * (1 - 1e-3))),
+        "best_psi": float(psis.min()),
+        "largest_relative_distance_at_same_psi": max(distances) if distances else None,
+    }
 
 
 def _per_hit_std(data: Any, r: np.ndarray) -> np.ndarray | None:

@@ -129,3 +129,13 @@ def test_an_imported_frf_run_is_fitted_in_the_frequency_domain(tmp_path):
     assert info["domain"] == "frequency"
     zetas = [m["damping_ratio"] for m in info["modes"]]
     assert zetas == pytest.approx(EQ18_DAMPING_RATIOS, rel=1e-3)
+
+
+def test_random_starts_find_no_better_optimum_on_the_seed_run(seed_run):
+    store, run_id = seed_run
+    (info,) = fit_json(store, run_id, "--starts", "4")
+    check = info["multi_start"]
+    assert check["starts"] == 4
+    assert not check["better_psi_found"]
+    assert check["reached_same_psi"] >= 1
+    assert check["best_psi"] == pytest.approx(info["psi"], rel=1e-3)
