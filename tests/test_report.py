@@ -53,7 +53,11 @@ def test_report_of_an_frf_only_run_has_no_hits_figure(tmp_path):
     result = invoke_daq("report", run.run_id, "-o", str(tmp_path / "r"), "--store", str(tmp_path))
     assert result.returncode == 0, result.stderr
     assert not (tmp_path / "r" / "hits.png").exists()
-    assert (tmp_path / "r" / "index.html").read_text().count("data:image/png;base64,") == 3
+    assert not (tmp_path / "r" / "response_fit.png").exists()  # no time records to overlay
+    page = (tmp_path / "r" / "index.html").read_text()
+    # FRF, stability, synthesis, and the convergence of the FRF-domain damping fit.
+    assert page.count("data:image/png;base64,") == 4
+    assert "Damping matrix" in page
 
 
 def test_report_of_an_unknown_run_is_one_line(tmp_path):
