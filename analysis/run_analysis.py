@@ -21,6 +21,8 @@ from analysis.windows import WindowSpec, added_decay_rate, correct_pole
 ESTIMATORS = ("h1", "h2", "hv")
 #: A mode of one hit is the run's mode when its frequency is this close (relative).
 HIT_MATCH_TOLERANCE = 0.03
+#: A mode found for a frequency of interest must lie this close to it (relative).
+FREQUENCY_OF_INTEREST_TOLERANCE = 0.05
 #: Consecutive LSCF orders each hit is fitted at for the scatter (their median is kept).
 SCATTER_ORDERS = 11
 
@@ -151,6 +153,14 @@ def _lines(frequency_hz: np.ndarray, options: AnalysisOptions) -> np.ndarray:
 
 def _identify(frequency_hz, frf, coherence, source, options, decay) -> RunAnalysis:
     keep = _lines(frequency_hz, options) & np.all(np.isfinite(frf), axis=0)
+    if options.frequencies_hz is not None:
+        low, high = float(frequency_hz[keep].min()), float(frequency_hz[keep].max())
+        outside = [f for f in options.frequencies_hz if not low <= f <= high]
+        if outside:
+            raise ValueError(
+                f"frequencies {', '.join(f'{f:g}' for f in outside)} Hz lie outside the analysed "
+                f"lines ({low:g}-{high:g} Hz)"
+            )
     modal = identify_modes(
         frequency_hz[keep],
         frf[:, keep],
@@ -159,6 +169,10 @@ def _identify(frequency_hz, frf, coherence, source, options, decay) -> RunAnalys
     )
     modes = []
     for mode in modal.modes:
+        if options.frequencies_hz is not None and not any(
+            abs(mode.frequency_hz - f) <= FREQUENCY_OF_INTEREST_TOLERANCE * f for f in options.frequencies_hz
+        ):
+            continue  # the nearest cluster to a frequency of interest, but not near it
         f_true, zeta_true = correct_pole(np.array([mode.frequency_hz]), np.array([mode.damping_ratio]), decay)
         modes.append(
             ModeEstimate(

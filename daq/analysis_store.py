@@ -72,11 +72,26 @@ def analyze(run: Run, options: AnalysisOptions) -> tuple[RunAnalysis, dict[str, 
     elif run.measured_frfs is not None or run.analyzer is not None:
         source = "measured_frf" if run.measured_frfs is not None else "analyzer"
         frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
-        result = analyze_frfs(frfs.frequency_hz, frfs.frf, frfs.coherence, source, options)
-        notes["windows"] = {"from": "none: FRFs analysed as stored"}
+        decay, origin = _frf_window_decay(run, source)
+        result = analyze_frfs(frfs.frequency_hz, frfs.frf, frfs.coherence, source, options, decay)
+        notes["windows"] = {"from": origin}
     else:
         raise ValueError("the run has no accepted hit and no FRF to analyse")
     return result, notes
+
+
+def _frf_window_decay(run: Run, source: str) -> tuple[float, str]:
+    """(1/tau of the exponential window the stored FRFs went through, where that came
+    from). Unknown windows give 0 and say so: the damping then includes them."""
+    if source == "analyzer":
+        _, response_window, origin = window_specs(run)
+        if response_window.kind == "exponential":
+            return 1.0 / float(response_window.exp_decay_s), "analyzer settings"
+        return 0.0, origin
+    imported = run.provenance.get("imported_from", {})
+    if isinstance(imported, dict) and imported.get("exp_decay_s"):
+        return 1.0 / float(imported["exp_decay_s"]), "the imported file's exponential window"
+    return 0.0, "unknown: the damping includes any window the source applied"
 
 
 def cache_key(path: Path, options: AnalysisOptions) -> str:

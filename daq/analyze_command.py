@@ -96,27 +96,32 @@ def analyze(
             estimator=estimator.lower(),
         )  # fmt: skip
     except ValueError as exc:
-        raise UserError(str(exc), exit_code=2) from None
+        # The options' names as the user typed them.
+        text = str(exc).replace("max_order", "--max-order").replace("estimator", "--estimator")
+        raise UserError(text.replace("band ", "--band "), exit_code=2) from None
     if jobs is not None and jobs < 1:
         raise UserError("--jobs must be at least 1", exit_code=2)
     store_dir, _ = resolve_store_dir(store)
     the_store = Store(store_dir)
     try:
         if all_runs:
-            ids = [s.run_id for s in the_store.list() if s.error is None]
+            # Every run file, damaged ones too: they fail with a line, never silently.
+            ids = [s.file_name.removesuffix(".h5") for s in the_store.list()]
         else:
             ids = list(dict.fromkeys(the_store.resolve(name).stem for name in runs or []))
     except StoreError as exc:
         raise UserError(str(exc)) from None
     if not ids:
         raise UserError(f"no runs to analyse in {store_dir}")
-    results, failures = run_all(store_dir, ids, options, force, jobs)
+    results, failures = run_all(store_dir, ids, options, force, jobs, quiet=len(ids) == 1)
     if json_output:
         typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
     else:
         for run_id in ids:
             if run_id in results:
                 _print(results[run_id])
+    if failures and len(ids) == 1:
+        raise UserError(f"run {ids[0]}: {failures[0][1]}")
     if failures:
         raise UserError(f"{len(failures)} of {len(ids)} runs could not be analysed")
 
@@ -129,10 +134,12 @@ def run_all(
     jobs: int | None,
     worker: Any = None,
     label: str = "analysing",
-) -> tuple[dict[str, dict], list[str]]:
+    quiet: bool = False,
+) -> tuple[dict[str, dict], list[tuple[str, str]]]:
     """Run ``worker(store_dir, run_id, options, force)`` (default: analyze_one) on
     ``ids`` in worker processes; (summaries by run id, failed ids). A worker returns a
-    summary dict or a one-line reason; failures are reported on stderr."""
+    summary dict or a one-line reason; failures, (run id, reason), are reported on
+    stderr unless ``quiet`` (one run: the caller makes its reason the one error line)."""
     worker = worker or analyze_one
     command = "fit" if worker is not analyze_one else "analyze"
     from rich.console import Console
@@ -140,7 +147,7 @@ def run_all(
 
     workers = min(jobs or os.cpu_count() or 1, len(ids))
     results: dict[str, dict] = {}
-    failures: list[str] = []
+    failures: list[tuple[str, str]] = []
     console = Console(stderr=True)
     columns = (TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True, disable=not console.is_terminal) as progress:
@@ -148,8 +155,9 @@ def run_all(
 
         def done(run_id: str, outcome: dict | str) -> None:
             if isinstance(outcome, str):
-                sys.stderr.write(f"daq {command}: run {run_id}: {outcome}\n")
-                failures.append(run_id)
+                if not quiet:
+                    sys.stderr.write(f"daq {command}: run {run_id}: {outcome}\n")
+                failures.append((run_id, outcome))
             else:
                 results[run_id] = outcome
             progress.advance(task)
@@ -190,6 +198,9 @@ def _print(info: dict) -> None:
         info["source"], info["source"]
     )
     typer.echo(f"Run {info['run_id']} ({info['kind']}, {source}){cached}: {len(info['modes'])} modes")
+    windows = str(info.get("windows", {}).get("from", ""))
+    if windows.startswith("unknown"):
+        typer.echo(f"  caution: windows {windows}")
     for k, mode in enumerate(info["modes"], 1):
         zeta = mode["damping_ratio"]
         f_std, z_std = mode["frequency_std_hz"], mode["damping_std"]

@@ -12,6 +12,12 @@ import typer
 from daq.errors import UserError
 from daq.runs_command import JsonOption, StoreOption
 
+#: FitOptions' field names as the options a user types.
+OPTION_NAMES = (
+    ("n_functions", "--functions"), ("method", "--method"), ("stiffness", "--stiffness"),
+    ("domain", "--domain"), ("starts", "--starts"),
+)  # fmt: skip
+
 
 def register(app: typer.Typer) -> None:
     app.command(name="fit")(fit)
@@ -80,27 +86,35 @@ def fit(
             starts=starts,
         )
     except ValueError as exc:
-        raise UserError(str(exc), exit_code=2) from None
+        text = str(exc)
+        for name, option in OPTION_NAMES:
+            text = text.replace(f"{name} must", f"{option} must")
+        raise UserError(text, exit_code=2) from None
     if jobs is not None and jobs < 1:
         raise UserError("--jobs must be at least 1", exit_code=2)
     store_dir, _ = resolve_store_dir(store)
     the_store = Store(store_dir)
     try:
         if all_runs:
-            ids = [s.run_id for s in the_store.list() if s.error is None]
+            # Every run file, damaged ones too: they fail with a line, never silently.
+            ids = [s.file_name.removesuffix(".h5") for s in the_store.list()]
         else:
             ids = list(dict.fromkeys(the_store.resolve(name).stem for name in runs or []))
     except StoreError as exc:
         raise UserError(str(exc)) from None
     if not ids:
         raise UserError(f"no runs to fit in {store_dir}")
-    results, failures = run_all(store_dir, ids, options, force, jobs, worker=fit_one, label="fitting")
+    results, failures = run_all(
+        store_dir, ids, options, force, jobs, quiet=len(ids) == 1, worker=fit_one, label="fitting"
+    )
     if json_output:
         typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
     else:
         for run_id in ids:
             if run_id in results:
                 print_fit(results[run_id])
+    if failures and len(ids) == 1:
+        raise UserError(f"run {ids[0]}: {failures[0][1]}")
     if failures:
         raise UserError(f"{len(failures)} of {len(ids)} runs could not be fitted")
 
@@ -120,14 +134,37 @@ def fit_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | s
         return f"numerical failure ({type(exc).__name__}: {' '.join(str(exc).split())})"
 
 
+def cautions(info: dict) -> list[str]:
+    """What a reader of the fit must not miss: a fit far above the noise, a matrix
+    that is not dissipative, modes it makes unstable or overdamped."""
+    out = []
+    floor = info.get("psi_noise_floor")
+    if floor and info["psi"] > 3 * floor:
+        out.append(
+            f"Psi is {info['psi'] / floor:.0f}x the noise floor: the model does not explain the data "
+            "(missing modes, wrong beam, or a local optimum; try --starts or --method de)"
+        )
+    diag = [info["damping_matrix"][i][i] for i in range(len(info["damping_matrix"]))]
+    if any(d < 0 for d in diag):
+        out.append("R has a negative diagonal term: not dissipative (--psd keeps R = L L^T)")
+    zetas = [m["damping_ratio"] for m in info["modes"]]
+    if any(z is None or z <= 0 for z in zetas):
+        out.append("with this R some mode is unstable, undamped or overdamped")
+    return out
+
+
 def print_fit(info: dict) -> None:
     cached = " (cached)" if info.get("cached") else ""
     floor = info.get("psi_noise_floor")
     floor_text = f" (noise floor {floor:.3g})" if floor is not None else ""
+    domain = "time records" if info.get("domain") == "time" else "FRF"
+    psd = " (R = L L^T)" if info["psd"] else ""
     typer.echo(
-        f"Run {info['run_id']}: {info['method']}{' (R = L L^T)' if info['psd'] else ''}{cached}, "
+        f"Run {info['run_id']}: {info['method']} on the {domain}{psd}{cached}, "
         f"Psi = {info['psi']:.4g}{floor_text}, {info['n_evaluations']} evaluations"
     )
+    for caution in cautions(info):
+        typer.echo(f"  caution: {caution}")
     unc = info["uncertainty"]
     by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
     r = info["damping_matrix"]

@@ -92,10 +92,17 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
         raise ValueError("the run's analysis found no mode with a damping ratio to start from")
     stiffness_info: dict[str, Any] = {"update": "none"}
     if options.stiffness == "scale":
-        model, scale, info = damping.update_stiffness(model, ident_f[usable])
+        try:
+            model, scale, info = damping.update_stiffness(model, ident_f[usable])
+        except ValueError as exc:
+            raise ValueError(
+                f"{exc}: the run's modes do not look like this beam's ({beam_origin}); "
+                "check its test article, or give --stiffness none"
+            ) from None
         stiffness_info = {"update": "scale on E", "scale": float(scale), **_jsonable(info)}
     start, matching = damping.proportional_estimate(model, ident_f[usable], ident_z[usable])
     data, domain = _data(run, analysis, model, options)
+    _check_band(run, data, domain, model)
     objective, residual_fn, batched = _objective(data, domain)
     n = options.n_functions
     if options.method == "modal":
@@ -222,6 +229,27 @@ def _per_hit_std(data: Any, r: np.ndarray) -> np.ndarray | None:
     return np.std(np.array(thetas), axis=0, ddof=1) / np.sqrt(n_hits)
 
 
+def _check_band(run: Run, data: Any, domain: str, model: Any) -> None:
+    """ValueError unless every mode of the model lies in the measured band: a mode
+    outside it leaves its part of R to chance (a zoom band around one mode gave
+    -99 % damping on the others)."""
+    from analysis.damping import undamped_modes
+
+    model_hz = undamped_modes(model)[0] / (2 * np.pi)
+    if domain == "time":
+        low, high = 0.0, run.hits.sample_rate_hz / 2.56
+    else:
+        low, high = float(data.frequency_hz.min()), float(data.frequency_hz.max())
+    outside = model_hz[(model_hz < low) | (model_hz > high)]
+    if outside.size:
+        shown = ", ".join(f"{f:.4g}" for f in outside)
+        raise ValueError(
+            f"the data cover {low:.4g}-{high:.4g} Hz but the {model_hz.size}-function model has modes at "
+            f"{shown} Hz outside it; capture a band holding them all or give --functions "
+            f"{model_hz.size - outside.size}" + ("" if model_hz.size - outside.size else " (none would fit)")
+        )
+
+
 def _fixed(damping: Any, method: str, r: np.ndarray, objective: Any, n_eval: int, ok: bool, message: str):
     """A FitResult for a matrix computed directly (not by minimising Psi)."""
     psi = float(objective(r[None])[0])
@@ -253,7 +281,11 @@ def _data(run: Run, analysis: dict[str, Any], model: Any, options: FitOptions) -
         ), "time"
     arrays = analysis["arrays"]
     coherence = arrays.get("coherence")
-    pulse_s = max(0.0, -hits.start_s) if hits is not None else 0.0
+    imported = run.provenance.get("imported_from", {})
+    if hits is not None:
+        pulse_s = max(0.0, -hits.start_s)
+    else:  # an FRF-only run: the pulse time its source recorded, if any
+        pulse_s = float(imported.get("pulse_s") or 0.0) if isinstance(imported, dict) else 0.0
     data = WindowedFrfData(
         model, arrays["frequency_hz"], np.atleast_2d(arrays["frf"])[0],
         None if coherence is None else np.atleast_2d(coherence)[0],

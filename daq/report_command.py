@@ -23,6 +23,9 @@ def report(
         Path | None,
         typer.Option("--output", "-o", metavar="<dir>", help="Folder to write [default: ./report-<run id>]."),
     ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Write over an earlier report in that folder.")
+    ] = False,
     store: StoreOption = None,
 ) -> None:
     """Write a run's report: hits, FRF and coherence, stability diagram, synthesis, Table 2.
@@ -46,6 +49,10 @@ def report(
     folder = output if output is not None else Path(f"report-{run_id}")
     if folder.exists() and not folder.is_dir():
         raise UserError(f"{folder} exists and is not a folder")
+    if (folder / "index.html").exists() and not force:
+        raise UserError(
+            f"{folder} already holds a report; give --force to write over it or -o another folder"
+        )
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

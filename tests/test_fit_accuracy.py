@@ -139,3 +139,27 @@ def test_random_starts_find_no_better_optimum_on_the_seed_run(seed_run):
     assert not check["better_psi_found"]
     assert check["reached_same_psi"] >= 1
     assert check["best_psi"] == pytest.approx(info["psi"], rel=1e-3)
+
+
+def test_an_exported_analyzer_frf_keeps_its_window_through_uff(seed_run, tmp_path):
+    """The analyzer's FRF went through the exponential window: exported to UFF and
+    imported alone, its damping must come out as the beam's, not the window's."""
+    import warnings
+
+    import pyuff
+
+    store, run_id = seed_run
+    whole = tmp_path / "whole.uff"
+    assert invoke_daq("export", run_id, "-f", "uff", "-o", str(whole), "--store", str(store)).returncode == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        frf_sets = [s for s in pyuff.UFF(str(whole)).read_sets() if s["func_type"] in (4, 6)]
+        pyuff.UFF(str(tmp_path / "frf.uff")).write_sets(frf_sets, mode="add")
+    other = tmp_path / "other"
+    assert invoke_daq("import", str(tmp_path / "frf.uff"), "--store", str(other)).returncode == 0
+    result = invoke_daq("analyze", "latest", "--json", "--store", str(other))
+    assert result.returncode == 0, result.stderr
+    (info,) = json.loads(result.stdout)
+    assert info["source"] == "measured_frf"
+    zetas = [m["damping_ratio"] for m in info["modes"][:3]]
+    assert zetas == pytest.approx(EQ18_DAMPING_RATIOS, rel=0.05)

@@ -297,6 +297,10 @@ def _frfs(path: Path, name: str, frf_recs: list[_Record], coh_recs: list[_Record
         else:
             coherence = np.stack([rec.data.real for rec in coh_recs])
     details.update(n_frf=len(frf_recs), n_lines=int(freq.size), frf_units=sorted(set(units)))
+    # The exponential window the FRFs went through, when the file says (daq export does).
+    decay, pulse = _float(frf_recs[0].keys.get("exp_decay_s")), _float(frf_recs[0].keys.get("pulse_s"))
+    if math.isfinite(decay) and decay > 0:
+        details.update(exp_decay_s=decay, pulse_s=pulse if math.isfinite(pulse) else 0.0)
     return make_frfs(path, freq, frf, coherence, labels)
 
 

@@ -106,13 +106,31 @@ def _frf_sets(run: Run) -> list[dict]:
             continue
         even = _even_axis(frfs.frequency_hz)
         axis, frf_kinds, coh_kinds = frfs.frequency_hz, ((12, "m/s^2"), (13, "N")), ((0, "NONE"), (0, "NONE"))
+        windows = _frf_windows(run, tag)
         for i in range(frfs.n_frf):
-            head = (_id_text(frfs.labels[i]), f"{run.run_id} {tag}", run.start_time, "NONE", "NONE")
+            head = (_id_text(frfs.labels[i]), f"{run.run_id} {tag}", run.start_time, windows, "NONE")
             frf_sets.append(_dset(FUNC_FRF, i, head, 2, even, (18, "Hz"), *frf_kinds, frfs.frf[i], axis))
             if frfs.coherence is not None:
                 coh = frfs.coherence[i]
                 coh_sets.append(_dset(FUNC_COHERENCE, i, head, 2, even, (18, "Hz"), *coh_kinds, coh, axis))
     return frf_sets + coh_sets
+
+
+def _frf_windows(run: Run, tag: str) -> str:
+    """ID line 4 of an FRF record: the exponential window the FRF went through
+    (``exp_decay_s=... pulse_s=...``), read back by read_uff so that the analysis can
+    take the window's damping out; "NONE" when it is not known."""
+    decay = pulse = None
+    if tag == "analyzer" and run.instrument is not None:
+        setup = run.instrument.settings.get("accelerometer", {})
+        if isinstance(setup, dict) and setup.get("window") == "EXPO" and setup.get("exp_decay_s"):
+            decay = float(setup["exp_decay_s"])
+            pulse = max(0.0, -run.hits.start_s) if run.hits is not None else 0.0
+    elif tag == "measured":
+        source = run.provenance.get("imported_from", {})
+        if isinstance(source, dict) and source.get("exp_decay_s"):
+            decay, pulse = float(source["exp_decay_s"]), float(source.get("pulse_s") or 0.0)
+    return "NONE" if decay is None else f"exp_decay_s={decay!r} pulse_s={pulse!r}"
 
 
 def _dset(func, number, ids, rsp_node, even, abscissa, ordinate, denominator, data, x) -> dict:

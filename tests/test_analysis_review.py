@@ -1,0 +1,86 @@
+"""What a new user's trial of analyze, fit and report found: one error line for one
+failing run, no fit of a band that misses the model's modes, no report written
+over another without --force, frequencies of interest that are really near."""
+
+from __future__ import annotations
+
+import numpy as np
+from cli_helpers import assert_one_line_error, invoke_daq
+from store.store_helpers import make_frf, make_run
+
+from daq.store import Hits, Store, seal
+
+
+def all_rejected_run():
+    run = make_run(kind="captured")
+    h = run.hits
+    run.hits = Hits(
+        h.force_n, h.response_m_s2, h.sample_rate_hz, h.start_s, h.center_hz,
+        np.zeros(h.n_hits, bool), ["double impact"] * h.n_hits, h.overload, h.peak_force_n,
+        h.timestamp_utc, h.checks,
+    )  # fmt: skip
+    return run
+
+
+def test_one_failing_run_is_one_error_line(tmp_path):
+    run = all_rejected_run()
+    seal(run, tmp_path)
+    for command in ("analyze", "fit"):
+        result = invoke_daq(command, run.run_id, "--store", str(tmp_path))
+        assert_one_line_error(result, run.run_id, "no accepted hit")
+
+
+def test_all_reports_a_damaged_run_instead_of_skipping_it(tmp_path):
+    good = make_run(kind="imported", measured=make_frf(n_frf=1))
+    seal(good, tmp_path)
+    damaged = tmp_path / "20261123T130000.000Z-deadbeef.h5"
+    data = bytearray((tmp_path / f"{good.run_id}.h5").read_bytes())
+    data[len(data) // 2 : len(data) // 2 + 64] = bytes(64)
+    damaged.write_bytes(bytes(data))
+    result = invoke_daq("analyze", "--all", "--store", str(tmp_path))
+    assert result.returncode == 1
+    assert "20261123T130000.000Z-deadbeef" in result.stderr
+
+
+def test_a_fit_needs_every_model_mode_inside_the_band(tmp_path):
+    f = np.linspace(20.0, 50.0, 301)  # a zoom-like band around the second mode only
+    w = 2 * np.pi * f
+    wn = 2 * np.pi * 35.0
+    h = -(w**2) / (wn**2 - w**2 + 2j * 0.01 * wn * w)
+    from daq.store import MeasuredFrf
+
+    run = make_run(kind="imported", measured=MeasuredFrf(f, h[np.newaxis, :], None, ["H"]))
+    seal(run, tmp_path)
+    result = invoke_daq("fit", run.run_id, "--store", str(tmp_path))
+    assert_one_line_error(result, "--stiffness none")  # 35 Hz is no mode of this beam
+    result = invoke_daq("fit", run.run_id, "--stiffness", "none", "--store", str(tmp_path))
+    assert_one_line_error(result, "outside it", "--functions")
+
+
+def test_a_report_is_not_written_over_another_without_force(tmp_path):
+    run = make_run(kind="imported", measured=make_frf(n_frf=1))
+    seal(run, tmp_path)
+    out = tmp_path / "r"
+    out.mkdir()
+    (out / "index.html").write_text("my notes\n")
+    result = invoke_daq("report", run.run_id, "-o", str(out), "--store", str(tmp_path))
+    assert_one_line_error(result, "--force")
+    assert (out / "index.html").read_text() == "my notes\n"
+
+
+def test_frequencies_of_interest_outside_the_lines_are_refused(tmp_path):
+    f = np.linspace(0.0, 200.0, 801)
+    w = 2 * np.pi * f
+    wn = 2 * np.pi * 40.0
+    h = -(w**2) / (wn**2 - w**2 + 2j * 0.01 * wn * w)
+    from daq.store import MeasuredFrf
+
+    run = make_run(kind="imported", measured=MeasuredFrf(f, h[np.newaxis, :], None, ["H"]))
+    seal(run, tmp_path)
+    assert_one_line_error(
+        invoke_daq("analyze", run.run_id, "--frequencies", "500", "--store", str(tmp_path)), "outside"
+    )
+    result = invoke_daq("analyze", run.run_id, "--frequencies", "120", "--json", "--store", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    assert '"modes": []' in result.stdout  # no mode near 120 Hz: none is passed off as one
+    assert Store(tmp_path).list()[0].run_id == run.run_id
