@@ -197,7 +197,10 @@ def _print(info: dict) -> None:
     source = {"hits": f"{info['n_averages']} hits, {info.get('estimator', '')}".rstrip(", ")}.get(
         info["source"], info["source"]
     )
-    typer.echo(f"Run {info['run_id']} ({info['kind']}, {source}){cached}: {len(info['modes'])} modes")
+    n_modes = len(info["modes"])
+    typer.echo(
+        f"Run {info['run_id']} ({info['kind']}, {source}){cached}: {n_modes} mode{'s' * (n_modes != 1)}"
+    )
     windows = str(info.get("windows", {}).get("from", ""))
     if windows.startswith("unknown"):
         typer.echo(f"  caution: windows {windows}")
@@ -214,10 +217,12 @@ def _print(info: dict) -> None:
         )
     rows = [r for r in info["table2"]["rows"] if r["identified_hz"] is not None]
     if rows:
-        typer.echo(f"  Table 2 ({info['table2']['beam']}):  mode  Ritz Hz  exact Hz  run Hz  vs exact")
+        typer.echo(f"  Table 2, beam: {info['table2']['beam']}")
+        typer.echo("    mode   Ritz Hz  exact Hz   run Hz  run vs exact  damping")
         for r in rows:
             ritz = f"{r['ritz_hz']:.3f}" if r["ritz_hz"] is not None else "-"
+            zeta = f"{100 * r['damping_ratio']:.3g} %" if r["damping_ratio"] is not None else "-"
             typer.echo(
                 f"    {r['mode']:>4}  {ritz:>8}  {r['exact_hz']:>8.3f}  {r['identified_hz']:>7.3f}  "
-                f"{r['difference_exact_pct']:+.2f} %"
+                f"{r['difference_exact_pct']:>+10.2f} %  {zeta:>7}"
             )

@@ -201,6 +201,11 @@ class Capture:
         yield Configured(self.actual)
         range_v = self.actual.hammer.range_v
         range_n = None if range_v is None else range_v / self.actual.hammer.sensitivity_v_per_eu
+        if self.actual.center_hz:
+            # In zoom the record is the narrow band mixed down: its peak is a small part
+            # of the pulse the input range saw, so "too weak" would fail every hit (and
+            # lowering the range then overloads). The overload flag still judges range.
+            range_n = None
         dsa.start()
         while self.accepted < self.hits_wanted:
             if self.stop_after_hits is not None and len(self.hits) >= self.stop_after_hits:

@@ -112,7 +112,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     elif options.method == "ls":
         result = damping.fit_least_squares(residual_fn, start, psd=options.psd, batched_residuals=batched)
     elif options.method == "ga":
-        result = damping.fit_ga(objective, n, seed=options.seed)
+        result = damping.fit_ga(objective, n, seed=options.seed, psd=options.psd)
     elif options.method == "de":
         result = damping.fit_de(objective, n, seed=options.seed, psd=options.psd)
     else:

@@ -34,6 +34,7 @@ def report(
     """
     from analysis.run_analysis import AnalysisOptions
     from daq.analysis_store import RESULT_NAME, analyze_stored
+    from daq.fit_store import FitOptions
     from daq.report import figures, page
     from daq.store import Store, StoreError, resolve_store_dir
 
@@ -65,7 +66,9 @@ def report(
     if the_run.hits is not None:
         pngs["hits"] = figures.hits_figure(the_run)
     fits = stored_fits(the_store, run_id)
-    with_response = [f for f in fits.values() if "model_response" in f]
+    # The default least-squares fit when there is one, whatever else was tried.
+    order = sorted(fits, key=lambda name: name != FitOptions().result_name)
+    with_response = [fits[name] for name in order if "model_response" in fits[name]]
     if with_response and the_run.hits is not None:
         pngs["response_fit"] = figures.response_fit_figure(the_run, with_response[0])
     if any("history" in f for f in fits.values()):

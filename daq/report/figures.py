@@ -114,7 +114,8 @@ def stability_figure(result: dict[str, Any]) -> bytes:
         twin.semilogy(f, np.abs(h), color="#555555", lw=0.7, alpha=0.6)
     twin.set_ylabel("|H| ((m/s²)/N)")
     ax.set_xlim(f[0], f[-1])
-    ax.legend(loc="upper left", fontsize=7)
+    # Below the plot: inside it, the legend hid the first mode's column.
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=4, fontsize=7, frameon=False)
     ax.set_title(f"Run {summary['run_id']}: stability diagram, {len(summary['modes'])} modes selected")
     return _png(fig)
 

@@ -85,7 +85,12 @@ def render(
     parts.append(
         f"<p class='note'>From {_e(source)}. Windows: {_e(windows)}; the exponential window's decay "
         f"({s['added_decay_1_s']:.4g} 1/s) is removed from every damping ratio. "
-        "± is the standard deviation over the hits identified one by one.</p>"
+        + (
+            "± is the standard deviation over the hits identified one by one."
+            if s["source"] == "hits"
+            else ""
+        )
+        + "</p>"
     )
     mode_rows = []
     for k, m in enumerate(s["modes"], 1):
