@@ -86,7 +86,6 @@ def analyze(
     written). An unchanged run analysed with unchanged options is a cache hit.
     """
     from analysis.run_analysis import AnalysisOptions
-    from daq.store import Store, StoreError, resolve_store_dir
 
     if bool(runs) == all_runs:
         raise UserError("name the runs to analyse, or give --all", exit_code=2)
@@ -99,31 +98,54 @@ def analyze(
         # The options' names as the user typed them.
         text = str(exc).replace("max_order", "--max-order").replace("estimator", "--estimator")
         raise UserError(text.replace("band ", "--band "), exit_code=2) from None
+    run_batch(runs, all_runs, store, options, force, jobs, json_output, analyze_one, _print, "analyse")
+
+
+def run_batch(
+    runs: list[str] | None,
+    all_runs: bool,
+    store: str | None,
+    options: Any,
+    force: bool,
+    jobs: int | None,
+    json_output: bool,
+    worker: Any,
+    printer: Any,
+    verb: str,
+) -> None:
+    """The part `daq analyze` and `daq fit` share: pick the runs (named, or every run
+    file with --all, damaged ones too so that they fail with a line, never silently),
+    run ``worker`` on each in worker processes, print each summary (``printer``) or
+    the JSON list, and end with one error line if any run failed."""
+    from daq.store import Store, StoreError, resolve_store_dir
+
     if jobs is not None and jobs < 1:
         raise UserError("--jobs must be at least 1", exit_code=2)
     store_dir, _ = resolve_store_dir(store)
     the_store = Store(store_dir)
     try:
         if all_runs:
-            # Every run file, damaged ones too: they fail with a line, never silently.
             ids = [s.file_name.removesuffix(".h5") for s in the_store.list()]
         else:
             ids = list(dict.fromkeys(the_store.resolve(name).stem for name in runs or []))
     except StoreError as exc:
         raise UserError(str(exc)) from None
     if not ids:
-        raise UserError(f"no runs to analyse in {store_dir}")
-    results, failures = run_all(store_dir, ids, options, force, jobs, quiet=len(ids) == 1)
+        raise UserError(f"no runs to {verb} in {store_dir}")
+    label = {"analyse": "analysing", "fit": "fitting"}.get(verb, verb)
+    results, failures = run_all(store_dir, ids, options, force, jobs, worker, label, quiet=len(ids) == 1)
     if json_output:
         typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
     else:
         for run_id in ids:
             if run_id in results:
-                _print(results[run_id])
+                printer(results[run_id])
     if failures and len(ids) == 1:
         raise UserError(f"run {ids[0]}: {failures[0][1]}")
     if failures:
-        raise UserError(f"{len(failures)} of {len(ids)} runs could not be analysed")
+        raise UserError(
+            f"{len(failures)} of {len(ids)} runs could not be {'analysed' if verb == 'analyse' else 'fitted'}"
+        )
 
 
 def run_all(

@@ -3,7 +3,6 @@ result beside its run, in worker processes with a progress bar."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -69,9 +68,8 @@ def fit(
     beside the noise floor, and the uncertainty of every term of R, naming the
     combinations the data does not determine.
     """
-    from daq.analyze_command import run_all
+    from daq.analyze_command import run_batch
     from daq.fit_store import FitOptions
-    from daq.store import Store, StoreError, resolve_store_dir
 
     if bool(runs) == all_runs:
         raise UserError("name the runs to fit, or give --all", exit_code=2)
@@ -90,33 +88,7 @@ def fit(
         for name, option in OPTION_NAMES:
             text = text.replace(f"{name} must", f"{option} must")
         raise UserError(text, exit_code=2) from None
-    if jobs is not None and jobs < 1:
-        raise UserError("--jobs must be at least 1", exit_code=2)
-    store_dir, _ = resolve_store_dir(store)
-    the_store = Store(store_dir)
-    try:
-        if all_runs:
-            # Every run file, damaged ones too: they fail with a line, never silently.
-            ids = [s.file_name.removesuffix(".h5") for s in the_store.list()]
-        else:
-            ids = list(dict.fromkeys(the_store.resolve(name).stem for name in runs or []))
-    except StoreError as exc:
-        raise UserError(str(exc)) from None
-    if not ids:
-        raise UserError(f"no runs to fit in {store_dir}")
-    results, failures = run_all(
-        store_dir, ids, options, force, jobs, quiet=len(ids) == 1, worker=fit_one, label="fitting"
-    )
-    if json_output:
-        typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
-    else:
-        for run_id in ids:
-            if run_id in results:
-                print_fit(results[run_id])
-    if failures and len(ids) == 1:
-        raise UserError(f"run {ids[0]}: {failures[0][1]}")
-    if failures:
-        raise UserError(f"{len(failures)} of {len(ids)} runs could not be fitted")
+    run_batch(runs, all_runs, store, options, force, jobs, json_output, fit_one, print_fit, "fit")
 
 
 def fit_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:

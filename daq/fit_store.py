@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.damping.checks import central_jacobian, multi_start_check, per_hit_std
 from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.run_analysis import AnalysisOptions
@@ -126,11 +127,13 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
             damping, "pilkey-inman", r, objective, iterations, bool(info.get("converged")), message
         )
     r = np.asarray(result.damping_matrix, dtype=float)
-    jac, res = _jacobian(batched, residual_fn, r)
+    jac, res = central_jacobian(batched, r)
     ident = damping.identifiability(jac, res, damping.matrix_to_theta(r), n)
-    per_hit = _per_hit_std(data, r) if options.method in ("ls", "de") and domain == "time" else None
+    per_hit = per_hit_std(data, r) if options.method in ("ls", "de") and domain == "time" else None
     global_check = (
-        _multi_start_check(residual_fn, batched, r, result.psi, options) if options.starts else None
+        multi_start_check(residual_fn, batched, r, result.psi, options.starts, options.seed)
+        if options.starts
+        else None
     )
     implied = damped_modes(model, r)
     summary = {
@@ -179,54 +182,6 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     if not arrays["history"].size:
         arrays.pop("history")
     return summary, arrays
-
-
-def _multi_start_check(
-    residual_fn: Any, batched: Any, r: np.ndarray, psi: float, options: FitOptions
-) -> dict:
-    """Local fits from ``options.starts`` random starts beside the chosen fit: how many
-    reach its Psi (to 0.1 %), whether any does better, and the largest distance of the
-    equally good ones from its R (a flat direction shows as equal Psi, other R)."""
-    from analysis import damping
-
-    fits = damping.multi_start(residual_fn, batched, r.shape[0], starts=options.starts, seed=options.seed)
-    psis = np.array([f.psi for f in fits])
-    same = np.abs(psis - psi) <= 1e-3 * psi
-    distances = [
-        float(np.linalg.norm(np.asarray(f.damping_matrix) - r) / np.linalg.norm(r))
-        for f, ok in zip(fits, same, strict=True)
-        if ok
-    ]
-    return {
-        "starts": int(options.starts),
-        "reached_same_psi": int(same.sum()),
-        "better_psi_found": bool(np.any(psis < psi * (1 - 1e-3))),
-        "best_psi": float(psis.min()),
-        "largest_relative_distance_at_same_psi": max(distances) if distances else None,
-    }
-
-
-def _per_hit_std(data: Any, r: np.ndarray) -> np.ndarray | None:
-    """(P,) standard deviation of each parameter of R over least-squares fits to each
-    accepted hit alone (started from the joint fit), divided by sqrt(n_hits); None
-    with fewer than 3 hits."""
-    from dataclasses import replace
-
-    from analysis import damping
-    from analysis.damping import bandlimited
-
-    n_hits = data.force_n.shape[0]
-    if n_hits < 3:
-        return None
-    thetas = []
-    for k in range(n_hits):
-        one = replace(data, force_n=data.force_n[k : k + 1], response_m_s2=data.response_m_s2[k : k + 1])
-        fit = damping.fit_least_squares(
-            lambda m, d=one: bandlimited.residuals(d, m), r,
-            batched_residuals=lambda m, d=one: bandlimited.batched_residuals(d, m),
-        )  # fmt: skip
-        thetas.append(damping.matrix_to_theta(np.asarray(fit.damping_matrix)))
-    return np.std(np.array(thetas), axis=0, ddof=1) / np.sqrt(n_hits)
 
 
 def _check_band(run: Run, data: Any, domain: str, model: Any) -> None:
@@ -312,22 +267,6 @@ def _objective(data: Any, domain: str):
         return module.batched_residuals(data, r)
 
     return objective, residual_fn, batched
-
-
-def _jacobian(batched: Any, residual_fn: Any, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Central-difference Jacobian of the residual in the symmetric parameters, one
-    batched model call."""
-    from analysis import damping
-
-    theta = damping.matrix_to_theta(r)
-    n = r.shape[0]
-    step = 1e-6 * max(1.0, float(np.max(np.abs(theta))))
-    eye = np.eye(theta.size) * step
-    thetas = np.concatenate([theta + eye, theta - eye, theta[None]])
-    res = batched(damping.theta_to_matrix(thetas, n))
-    p = theta.size
-    jac = (res[:p] - res[p : 2 * p]).T / (2 * step)
-    return jac, res[-1]
 
 
 #: Samples before each hit's force peak that the analyzer's anti-alias filters may

@@ -1,0 +1,69 @@
+"""Checks on a fitted damping matrix: the Jacobian behind its uncertainty, refits to
+each hit alone (the uncertainty checked another way), and random starts (is the
+optimum global?). Pure numerics, used by daq/fit_store.py."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from analysis.damping.bandlimited import BandLimitedData, batched_residuals, residuals
+from analysis.damping.local import fit_least_squares, multi_start
+from analysis.damping.params import matrix_to_theta, theta_to_matrix
+
+
+def multi_start_check(
+    residual_fn: Callable, batched: Callable, r: np.ndarray, psi: float, starts: int, seed: int = 0
+) -> dict:
+    """Local fits from ``starts`` random starts beside the chosen fit: how many
+    reach its Psi (to 0.1 %), whether any does better, and the largest distance of the
+    equally good ones from its R (a flat direction shows as equal Psi, other R)."""
+    fits = multi_start(residual_fn, batched, r.shape[0], starts=starts, seed=seed)
+    psis = np.array([f.psi for f in fits])
+    same = np.abs(psis - psi) <= 1e-3 * psi
+    distances = [
+        float(np.linalg.norm(np.asarray(f.damping_matrix) - r) / np.linalg.norm(r))
+        for f, ok in zip(fits, same, strict=True)
+        if ok
+    ]
+    return {
+        "starts": int(starts),
+        "reached_same_psi": int(same.sum()),
+        "better_psi_found": bool(np.any(psis < psi * (1 - 1e-3))),
+        "best_psi": float(psis.min()),
+        "largest_relative_distance_at_same_psi": max(distances) if distances else None,
+    }
+
+
+def per_hit_std(data: BandLimitedData, r: np.ndarray) -> np.ndarray | None:
+    """(P,) standard deviation of each parameter of R over least-squares fits to each
+    accepted hit alone (started from the joint fit), divided by sqrt(n_hits); None
+    with fewer than 3 hits."""
+    n_hits = data.force_n.shape[0]
+    if n_hits < 3:
+        return None
+    thetas = []
+    for k in range(n_hits):
+        one = replace(data, force_n=data.force_n[k : k + 1], response_m_s2=data.response_m_s2[k : k + 1])
+        fit = fit_least_squares(
+            lambda m, d=one: residuals(d, m), r, batched_residuals=lambda m, d=one: batched_residuals(d, m)
+        )
+        thetas.append(matrix_to_theta(np.asarray(fit.damping_matrix)))
+    return np.std(np.array(thetas), axis=0, ddof=1) / np.sqrt(n_hits)
+
+
+def central_jacobian(batched: Callable, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(Jacobian (n_res, P), residual (n_res,)) at the symmetric matrix ``r`` (N, N):
+    central differences in its N(N+1)/2 parameters, all in one batched call of
+    ``batched`` ((B, N, N) -> (B, n_res))."""
+    theta = matrix_to_theta(r)
+    n = r.shape[0]
+    step = 1e-6 * max(1.0, float(np.max(np.abs(theta))))
+    eye = np.eye(theta.size) * step
+    thetas = np.concatenate([theta + eye, theta - eye, theta[None]])
+    res = batched(theta_to_matrix(thetas, n))
+    p = theta.size
+    jac = (res[:p] - res[p : 2 * p]).T / (2 * step)
+    return jac, res[-1]
