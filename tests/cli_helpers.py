@@ -69,3 +69,24 @@ def assert_one_line_error(result: subprocess.CompletedProcess[str], *fragments: 
     assert "Traceback" not in result.stderr
     for fragment in fragments:
         assert fragment in lines[0], lines[0]
+
+
+def capture_sim(store: Path, scenario: str, seed: int, hits: int = 5) -> str:
+    """`daq capture --sim` of ``hits`` accepted hits into ``store``; the new run's id."""
+    from daq.store import Store
+
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--scenario", scenario, "--seed", str(seed), "--hits", str(hits),
+        "--time-scale", "0", "--store", str(store),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    return max(s.run_id for s in Store(store).list())
+
+
+def daq_json(command: str, store: Path, *args: str) -> list[dict]:
+    """`daq COMMAND ARGS --json --store STORE`, which must succeed; its JSON output."""
+    import json
+
+    result = invoke_daq(command, *args, "--json", "--store", str(store))
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)

@@ -29,6 +29,10 @@ EQ18_EIGENVALUES = (0.1343, 1.3126, 10.333)
 EQ18_POLE_MAGNITUDE_HZ = (5.58862, 36.08886, 96.47856)
 EQ18_DAMPING_RATIOS = (0.036058, 0.203226, 0.161986)
 
+# The simulator's realistic scenario: its modal damping ratios, modes 1-4
+# (docs/simulator.md; set in sims/scenarios.py, the truth an identification must find).
+REALISTIC_DAMPING_RATIOS = (0.010, 0.006, 0.004, 0.003)
+
 # The seed's Table 2.
 SEED_ANALYTICAL_HZ = (5.1639344, 29.644809, 84.726776)
 SEED_EXPERIMENTAL_HZ = (5.5685326, 34.897681, 97.715208)

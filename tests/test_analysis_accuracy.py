@@ -8,34 +8,24 @@ Captures run through the real chain (simulator on a socket, driver, store) in-pr
 from __future__ import annotations
 
 import hashlib
-import json
 from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
-from reference import EQ18_DAMPING_RATIOS, EQ18_POLE_MAGNITUDE_HZ, EXACT_TABULATED_HZ
+from cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
+from reference import (
+    EQ18_DAMPING_RATIOS,
+    EQ18_POLE_MAGNITUDE_HZ,
+    EXACT_TABULATED_HZ,
+    REALISTIC_DAMPING_RATIOS,
+)
 from store.store_helpers import make_run
 
-from daq.store import MeasuredFrf, Store, seal
-
-#: The realistic scenario's modal damping, modes 1-4 (docs/simulator.md; sims/scenarios.py).
-REALISTIC_DAMPING = (0.010, 0.006, 0.004, 0.003)
-
-
-def capture(store: Path, scenario: str, seed: int, hits: int = 5) -> str:
-    result = invoke_daq(
-        "capture", "--sim", "--yes", "--scenario", scenario, "--seed", str(seed), "--hits", str(hits),
-        "--time-scale", "0", "--store", str(store),
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr
-    return max(s.run_id for s in Store(store).list())
+from daq.store import MeasuredFrf, seal
 
 
 def analyze_json(store: Path, *args: str) -> list[dict]:
-    result = invoke_daq("analyze", *args, "--json", "--store", str(store))
-    assert result.returncode == 0, result.stderr
-    return json.loads(result.stdout)
+    return daq_json("analyze", store, *args)
 
 
 def match(modes: list[dict], truth_hz: tuple[float, ...]) -> list[dict]:
@@ -46,7 +36,7 @@ def match(modes: list[dict], truth_hz: tuple[float, ...]) -> list[dict]:
 @pytest.fixture(scope="module")
 def realistic(tmp_path_factory) -> tuple[Path, str]:
     store = tmp_path_factory.mktemp("realistic")
-    return store, capture(store, "realistic", seed=3)
+    return store, capture_sim(store, "realistic", seed=3)
 
 
 def test_realistic_run_gives_the_exact_beam_and_the_simulated_damping(realistic):
@@ -56,7 +46,7 @@ def test_realistic_run_gives_the_exact_beam_and_the_simulated_damping(realistic)
     freqs = [m["frequency_hz"] for m in info["modes"]]
     assert freqs == sorted(freqs)
     found = match(info["modes"], EXACT_TABULATED_HZ)
-    for mode, f_true, zeta_true in zip(found, EXACT_TABULATED_HZ, REALISTIC_DAMPING, strict=True):
+    for mode, f_true, zeta_true in zip(found, EXACT_TABULATED_HZ, REALISTIC_DAMPING_RATIOS, strict=True):
         assert mode["frequency_hz"] == pytest.approx(f_true, rel=1e-3)
         assert mode["damping_ratio"] == pytest.approx(zeta_true, rel=0.10)
     # The Table 2 rows name the same modes beside the analytical columns.
@@ -66,7 +56,7 @@ def test_realistic_run_gives_the_exact_beam_and_the_simulated_damping(realistic)
 
 
 def test_seed_run_gives_the_eq18_poles(tmp_path):
-    run_id = capture(tmp_path, "seed", seed=4)
+    run_id = capture_sim(tmp_path, "seed", seed=4)
     (info,) = analyze_json(tmp_path, run_id)
     found = match(info["modes"], EQ18_POLE_MAGNITUDE_HZ)
     for mode, f_true, zeta_true in zip(found, EQ18_POLE_MAGNITUDE_HZ, EQ18_DAMPING_RATIOS, strict=True):
