@@ -101,7 +101,10 @@ class StructuralModel:
         batch = r.shape[:-2]
         n = self.n_dof
         minv_k = np.linalg.solve(self.mass, self.stiffness)
-        minv_r = np.linalg.solve(self.mass, r)  # broadcasts over the batch
+        # One factorisation of M for the whole batch (a broadcast solve would factor it
+        # once per member): the members' columns side by side as right-hand sides.
+        columns = np.moveaxis(r, -2, 0).reshape(n, -1)
+        minv_r = np.moveaxis(np.linalg.solve(self.mass, columns).reshape(n, *batch, n), 0, -2)
         minv_b = np.linalg.solve(self.mass, self.force_shape)
 
         a = np.zeros((*batch, 2 * n, 2 * n))

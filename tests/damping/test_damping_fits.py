@@ -95,11 +95,11 @@ def test_ga_is_reproducible_batched_and_improves():
         calls.append(r.shape)
         return psi(data, r)
 
-    a = fit_ga(objective, 3, seed=5)
+    a = fit_ga(objective, 3, seed=5, cache=False)
     assert calls == [(50, 3, 3)] * 30  # one batched call per generation, the paper's 50 x 30
     assert a.n_evaluations == 1500
     assert a.history.shape == (30,)
-    b = fit_ga(lambda r: psi(data, r), 3, seed=5)
+    b = fit_ga(lambda r: psi(data, r), 3, seed=5, cache=False)
     c = fit_ga(lambda r: psi(data, r), 3, seed=6)
     np.testing.assert_array_equal(a.theta, b.theta)
     np.testing.assert_array_equal(a.history, b.history)
@@ -107,6 +107,28 @@ def test_ga_is_reproducible_batched_and_improves():
     assert a.psi <= a.history[0]
     assert a.psi == pytest.approx(float(psi(data, a.damping_matrix)))
     np.testing.assert_allclose(a.theta, np.round(a.theta, 4), atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+def test_ga_cache_computes_each_distinct_member_once_and_changes_nothing(seed):
+    data, _ = truth(noise=0.01)
+    computed = []
+
+    def objective(r):
+        computed.extend(r.reshape(r.shape[0], -1).round(4).tolist())
+        return psi(data, r)
+
+    cached = fit_ga(objective, 3, seed=seed)
+    again = fit_ga(lambda r: psi(data, r), 3, seed=seed)
+    np.testing.assert_array_equal(cached.history, again.history)  # reproducible
+    plain = fit_ga(lambda r: psi(data, r), 3, seed=seed, cache=False)
+    np.testing.assert_array_equal(cached.theta, plain.theta)
+    np.testing.assert_allclose(cached.history, plain.history, rtol=1e-12)
+    assert cached.n_evaluations == plain.n_evaluations == 1500
+    distinct = {tuple(row) for row in computed}
+    assert len(computed) == len(distinct)  # never the same member twice
+    assert len(computed) < 1000  # selection and crossover copy many members unchanged
+    assert f"({len(computed)} distinct members computed)" in cached.message
 
 
 def test_ga_with_elitism_never_gets_worse_and_beats_its_first_generation():
@@ -127,7 +149,7 @@ def test_ga_calls_the_model_once_per_generation(monkeypatch):
         return fast(*args, **kwargs)
 
     monkeypatch.setattr(objective_module, "_fast_sse", counted)
-    fit_ga(lambda r: psi(data, r), 3, seed=0, generations=7)
+    fit_ga(lambda r: psi(data, r), 3, seed=0, generations=7, cache=False)
     assert count[0] == 7
 
 
