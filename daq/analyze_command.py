@@ -19,6 +19,7 @@ from typing import Annotated, Any
 import typer
 
 from daq.errors import UserError
+from daq.memory_tuning import keep_freed_memory
 from daq.runs_command import JsonOption, StoreOption
 
 
@@ -188,7 +189,7 @@ def run_all(
             for run_id in ids:
                 done(run_id, worker(store_dir, run_id, options, force))
         else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
+            with ProcessPoolExecutor(max_workers=workers, initializer=keep_freed_memory) as pool:
                 futures = {pool.submit(worker, store_dir, r, options, force): r for r in ids}
                 for future in as_completed(futures):
                     done(futures[future], future.result())

@@ -24,6 +24,10 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import typer
 
+from daq.memory_tuning import keep_freed_memory
+
+keep_freed_memory()
+
 from daq import (
     __version__,
     analyze_command,

@@ -116,6 +116,14 @@ def cautions(info: dict) -> list[str]:
             f"Psi is {info['psi'] / floor:.0f}x the noise floor: the model does not explain the data "
             "(missing modes, wrong beam, or a local optimum; try --starts or --method de)"
         )
+    box = info.get("search_box")
+    needed = info.get("start", {}).get("coded_scale")
+    if box is not None and needed is not None and needed > box:
+        out.append(
+            f"the modal estimate needs terms up to {needed:.4g}, outside the search range "
+            f"[-{box:g}, {box:g}]{' (the seed paper’s GA range)' if info['method'] == 'ga' else ''}: "
+            "this method cannot reach it (use --method ls or de)"
+        )
     diag = [info["damping_matrix"][i][i] for i in range(len(info["damping_matrix"]))]
     if any(d < 0 for d in diag):
         out.append("R has a negative diagonal term: not dissipative (--psd keeps R = L L^T)")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +26,7 @@ from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
 
 METHODS = ("modal", "ls", "ga", "de", "pilkey-inman")
-FIT_VERSION = 1
+FIT_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -113,9 +113,11 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     elif options.method == "ls":
         result = damping.fit_least_squares(residual_fn, start, psd=options.psd, batched_residuals=batched)
     elif options.method == "ga":
-        result = damping.fit_ga(objective, n, seed=options.seed, psd=options.psd)
+        result = damping.fit_ga(objective, n, seed=options.seed, psd=options.psd, bounds=GA_BOUNDS)
     elif options.method == "de":
-        result = damping.fit_de(objective, n, seed=options.seed, psd=options.psd)
+        bounds = _de_bounds(start, options.psd)
+        result = damping.fit_de(objective, n, seed=options.seed, psd=options.psd, bounds=bounds)
+        result = replace(result, message=f"{result.message} (box ±{bounds[1]:.4g} per term)")
     else:
         poles = _identified_poles(ident_f[usable], ident_z[usable])
         # Not from the proportional estimate: there the poles do not move to first order
@@ -146,7 +148,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
         "message": result.message,
         "damping_matrix": _matrix_json(r),
         "psi": float(result.psi),
-        "psi_noise_floor": _noise_floor(run, domain, model, r),
+        "psi_noise_floor": _noise_floor(run, domain, model, start),
         "n_evaluations": int(result.n_evaluations),
         "seconds": time.perf_counter() - started,
         "modes": [
@@ -154,7 +156,9 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
             {"frequency_hz": _num(f), "damping_ratio": _num(z)}
             for f, z in zip(implied.natural_frequencies_hz, implied.damping_ratios, strict=True)
         ],
-        "start": {"damping_matrix": _matrix_json(start), "matching": _jsonable(matching)},
+        "start": {"damping_matrix": _matrix_json(start), "matching": _jsonable(matching),
+                  "coded_scale": _coded_scale(start, options.psd)},
+        "search_box": {"ga": GA_BOUNDS[1], "de": _de_bounds(start, options.psd)[1]}.get(options.method),
         "multi_start": global_check,
         "stiffness": stiffness_info,
         "model": {"ritz_functions": n, "beam": beam_origin},
@@ -274,13 +278,36 @@ def _objective(data: Any, domain: str):
 PRE_RINGING_SAMPLES = 16
 
 
+#: DE searches a box this many times the largest term of the modal estimate (at
+#: least the seed's [-10, 10]): a realistic beam's R has terms in the hundreds.
+DE_BOX_FACTOR = 10.0
+
+
+#: The seed's coding range of every term (Table 3): the GA keeps it, to be the paper's.
+GA_BOUNDS = (-10.0, 10.0)
+
+
+def _coded_scale(start: np.ndarray, psd: bool) -> float:
+    """Largest coded term the modal estimate needs: max |R_ij|, or its square root
+    with R = L L^T (the Cholesky factor's scale)."""
+    scale = float(np.max(np.abs(start)))
+    return float(np.sqrt(scale)) if psd else scale
+
+
+def _de_bounds(start: np.ndarray, psd: bool) -> tuple[float, float]:
+    """(lo, hi) of every coded term for differential evolution, from the modal estimate."""
+    half = max(GA_BOUNDS[1], DE_BOX_FACTOR * _coded_scale(start, psd))
+    return -half, half
+
+
 def _noise_floor(run: Run, domain: str, model: Any, damping: np.ndarray) -> float | None:
     """Psi (eq 17) that the measurement noise alone would leave at the true R.
 
     Both channels' noise is taken from the samples before each hit's pulse (and the
     filters' pre-ringing). The response's noise enters Psi directly; the force's
     enters through the model, white over the span: sigma^2 = sigma_y^2 + sigma_f^2
-    mean|H|^2 (lines 0..span, H of the fitted R). With a 2.25 mV/N hammer the second
+    mean|H|^2 (lines 0..span, H of the model with ``damping``: the modal estimate, so
+    that every method of one run is held to the same floor). With a 2.25 mV/N hammer the second
     term dominates at the seed beam's |H| of tens of (m/s^2)/N. None when no hit has
     16 quiet samples.
     """

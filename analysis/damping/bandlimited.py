@@ -29,6 +29,8 @@ from analysis.response import frequency_response
 from analysis.structure import StructuralModel
 
 PAD = 8
+#: Bytes of complex spectra ``psi`` handles at once (see there).
+_CHUNK_BYTES = 8 * 2**20
 
 
 @dataclass(frozen=True)
@@ -86,6 +88,13 @@ def psi(data: BandLimitedData, damping: np.ndarray) -> np.ndarray:
     """eq (17) over the compared samples, (...,) for damping (..., N, N); unstable -> inf."""
     r = np.asarray(damping, dtype=float)
     flat = r.reshape(-1, *r.shape[-2:])
+    # A few members at a time: one member's spectra over all hits take hits x 4n x 16
+    # bytes, and temporaries past glibc's 32 MiB mmap limit are mapped and faulted in
+    # afresh on every call (a DE run spent a quarter of its time there).
+    step = max(1, _CHUNK_BYTES // (16 * data._force_spectrum.size))
+    value = np.empty(flat.shape[0])
     with np.errstate(all="ignore"):
-        value = np.sqrt(np.sum(batched_residuals(data, flat) ** 2, axis=1)) / data.n_compared
+        for i in range(0, flat.shape[0], step):
+            res = batched_residuals(data, flat[i : i + step])
+            value[i : i + step] = np.sqrt(np.einsum("bi,bi->b", res, res)) / data.n_compared
     return np.where(np.isfinite(value), value, np.inf).reshape(r.shape[:-2])
