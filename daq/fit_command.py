@@ -145,6 +145,16 @@ def print_fit(info: dict) -> None:
     )
     for caution in cautions(info):
         typer.echo(f"  caution: {caution}")
+    stiffness = info.get("stiffness") or {}
+    if stiffness.get("update") == "scale on E":
+        typer.echo(
+            f"  model: {info['model']['ritz_functions']} Ritz functions, stiffness scaled by "
+            f"{stiffness['scale']:.5f} to the run's frequencies first (--stiffness scale)"
+        )
+    else:
+        typer.echo(
+            f"  model: {info['model']['ritz_functions']} Ritz functions, stiffness as built (--stiffness none)"
+        )
     unc = info["uncertainty"]
     by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
     r = info["damping_matrix"]
