@@ -152,9 +152,8 @@ def print_fit(info: dict) -> None:
             f"{stiffness['scale']:.5f} to the run's frequencies first (--stiffness scale)"
         )
     else:
-        typer.echo(
-            f"  model: {info['model']['ritz_functions']} Ritz functions, stiffness as built (--stiffness none)"
-        )
+        n_functions = info["model"]["ritz_functions"]
+        typer.echo(f"  model: {n_functions} Ritz functions, stiffness as built (--stiffness none)")
     unc = info["uncertainty"]
     by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
     r = info["damping_matrix"]
