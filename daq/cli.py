@@ -39,6 +39,7 @@ from daq import (
     replay_command,
     report_command,
     runs_command,
+    serve_command,
 )
 from daq import talk_command as talk
 from daq.demo_command import demo
@@ -126,6 +127,7 @@ analyze_command.register(app)
 fit_command.register(app)
 report_command.register(app)
 config_command.register(app)
+serve_command.register(app)
 
 
 def _fail(message: str, exit_code: int) -> int:

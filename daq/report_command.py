@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
@@ -32,20 +32,13 @@ def report(
 
     PNG files and index.html (everything embedded: it opens from disk, no network).
     """
-    from analysis.run_analysis import AnalysisOptions
-    from daq.analysis_store import RESULT_NAME, analyze_stored
-    from daq.fit_store import FitOptions
-    from daq.report import figures, page
+    from daq.report.build import build_report
     from daq.store import Store, StoreError, resolve_store_dir
 
     store_dir, _ = resolve_store_dir(store)
-    the_store = Store(store_dir)
     try:
-        run_id = the_store.resolve(run).stem
-        analyze_stored(store_dir, run_id, AnalysisOptions())
-        the_run = the_store.open(run_id)
-        result = the_store.read_result(run_id, RESULT_NAME)
-    except (StoreError, ValueError) as exc:
+        run_id = Store(store_dir).resolve(run).stem
+    except StoreError as exc:
         raise UserError(" ".join(str(exc).split())) from None
     folder = output if output is not None else Path(f"report-{run_id}")
     if folder.exists() and not folder.is_dir():
@@ -55,51 +48,17 @@ def report(
             f"{folder} already holds a report; give --force to write over it or -o another folder"
         )
     try:
+        html, pngs = build_report(store_dir, run_id)
+    except (StoreError, ValueError) as exc:
+        raise UserError(" ".join(str(exc).split())) from None
+    try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise UserError(f"cannot create {folder}: {exc.strerror or exc}") from None
-    pngs = {
-        "frf": figures.frf_figure(result),
-        "stability": figures.stability_figure(result),
-        "synthesis": figures.synthesis_figure(result),
-    }
-    if the_run.hits is not None:
-        pngs["hits"] = figures.hits_figure(the_run)
-    fits = stored_fits(the_store, run_id)
-    # The default least-squares fit when there is one, whatever else was tried.
-    order = sorted(fits, key=lambda name: name != FitOptions().result_name)
-    with_response = [fits[name] for name in order if "model_response" in fits[name]]
-    if with_response and the_run.hits is not None:
-        pngs["response_fit"] = figures.response_fit_figure(the_run, with_response[0])
-    if any("history" in f for f in fits.values()):
-        pngs["convergence"] = figures.convergence_figure(fits)
     for name, png in pngs.items():
         _write(folder / f"{name}.png", png)
-    _write(folder / "index.html", page.render(the_run, result, pngs, fits).encode("utf-8"))
+    _write(folder / "index.html", html.encode("utf-8"))
     typer.echo(f"Report of run {run_id}: {folder / 'index.html'} ({len(pngs)} figures)")
-
-
-def stored_fits(the_store: Any, run_id: str) -> dict[str, dict]:
-    """The damping fits stored beside the run (``<id>.fit-*.h5``), by result name; the
-    least-squares fit is made first when there is none (a report shows the matrix)."""
-    from daq.store import StoreError
-
-    names = sorted(p.name[len(run_id) + 1 : -3] for p in the_store.path.glob(f"{run_id}.fit-*.h5"))
-    if not names:
-        from daq.fit_store import FitOptions, fit_stored
-
-        try:
-            fit_stored(the_store.path, run_id, FitOptions())
-        except (StoreError, ValueError):
-            return {}  # e.g. an FRF-only run: the report goes without a fit
-        names = [FitOptions().result_name]
-    fits = {}
-    for name in names:
-        try:
-            fits[name] = the_store.read_result(run_id, name)
-        except StoreError:
-            continue
-    return fits
 
 
 def _write(path: Path, data: bytes) -> None:

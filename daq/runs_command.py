@@ -92,13 +92,13 @@ def list_runs(store: StoreOption = None, as_json: JsonOption = False) -> None:
         why = "no runs yet" if the_store.path.is_dir() else "the folder does not exist yet"
         _note(f"no runs in this store: {why}")
     if as_json:
-        print(_dumps([_summary_dict(s) for s in summaries]))
+        print(_dumps([summary_dict(s) for s in summaries]))
         return
     if summaries:
         _print_table(summaries, the_store.path)
 
 
-def _summary_dict(s) -> dict[str, Any]:
+def summary_dict(s) -> dict[str, Any]:
     return {
         "run_id": s.run_id,
         "file": s.file_name,
@@ -173,7 +173,7 @@ def show(
 
     the_store, source = _store(store)
     path = the_store.resolve(run)
-    data = _run_dict(open_run(path), path)
+    data = run_dict(open_run(path), path)
     if as_json:
         print(_dumps(data))
         return
@@ -193,7 +193,7 @@ def _frf_dict(frf) -> dict[str, Any] | None:
     }
 
 
-def _run_dict(run, path: Path) -> dict[str, Any]:
+def run_dict(run, path: Path) -> dict[str, Any]:
     hits = run.hits
     hits_data = None
     n_hits = n_accepted = 0

@@ -26,6 +26,11 @@ class InstrumentTimeout(DriverError):
     instrument_answers: bool | None = None
 
 
+class Interrupted(DriverError):
+    """A wait was given up on request (``HP35660A.interrupt`` was set), e.g. the
+    service's Stop button while the analyzer waits for a hit."""
+
+
 class ResourceBusy(DriverError):
     """Another process is talking to this instrument (its lock file is held)."""
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,7 +19,14 @@ from typing import TypeVar
 
 from drivers.commands import COMMANDS, STATUS_BITS, ascii_message, command, parse_reply, replies
 from drivers.dumps import DumpsMixin
-from drivers.errors import ConnectionLost, DriverError, InstrumentError, InstrumentTimeout, ProtocolError
+from drivers.errors import (
+    ConnectionLost,
+    DriverError,
+    InstrumentError,
+    InstrumentTimeout,
+    Interrupted,
+    ProtocolError,
+)
 from drivers.record import record_length_s
 from drivers.settings import ChannelSetup, ImpactSettings, Window
 from drivers.transport import Transport
@@ -66,6 +74,8 @@ class HP35660A(DumpsMixin):
         self.transport = transport
         self.retries = retries
         self.hit_allowance_s = hit_allowance_s
+        #: Set from another thread to end the current and every later wait with Interrupted.
+        self.interrupt = threading.Event()
         self._record_length_s: float | None = None
         self._recovery_error: DriverError | None = None
 
@@ -350,6 +360,8 @@ class HP35660A(DumpsMixin):
         deadline = time.monotonic() + timeout
         pause = 0.005
         while True:
+            if self.interrupt.is_set():
+                raise Interrupted(f"{what}: interrupted")
             status = self.status()
             if status.error:
                 self.check_errors()
@@ -362,7 +374,7 @@ class HP35660A(DumpsMixin):
                     else ""
                 )
                 raise InstrumentTimeout(f"{what}: not within {timeout:.3g} s; status {status}{hint}")
-            time.sleep(min(pause, max(0.0, deadline - time.monotonic())))
+            self.interrupt.wait(min(pause, max(0.0, deadline - time.monotonic())))
             pause = min(pause * 1.5, 0.2)
 
     def wait_for_hit(self, timeout_s: float | None = None) -> Status:

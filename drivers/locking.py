@@ -70,11 +70,13 @@ def check_lock_directory(directory: Path) -> None:
 class ResourceLock:
     """Held from ``acquire()`` to ``release()``; ResourceBusy if another process holds it."""
 
-    def __init__(self, key: str, label: str | None = None) -> None:
+    def __init__(self, key: str, label: str | None = None, holder: str = "") -> None:
         """``key`` names the physical link (the file's name); ``label`` is what
-        messages call it (default: the key)."""
+        messages call it (default: the key); ``holder`` says who holds it, for the
+        message another process gets (e.g. "daq serve at http://127.0.0.1:8000")."""
         self.key = key
         self.label = label or key
+        self.holder = " ".join(holder.split())[:200]
         self.path = lock_path(key)
         self._fd: int | None = None
 
@@ -95,14 +97,16 @@ class ResourceLock:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "unknown"
+            pid, _, note = os.pread(fd, 512, 0).decode(errors="replace").strip().partition(" ")
             os.close(fd)
-            where = "this process" if holder == str(os.getpid()) else f"another process (pid {holder})"
+            pid = pid or "unknown"
+            ours = pid == str(os.getpid())
+            where = "this process" if ours else f"{note or 'another process'} (pid {pid})"
             shared = f" (it shares {self.key})" if self.key != self.label else ""
             raise ResourceBusy(f"{self.label} is in use by {where}{shared}") from None
         # Ours now: the pid replaces whatever a dead holder left.
         os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        os.pwrite(fd, f"{os.getpid()} {self.holder}".strip().encode() + b"\n", 0)
         self._fd = fd
 
     def release(self) -> None:

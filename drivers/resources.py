@@ -65,3 +65,15 @@ def list_resources() -> dict[str, list[str]]:
     except Exception as exc:
         found["notes"].append("serial ports not searched: " + " ".join(str(exc).split()))
     return found
+
+
+def lock_key_of(resource: str) -> str:
+    """The name of the lock file ``open_transport(resource)`` would take, without
+    opening anything: a process that owns the instrument for longer than one
+    connection (``daq serve``) holds it itself and opens with ``lock_file=False``."""
+    resource = resource.strip()
+    if not resource:
+        raise ValueError("empty resource name")
+    if resource.upper().startswith("PROLOGIX::"):
+        return PrologixTransport(resource, 5.0, lock_file=True).lock_key
+    return VisaTransport(resource, 5.0, lock_file=True).lock_key

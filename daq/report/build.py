@@ -1,0 +1,62 @@
+"""A run's report as one self-contained HTML page: used by ``daq report`` and by the
+service's ``/api/runs/<id>/report``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+
+def build_report(store_dir: Path, run_id: str) -> tuple[str, dict[str, bytes]]:
+    """(index.html text, {figure name: PNG bytes}) of run ``run_id``; analyses the run
+    and fits it (least squares) first when that was not done. StoreError or
+    ValueError when the run cannot be read or analysed."""
+    from analysis.run_analysis import AnalysisOptions
+    from daq.analysis_store import RESULT_NAME, analyze_stored
+    from daq.fit_store import FitOptions
+    from daq.report import figures, page
+    from daq.store import Store
+
+    the_store = Store(store_dir)
+    analyze_stored(store_dir, run_id, AnalysisOptions())
+    the_run = the_store.open(run_id)
+    result = the_store.read_result(run_id, RESULT_NAME)
+    pngs = {
+        "frf": figures.frf_figure(result),
+        "stability": figures.stability_figure(result),
+        "synthesis": figures.synthesis_figure(result),
+    }
+    if the_run.hits is not None:
+        pngs["hits"] = figures.hits_figure(the_run)
+    fits = stored_fits(the_store, run_id)
+    # The default least-squares fit when there is one, whatever else was tried.
+    order = sorted(fits, key=lambda name: name != FitOptions().result_name)
+    with_response = [fits[name] for name in order if "model_response" in fits[name]]
+    if with_response and the_run.hits is not None:
+        pngs["response_fit"] = figures.response_fit_figure(the_run, with_response[0])
+    if any("history" in f for f in fits.values()):
+        pngs["convergence"] = figures.convergence_figure(fits)
+    return page.render(the_run, result, pngs, fits), pngs
+
+
+def stored_fits(the_store: Any, run_id: str) -> dict[str, dict]:
+    """The damping fits stored beside the run (``<id>.fit-*.h5``), by result name; the
+    least-squares fit is made first when there is none (a report shows the matrix)."""
+    from daq.store import StoreError
+
+    names = sorted(p.name[len(run_id) + 1 : -3] for p in the_store.path.glob(f"{run_id}.fit-*.h5"))
+    if not names:
+        from daq.fit_store import FitOptions, fit_stored
+
+        try:
+            fit_stored(the_store.path, run_id, FitOptions())
+        except (StoreError, ValueError):
+            return {}  # e.g. an FRF-only run: the report goes without a fit
+        names = [FitOptions().result_name]
+    fits = {}
+    for name in names:
+        try:
+            fits[name] = the_store.read_result(run_id, name)
+        except StoreError:
+            continue
+    return fits

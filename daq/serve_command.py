@@ -1,0 +1,177 @@
+"""`daq serve`: the lab service (docs/service.md).
+
+One long-running process owns the analyzer, runs captures on request from its web
+page or HTTP API, seals each run, and analyses and fits every run as it lands.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from typing import Annotated
+
+import typer
+
+from daq.errors import UserError
+from daq.runs_command import StoreOption
+from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="serve")(serve)
+
+
+def serve(
+    resource: Annotated[
+        str | None,
+        typer.Option("--resource", "-r", metavar="<resource>", help="The analyzer's VISA resource."),
+    ] = None,
+    sim: Annotated[bool, typer.Option("--sim", help="Serve the built-in simulated analyzer.")] = False,
+    store: StoreOption = None,
+    host: Annotated[
+        str,
+        typer.Option(
+            metavar="<address>", help="Address to listen on; beyond loopback every request needs the token."
+        ),
+    ] = "127.0.0.1",
+    port: Annotated[int, typer.Option(metavar="<port>", help="TCP port (0: any free one).")] = 8000,
+    workers: Annotated[
+        int | None,
+        typer.Option(metavar="<n>", help="Analysis worker processes [default: cores - 1, at least 1]."),
+    ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<tcp://host:port>", help="Hand analyses to this Dask scheduler (else $DAQ_SCHEDULER)."
+        ),
+    ] = None,
+    show_token: Annotated[
+        bool, typer.Option("--show-token", help="Print the access token (made at first start) and exit.")
+    ] = False,
+    scenario: Annotated[Scenario | None, typer.Option(help="Simulator only. " + SCENARIO_HELP)] = None,
+    seed: Annotated[int | None, typer.Option(metavar="<int>", help="Simulator only. " + SEED_HELP)] = None,
+    time_scale: Annotated[
+        float | None,
+        typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
+    ] = None,
+) -> None:
+    """Run the lab service: the analyzer, the store, a live web page and an HTTP API.
+
+    Open the printed address in a browser on the lab PC. Captures started there (or
+    through the API) are checked hit by hit, accepted or rejected on the page, sealed
+    into the store, then analysed and fitted in worker processes. Ctrl-C stops the
+    service; a capture in progress is sealed as an incomplete run.
+    """
+    from daq.instrument import configured_resource
+    from daq.service.auth import TokenError, load_or_create_token, token_path
+    from daq.store import resolve_store_dir
+
+    path = token_path()
+    try:
+        token, created = load_or_create_token(path)
+    except TokenError as exc:
+        raise UserError(str(exc)) from None
+    if show_token:
+        typer.echo(token)
+        return
+    if sim and resource:
+        raise UserError("--sim and --resource exclude each other", exit_code=2)
+    if not 0 <= port <= 65535:
+        raise UserError("--port must be 0..65535", exit_code=2)
+    if workers is not None and workers < 1:
+        raise UserError("--workers must be at least 1", exit_code=2)
+    real = None if sim else configured_resource(resource)
+    sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale}
+    if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
+        raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
+    if time_scale is not None and not time_scale >= 0:
+        raise UserError("--time-scale must be >= 0", exit_code=2)
+    address = _scheduler(scheduler)
+    store_dir, _ = resolve_store_dir(store)
+    run_service(
+        store_dir, real, sim, host, port, token, created, path, workers, address,
+        scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
+        time_scale=0.05 if time_scale is None else time_scale,
+    )  # fmt: skip
+
+
+def _scheduler(option: str | None) -> str | None:
+    if option is None and not os.environ.get("DAQ_SCHEDULER"):
+        return None
+    from daq.dask_batch import scheduler_address
+
+    return scheduler_address(option)
+
+
+def run_service(
+    store_dir, resource, sim, host, port, token, created, token_file, workers, scheduler,
+    scenario: str, seed: int, time_scale: float,
+) -> None:  # fmt: skip
+    import socket
+
+    import uvicorn
+
+    from daq.service.app import create_app
+    from daq.service.auth import is_loopback
+    from daq.service.instrument_link import SimSpec
+    from daq.service.service import Service, ServiceConfig
+    from daq.store import StoreError
+    from drivers.errors import DriverError
+
+    loopback = is_loopback(host)
+    # Bind first, so that the port is known (for --port 0) and taken before anything starts.
+    try:
+        family = socket.AF_INET6 if ":" in host else socket.AF_INET
+        sock = socket.socket(family, socket.SOCK_STREAM)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+    except OSError as exc:
+        raise UserError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
+    spec = SimSpec(scenario, seed, time_scale) if resource is None else None
+    config = ServiceConfig(
+        store_dir=store_dir, resource=resource, sim=spec, host=host, port=sock.getsockname()[1],
+        token=token, reads_need_token=not loopback, scheduler=scheduler,
+    )  # fmt: skip
+    if workers is not None:
+        config.workers = workers
+    service = Service(config)
+    try:
+        service.start()
+    except (DriverError, StoreError, ValueError) as exc:
+        sock.close()
+        raise UserError(str(exc)) from None
+    status = service.link.status()
+    what = "simulated analyzer" if status["simulated"] else "analyzer"
+    state = status["identification"] or f"not answering: {status['last_error']}"
+    say = sys.stderr.write
+    say(f"daq serve: {what} at {status['resource']} ({state})\n")
+    say(
+        f"daq serve: store {store_dir}; {config.workers} analysis workers"
+        + (f" on {scheduler}" if scheduler else "")
+        + "\n"
+    )
+    if created:
+        say(f"daq serve: a new access token was made in {token_file}\n")
+    if loopback:
+        say(f"daq serve: open {config.url}/#token={token}\n")
+    else:
+        say(
+            f"daq serve: listening on {host}, beyond this machine: EVERY request needs the token "
+            f"(daq serve --show-token); open {config.url}/#token=<token>\n"
+        )
+    say("daq serve: Ctrl-C stops the service\n")
+    server = uvicorn.Server(
+        uvicorn.Config(
+            create_app(service),
+            log_level="warning",
+            access_log=False,
+            lifespan="off",
+            timeout_graceful_shutdown=3,
+        )
+    )
+    try:
+        server.run(sockets=[sock])
+    finally:
+        service.close()
+        sock.close()
+    say("daq serve: stopped\n")

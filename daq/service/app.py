@@ -1,0 +1,365 @@
+"""The HTTP API and pages of ``daq serve`` (FastAPI; docs/service.md lists every route).
+
+Request handlers that touch the disk or the analyzer are plain ``def``: FastAPI runs
+them in its thread pool, so the event loop only ever streams events.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import tempfile
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+from fastapi import Depends, FastAPI, Header, HTTPException, Query, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response, StreamingResponse
+from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, ConfigDict, Field
+from starlette.background import BackgroundTask
+
+from daq import __version__
+from daq.service.auth import token_matches
+from daq.service.capture_control import MAX_HITS_WANTED, Conflict
+from daq.service.events import plain
+from daq.service.limits import BodyLimit
+from daq.service.service import Service
+from daq.store import StoreError
+from drivers.errors import DriverError
+
+#: Seconds between keep-alive comments on an idle event stream (proxies and browsers
+#: drop silent connections).
+KEEPALIVE_S = 15.0
+
+
+class CaptureRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    hits: int = Field(5, ge=1, le=MAX_HITS_WANTED, description="Accepted hits to average.")
+    operator: str = Field("", max_length=200)
+    note: str = Field("", max_length=2000)
+    auto: bool = Field(False, description="Decide each hit by the checks instead of waiting for a decision.")
+
+
+class Decision(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    index: int = Field(ge=0, description="0-based index of the pending hit.")
+    accept: bool
+    reason: str = Field("", max_length=500)
+
+
+def create_app(service: Service) -> FastAPI:
+    app = FastAPI(
+        title="daq serve",
+        version=__version__,
+        description="The lab service: captures on the HP analyzer, the run store, analyses and fits.",
+        docs_url=None,  # Swagger UI loads scripts from a CDN; the lab PC may have no network
+        redoc_url=None,
+    )
+    app.add_middleware(BodyLimit)
+    app.state.service = service
+    token = service.config.token
+
+    def given_token(request: Request, authorization: str | None) -> str | None:
+        if authorization and authorization.lower().startswith("bearer "):
+            return authorization[7:].strip()
+        if request.method == "GET":
+            return request.query_params.get("token")
+        return None
+
+    def need_token(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
+        if not token_matches(given_token(request, authorization), token):
+            raise HTTPException(
+                401, "a valid token is needed (Authorization: Bearer <token>; daq serve --show-token)"
+            )
+
+    def read_access(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
+        if service.config.reads_need_token:
+            need_token(request, authorization)
+
+    reads = [Depends(read_access)]
+    writes = [Depends(need_token)]
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+        first = exc.errors()[0] if exc.errors() else {}
+        where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "request"
+        message = first.get("msg", "invalid request")
+        if first.get("type") == "json_invalid":
+            message = "the body is not valid JSON"
+        return JSONResponse({"detail": f"{where}: {message}"}, status_code=422)
+
+    # ------------------------------------------------------------ pages
+    static = resources.files("daq.service") / "static"
+
+    @app.get("/", include_in_schema=False)
+    def live_page() -> Response:
+        return _page(static, "index.html")
+
+    @app.get("/runs", include_in_schema=False)
+    def runs_page() -> Response:
+        return _page(static, "runs.html")
+
+    app.mount("/static", StaticFiles(directory=str(static), check_dir=False), name="static")
+
+    # ------------------------------------------------------------ status
+    @app.get(
+        "/api/health", dependencies=reads, summary="The service, the instrument, the capture, the workers"
+    )
+    def health() -> dict[str, Any]:
+        return {
+            "status": "ok",
+            "version": __version__,
+            "store": str(service.store.path),
+            "instrument": service.link.status(),
+            "capture": {"state": service.capture.state},
+            "jobs": service.jobs.counts(),
+            "token_required_for_reads": service.config.reads_need_token,
+            "clients": service.hub.n_subscribers,
+        }
+
+    @app.get("/api/instrument", dependencies=reads, summary="What is known of the analyzer")
+    def instrument() -> dict[str, Any]:
+        return service.link.status()
+
+    # ------------------------------------------------------------ capture
+    @app.get("/api/capture", dependencies=reads, summary="The current or last capture")
+    def capture_state() -> dict[str, Any]:
+        return plain(service.capture.snapshot())
+
+    @app.post("/api/capture", dependencies=writes, status_code=202, summary="Start a capture")
+    def capture_start(body: CaptureRequest) -> dict[str, Any]:
+        try:
+            run_id = service.capture.start(body.hits, body.operator, body.note, body.auto)
+        except Conflict as exc:
+            raise HTTPException(409, str(exc)) from None
+        except DriverError as exc:
+            raise HTTPException(503, f"the analyzer cannot be reached: {exc}") from None
+        return {"run_id": run_id}
+
+    @app.post("/api/capture/decision", dependencies=writes, summary="Accept or reject the pending hit")
+    def capture_decision(body: Decision) -> dict[str, Any]:
+        try:
+            service.capture.decide(body.index, body.accept, body.reason)
+        except Conflict as exc:
+            raise HTTPException(409, str(exc)) from None
+        return {"index": body.index, "accepted": body.accept}
+
+    @app.post("/api/capture/stop", dependencies=writes, status_code=202, summary="Stop; seal the hits so far")
+    def capture_stop() -> dict[str, Any]:
+        return _stop(service, "stop")
+
+    @app.post("/api/capture/abort", dependencies=writes, status_code=202, summary="Abort; discard the hits")
+    def capture_abort() -> dict[str, Any]:
+        return _stop(service, "abort")
+
+    @app.get("/api/capture/hits/{index}", dependencies=reads, summary="One hit's time records")
+    def capture_hit(index: int) -> dict[str, Any]:
+        traces = service.capture.hit_traces(index)
+        if traces is None:
+            raise HTTPException(404, f"the current capture has no hit {index}")
+        return plain(traces)
+
+    @app.get("/api/capture/frf", dependencies=reads, summary="The FRF averaged over the accepted hits so far")
+    def capture_frf() -> dict[str, Any]:
+        frf = service.capture.frf()
+        if frf is None:
+            raise HTTPException(404, "no hit accepted yet")
+        return plain(frf)
+
+    # ------------------------------------------------------------ runs
+    @app.get("/api/runs", dependencies=reads, summary="Every run of the store, with its results")
+    def runs() -> list[dict[str, Any]]:
+        return [_run_row(service, s) for s in _store_call(service.store.list)]
+
+    @app.get("/api/runs/{run_id}", dependencies=reads, summary="One run, its analysis and fits")
+    def run(run_id: str) -> dict[str, Any]:
+        from daq.runs_command import run_dict
+
+        rid = _resolve(service, run_id)
+        info = run_dict(_store_call(service.store.open, rid), service.store.path / f"{rid}.h5")
+        info["file"] = f"{rid}.h5"  # not the server's path
+        state = service.jobs.state(rid)
+        analysis = service.analysis(rid)
+        return plain(
+            {
+                "run": info,
+                "analysis": None if analysis is None else analysis["summary"],
+                "fits": {name: p["summary"] for name, p in service.fits(rid).items()},
+                "analysis_state": state["analysis"],
+                "fit_state": state["fit"],
+            }
+        )
+
+    @app.get("/api/runs/{run_id}/analysis", dependencies=reads, summary="The run's analysis: modes, Table 2")
+    def run_analysis(run_id: str) -> dict[str, Any]:
+        return plain(_analysis(service, run_id)["summary"])
+
+    @app.get("/api/runs/{run_id}/frf", dependencies=reads, summary="The run's analysed FRF and coherence")
+    def run_frf(run_id: str) -> dict[str, Any]:
+        payload = _analysis(service, run_id)
+        frf = np.atleast_2d(payload["frf"])[0]
+        coherence = payload.get("coherence")
+        return plain(
+            {
+                "frequency_hz": payload["frequency_hz"],
+                "frf_abs": np.abs(frf),
+                "frf_phase_deg": np.degrees(np.angle(frf)),
+                "coherence": None if coherence is None else np.atleast_2d(coherence)[0],
+            }
+        )
+
+    @app.get("/api/runs/{run_id}/fits", dependencies=reads, summary="The run's damping fits")
+    def run_fits(run_id: str) -> dict[str, Any]:
+        rid = _resolve(service, run_id)
+        return plain({name: p["summary"] for name, p in service.fits(rid).items()})
+
+    @app.get("/api/runs/{run_id}/file", dependencies=reads, summary="The run's HDF5 file")
+    def run_file(run_id: str) -> Response:
+        rid = _resolve(service, run_id)
+        return FileResponse(
+            service.store.path / f"{rid}.h5", media_type="application/x-hdf5", filename=f"{rid}.h5"
+        )
+
+    @app.get("/api/runs/{run_id}/export", dependencies=reads, summary="The run as CSV or UFF 58")
+    def run_export(run_id: str, format: Annotated[str, Query(pattern="^(csv|uff)$")] = "csv") -> Response:
+        rid = _resolve(service, run_id)
+        the_run = _store_call(service.store.open, rid)
+        folder = Path(tempfile.mkdtemp(prefix="daq-export-"))
+        target = folder / f"{rid}.{format}"
+        try:
+            if format == "csv":
+                from daq.formats.csv_text import write_csv
+
+                write_csv(the_run, target)
+            else:
+                from daq.formats.uff58_export import write_uff
+
+                write_uff(the_run, target)
+        except (ValueError, OSError) as exc:
+            _remove(folder)
+            raise HTTPException(422, f"cannot export run {rid} as {format}: {exc}") from None
+        media = "text/csv" if format == "csv" else "application/octet-stream"
+        return FileResponse(
+            target, media_type=media, filename=target.name, background=BackgroundTask(_remove, folder)
+        )
+
+    @app.get(
+        "/api/runs/{run_id}/report",
+        dependencies=reads,
+        response_class=HTMLResponse,
+        summary="The run's report",
+    )
+    def run_report(run_id: str) -> HTMLResponse:
+        from daq.report.build import build_report
+
+        rid = _resolve(service, run_id)
+        try:
+            html, _ = build_report(service.store.path, rid)
+        except (StoreError, ValueError) as exc:
+            raise HTTPException(422, f"no report for run {rid}: {' '.join(str(exc).split())}") from None
+        return HTMLResponse(html)
+
+    # ------------------------------------------------------------ events
+    @app.get("/api/events", dependencies=reads, summary="Live events (server-sent events)")
+    async def events(
+        request: Request,
+        since: Annotated[int | None, Query(ge=0)] = None,
+        last_event_id: Annotated[str | None, Header()] = None,
+    ) -> StreamingResponse:
+        if since is None and last_event_id is not None and last_event_id.strip().isdigit():
+            since = int(last_event_id)
+        return StreamingResponse(
+            _stream(service, request, since),
+            media_type="text/event-stream",
+            headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
+        )
+
+    return app
+
+
+async def _stream(service: Service, request: Request, since: int | None):
+    sub, backlog = service.hub.subscribe(since)
+    try:
+        yield f'event: hello\ndata: {{"last_id": {service.hub.last_id}}}\n\n'.encode()
+        for event in backlog:
+            yield event.sse()
+        while True:
+            try:
+                event = await asyncio.wait_for(sub.queue.get(), KEEPALIVE_S)
+            except TimeoutError:
+                if await request.is_disconnected():
+                    return
+                yield b": keep-alive\n\n"
+                continue
+            if event is None:  # the client fell too far behind: it reconnects and catches up
+                return
+            yield event.sse()
+    finally:
+        service.hub.unsubscribe(sub)
+
+
+def _page(static: Any, name: str) -> Response:
+    page = static / name
+    if not page.is_file():
+        raise HTTPException(404, f"{name} is not installed")
+    return HTMLResponse(page.read_text(encoding="utf-8"))
+
+
+def _stop(service: Service, how: str) -> dict[str, Any]:
+    try:
+        service.capture.stop(how)
+    except Conflict as exc:
+        raise HTTPException(409, str(exc)) from None
+    return {"state": service.capture.state}
+
+
+def _store_call(fn: Any, *args: Any) -> Any:
+    try:
+        return fn(*args)
+    except StoreError as exc:
+        raise HTTPException(404, " ".join(str(exc).split())) from None
+
+
+def _resolve(service: Service, run_id: str) -> str:
+    """The id of the run named by ``run_id`` (an id, a unique prefix, or latest); 404
+    otherwise. Names are checked against the id grammar before any path is formed."""
+    if not run_id or len(run_id) > 64:
+        raise HTTPException(404, "no such run")
+    return _store_call(service.store.resolve, run_id).stem
+
+
+def _analysis(service: Service, run_id: str) -> dict[str, Any]:
+    rid = _resolve(service, run_id)
+    payload = service.analysis(rid)
+    if payload is None:
+        raise HTTPException(404, f"run {rid} has no analysis yet ({service.jobs.state(rid)['analysis']})")
+    return payload
+
+
+def _run_row(service: Service, s: Any) -> dict[str, Any]:
+    from daq.runs_command import summary_dict
+
+    row = summary_dict(s)
+    row.pop("file", None)
+    row.update(analysis="none", fit="none", frequencies_hz=None, damping_ratios=None, fit_psi=None)
+    if s.error is not None:
+        return plain(row)
+    state = service.jobs.state(s.run_id)
+    row.update(analysis=state["analysis"], fit=state["fit"])
+    analysis = service.analysis(s.run_id) if state["analysis"] == "done" else None
+    if analysis is not None:
+        modes = analysis["summary"].get("modes", [])
+        row["frequencies_hz"] = [m["frequency_hz"] for m in modes]
+        row["damping_ratios"] = [m["damping_ratio"] for m in modes]
+    fit = service.default_fit(s.run_id) if state["fit"] == "done" else None
+    if fit is not None:
+        row["fit_psi"] = fit["summary"].get("psi")
+    return plain(row)
+
+
+def _remove(folder: Path) -> None:
+    import shutil
+
+    shutil.rmtree(folder, ignore_errors=True)

@@ -1,0 +1,356 @@
+"""One capture at a time, run in a thread of the service, decided from the web page.
+
+The workflow is daq.capture.Capture, the same as ``daq capture``: the same checks,
+the same runs. What differs is who decides each hit: the page or the API
+(``decide``), or the checks when the capture was started with ``auto``. Every step
+is published as an event (daq/service/events.py). However the capture ends, the
+hits taken are sealed: complete, or as an incomplete run after Stop, a dropped
+link or an instrument error. Only Abort discards them, as asked.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from daq.capture import (
+    Capture,
+    CaptureError,
+    Configured,
+    Connected,
+    Finished,
+    HitArrived,
+    HitDecided,
+    settings_as_dict,
+)
+from daq.service.events import EventHub
+from daq.service.instrument_link import InstrumentLink
+from daq.store import Run, Store, StoreError
+from drivers.errors import DriverError, Interrupted
+from drivers.settings import ImpactSettings
+
+log = logging.getLogger(__name__)
+
+MAX_HITS_WANTED = 999
+
+
+class Conflict(Exception):
+    """The request does not fit the capture's state (HTTP 409); one line."""
+
+
+class CaptureController:
+    """start / decide / stop / abort from request threads; the capture runs in its own."""
+
+    def __init__(
+        self,
+        link: InstrumentLink,
+        store_dir: Path,
+        hub: EventHub,
+        on_sealed: Callable[[str], None],
+        settings: ImpactSettings | None = None,
+    ) -> None:
+        self.link = link
+        self.store_dir = store_dir
+        self.hub = hub
+        self.on_sealed = on_sealed
+        self.settings = settings or ImpactSettings()
+        self._cond = threading.Condition()
+        self._thread: threading.Thread | None = None
+        self.state = "idle"
+        self.last_run_id: str | None = None
+        self.last_outcome: str | None = None
+        self.last_error: str | None = None
+        self._reset(None, 0, False)
+
+    def _reset(self, job: Capture | None, hits_wanted: int, auto: bool) -> None:
+        self._job = job
+        self.run_id = job.run_id if job is not None else None
+        self.hits_wanted = hits_wanted
+        self.auto = auto
+        self.hits: list[dict[str, Any]] = []
+        self.traces: list[tuple[np.ndarray, np.ndarray]] = []
+        self.pending: int | None = None
+        self.actual_settings: dict[str, Any] | None = None
+        self.sample_rate_hz = 0.0
+        self.start_s = 0.0
+        self.center_hz = 0.0
+        self._decision: tuple[bool, str] | None = None
+        self._stop: str | None = None
+        self._frf: dict[str, Any] | None = None
+
+    # ------------------------------------------------------------ requests
+    def start(self, hits_wanted: int, operator: str = "", note: str = "", auto: bool = False) -> str:
+        """Open the analyzer and start a capture; its run id. Conflict if one runs;
+        DriverError if the analyzer cannot be reached."""
+        if not 1 <= hits_wanted <= MAX_HITS_WANTED:
+            raise ValueError(f"hits must be 1..{MAX_HITS_WANTED}")
+        with self._cond:
+            if self.state != "idle":
+                raise Conflict(f"a capture is {self.state} (run {self.run_id})")
+            self.state = "starting"
+        try:
+            dsa = self.link.open_driver()
+        except DriverError:
+            with self._cond:
+                self.state = "idle"
+            raise
+        simulator = self.link.sim.provenance() if self.link.sim is not None else None
+        job = Capture(
+            dsa, self.settings, hits_wanted, resource=self.link.resource, transport=self.link.transport_name,
+            simulator=simulator, operator=operator, note=note,
+        )  # fmt: skip
+        with self._cond:
+            self._reset(job, hits_wanted, auto)
+            self.state = "running"
+            self._thread = threading.Thread(target=self._run, args=(job, dsa), name="capture", daemon=True)
+        self.hub.publish(
+            "capture_started",
+            {
+                "run_id": job.run_id,
+                "hits_wanted": hits_wanted,
+                "auto": auto,
+                "operator": operator,
+                "note": note,
+            },
+        )
+        self._thread.start()
+        return job.run_id
+
+    def decide(self, index: int, accept: bool, reason: str = "") -> None:
+        with self._cond:
+            if self.state != "running" or self.pending is None:
+                raise Conflict("no hit is waiting for a decision")
+            if index != self.pending:
+                raise Conflict(f"hit {index} is not the one waiting (hit {self.pending} is)")
+            self._decision = (bool(accept), reason)
+            self._cond.notify_all()
+
+    def stop(self, how: str = "stop") -> None:
+        """End the capture: ``stop`` seals the hits so far, ``abort`` discards them."""
+        with self._cond:
+            if self.state not in ("running", "stopping"):
+                raise Conflict("no capture is running")
+            if self._stop is None or how == "abort":
+                self._stop = how
+            self.state = "stopping"
+            job = self._job
+            self._cond.notify_all()
+        if job is not None:
+            job.driver.interrupt.set()
+
+    def wait_idle(self, timeout_s: float | None = None) -> bool:
+        thread = self._thread
+        if thread is not None:
+            thread.join(timeout_s)
+            return not thread.is_alive()
+        return True
+
+    # ------------------------------------------------------------ reading
+    def snapshot(self) -> dict[str, Any]:
+        with self._cond:
+            return {
+                "state": self.state,
+                "run_id": self.run_id,
+                "hits_wanted": self.hits_wanted,
+                "accepted": sum(1 for h in self.hits if h["accepted"]),
+                "auto": self.auto,
+                "pending": self.pending,
+                "hits": [dict(h) for h in self.hits],
+                "settings": self.actual_settings,
+                "last_run_id": self.last_run_id,
+                "last_outcome": self.last_outcome,
+                "last_error": self.last_error,
+            }
+
+    def hit_traces(self, index: int) -> dict[str, Any] | None:
+        with self._cond:
+            if not 0 <= index < len(self.traces):
+                return None
+            force, response = self.traces[index]
+            return {
+                "index": index,
+                "sample_rate_hz": self.sample_rate_hz,
+                "start_s": self.start_s,
+                "force_n": np.real(force),
+                "response_m_s2": np.real(response),
+            }
+
+    def frf(self) -> dict[str, Any] | None:
+        with self._cond:
+            return self._frf
+
+    # ------------------------------------------------------------ the capture thread
+    def _run(self, job: Capture, dsa: Any) -> None:
+        outcome, message, sealed = "failed", "", None
+        try:
+            sealed = self._iterate(job)
+            outcome, message = "sealed", f"{job.accepted} hits averaged"
+        except _Stopped:
+            pass
+        except Interrupted:
+            pass
+        except DriverError as exc:
+            message = str(exc)
+            self.link.note_error(message)
+            self.hub.publish("instrument", self.link.status())
+        except (CaptureError, StoreError) as exc:
+            message = str(exc)
+        except Exception as exc:  # a bug: the service stays up and says so
+            log.exception("capture %s failed", job.run_id)
+            message = f"internal error: {type(exc).__name__}: {exc}"
+        finally:
+            dsa.close()
+        if sealed is None:
+            outcome, message, sealed = self._keep_partial(job, outcome, message)
+        with self._cond:
+            self.pending = None
+            self.last_run_id = sealed.run_id if sealed is not None else self.last_run_id
+            self.last_outcome = outcome
+            self.last_error = message if outcome in ("failed", "incomplete") and message else None
+            self.state = "idle"
+            self._cond.notify_all()
+        self.hub.publish("capture_ended", {"run_id": job.run_id, "outcome": outcome, "message": message})
+        if sealed is not None:
+            self.on_sealed(sealed.run_id)
+
+    def _keep_partial(self, job: Capture, outcome: str, message: str) -> tuple[str, str, Run | None]:
+        """After anything but a complete capture: seal the hits so far (unless aborted)."""
+        with self._cond:
+            how = self._stop
+        if how == "abort":
+            return "aborted", f"{len(job.hits)} hits discarded", None
+        why = message or "stopped"
+        try:
+            run = job.partial_run()
+        except CaptureError as exc:
+            return "failed", f"{why}; the hits could not be kept: {exc}", None
+        if run is None:
+            return ("stopped" if how == "stop" else outcome), f"{why}; no hits to keep", None
+        try:
+            self._seal(run)
+        except StoreError as exc:
+            return "failed", f"{why}; the {run.hits.n_hits} hits so far could not be sealed: {exc}", None
+        return "incomplete", f"{why}; {run.hits.n_hits} hits kept as an incomplete run", run
+
+    def _seal(self, run: Run) -> None:
+        Store(self.store_dir).seal(run)
+        self.hub.publish(
+            "run_sealed",
+            {"run_id": run.run_id, "complete": run.complete, "n_hits": run.hits.n_hits,
+             "n_accepted": int(np.count_nonzero(run.hits.accepted))},
+        )  # fmt: skip
+
+    def _iterate(self, job: Capture) -> Run:
+        for event in job:
+            with self._cond:
+                if self._stop is not None:
+                    raise _Stopped
+            if isinstance(event, Connected):
+                self.link.note_ok(event.identification)
+                self.hub.publish("instrument", self.link.status())
+            elif isinstance(event, Configured):
+                settings = settings_as_dict(event.settings)
+                with self._cond:
+                    self.actual_settings = settings
+                    self.center_hz = float(event.settings.center_hz or 0.0)
+                self.hub.publish(
+                    "configured",
+                    {"run_id": job.run_id, "identification": job.identification, "settings": settings},
+                )
+            elif isinstance(event, HitArrived):
+                self._arrived(job, event)
+                if not self.auto:
+                    job.decide(*self._wait_for_decision(event.index))
+            elif isinstance(event, HitDecided):
+                self._decided(job, event)
+            elif isinstance(event, Finished):
+                self._seal(event.run)
+                return event.run
+        raise CaptureError("the capture ended without a run")
+
+    def _arrived(self, job: Capture, hit: HitArrived) -> None:
+        summary = {
+            "index": hit.index, "decided": False, "accepted": None, "reason": "",
+            "peak_force_n": hit.peak_force_n, "overload": list(hit.overload),
+            "timestamp_utc": hit.timestamp_utc, "passed": hit.passed,
+            "suggested_reason": hit.suggested_reason,
+            "checks": [{"name": c.name, "passed": c.passed, "detail": c.detail} for c in hit.checks],
+        }  # fmt: skip
+        with self._cond:
+            self.sample_rate_hz, self.start_s = job.sample_rate_hz, job.start_s
+            self.hits.append(summary)
+            self.traces.append((hit.force_n, hit.response_m_s2))
+            self.pending = None if self.auto else hit.index
+            self._decision = None
+        self.hub.publish(
+            "hit",
+            {**summary, "run_id": job.run_id, "accepted_so_far": hit.accepted_so_far,
+             "sample_rate_hz": job.sample_rate_hz, "start_s": job.start_s,
+             "force_n": np.real(hit.force_n), "response_m_s2": np.real(hit.response_m_s2)},
+        )  # fmt: skip
+
+    def _wait_for_decision(self, index: int) -> tuple[bool, str]:
+        with self._cond:
+            while self._decision is None and self._stop is None:
+                self._cond.wait()
+            if self._stop is not None:
+                raise _Stopped
+            decision = self._decision
+            self._decision = None
+            self.pending = None
+            return decision
+
+    def _decided(self, job: Capture, event: HitDecided) -> None:
+        with self._cond:
+            hit = self.hits[event.index]
+            hit.update(decided=True, accepted=event.accepted, reason=event.reason)
+            accepted = [self.traces[h["index"]] for h in self.hits if h["accepted"]]
+        self.hub.publish(
+            "hit_decided",
+            {"run_id": job.run_id, "index": event.index, "accepted": event.accepted,
+             "reason": event.reason, "accepted_so_far": event.accepted_so_far},
+        )  # fmt: skip
+        if event.accepted:
+            frf = live_frf(self.actual_settings or {}, accepted, self.sample_rate_hz, self.center_hz)
+            with self._cond:
+                self._frf = frf
+            self.hub.publish("frf", {"run_id": job.run_id, **frf})
+
+
+class _Stopped(Exception):
+    """Stop or Abort was asked while the capture waited."""
+
+
+def live_frf(
+    settings: dict[str, Any],
+    records: list[tuple[np.ndarray, np.ndarray]],
+    sample_rate_hz: float,
+    center_hz: float,
+) -> dict[str, Any]:
+    """H1 and coherence over the accepted hits so far, with the windows the analysis
+    will use (the analyzer's settings). records: [(force_n, response_m_s2)] each (n,)."""
+    from analysis.spectra import frf_estimate, linear_spectra
+    from daq.analysis_store import window_specs
+
+    force_window, response_window, _ = window_specs(
+        SimpleNamespace(instrument=SimpleNamespace(settings=settings))
+    )
+    force = np.stack([f for f, _ in records])
+    response = np.stack([r for _, r in records])
+    spectra = linear_spectra(
+        force, response, sample_rate_hz, force_window, response_window, center_hz=center_hz
+    )
+    est = frf_estimate(spectra)
+    return {
+        "n_averaged": len(records),
+        "frequency_hz": est.frequency_hz,
+        "frf_abs": np.abs(est.h1),
+        "frf_phase_deg": np.degrees(np.angle(est.h1)),
+        "coherence": est.coherence,
+    }

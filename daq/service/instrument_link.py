@@ -1,0 +1,119 @@
+"""The service's hold on the analyzer: the lock for as long as the service runs, a
+fresh connection for each capture (so that a dropped link is reconnected at the
+next one), and what is known of its state.
+
+With ``--sim`` the built-in simulator serves on a loopback TCP socket inside the
+service, as ``daq capture --sim`` does, and the service talks to it through
+pyvisa-py like to a real analyzer.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+from drivers.errors import DriverError
+from drivers.hp35660a import HP35660A
+from drivers.locking import ResourceLock
+from drivers.resources import lock_key_of
+
+#: A technician may take their time between hits; Stop on the page ends a wait.
+SERVICE_HIT_ALLOWANCE_S = 24 * 3600.0
+#: Per exchange with the analyzer.
+IO_TIMEOUT_S = 5.0
+
+
+@dataclass(frozen=True)
+class SimSpec:
+    """The built-in simulator's beam scenario, seed, time scale and hammer overrides."""
+
+    scenario: str = "realistic"
+    seed: int = 1
+    time_scale: float = 0.05
+    hammer: str = ""
+
+    def provenance(self) -> dict[str, Any]:
+        return {
+            "scenario": self.scenario,
+            "seed": self.seed,
+            "time_scale": self.time_scale,
+            "hammer": self.hammer,
+        }
+
+
+class InstrumentLink:
+    """Owns the resource; ``open_driver()`` for each capture."""
+
+    def __init__(self, resource: str | None, sim: SimSpec | None, holder: str) -> None:
+        if (resource is None) == (sim is None):
+            raise ValueError("give a resource or a simulator, not both")
+        self.resource = resource or ""
+        self.sim = sim
+        self.holder = holder
+        self._stack = contextlib.ExitStack()
+        self._lock: ResourceLock | None = None
+        self._state_lock = threading.Lock()
+        self.connected = False
+        self.identification: str | None = None
+        self.last_error: str | None = None
+        self.transport_name = ""
+
+    def start(self) -> None:
+        """Start the simulator if any, take the instrument's lock (ResourceBusy if
+        another process has it) and probe the analyzer once (a failure is recorded,
+        not raised: the service starts, and says so)."""
+        if self.sim is not None:
+            from daq.capture_session import serve_simulator
+            from sims.hammer import HammerModel, adjusted
+            from sims.sources import PhysicsSource
+
+            hammer = adjusted(HammerModel(), self.sim.hammer) if self.sim.hammer else HammerModel()
+            source = PhysicsSource(self.sim.scenario, hammer=hammer, seed=self.sim.seed)
+            self.resource = serve_simulator(self._stack, source, self.sim.time_scale)
+        lock = ResourceLock(lock_key_of(self.resource), self.resource, holder=self.holder)
+        lock.acquire()
+        self._lock = lock
+        self._stack.callback(lock.release)
+        try:
+            with self.open_driver() as dsa:
+                self.note_ok(dsa.identify())
+        except DriverError as exc:
+            self.note_error(str(exc))
+
+    def open_driver(self) -> HP35660A:
+        """A new connection (the lock is ours already: the driver does not take it)."""
+        try:
+            dsa = HP35660A.open(self.resource, timeout_s=IO_TIMEOUT_S, lock_file=False)
+        except DriverError as exc:
+            self.note_error(str(exc))
+            raise
+        dsa.hit_allowance_s = SERVICE_HIT_ALLOWANCE_S
+        self.transport_name = type(dsa.transport).__name__
+        return dsa
+
+    def note_ok(self, identification: str | None = None) -> None:
+        with self._state_lock:
+            self.connected = True
+            self.last_error = None
+            if identification:
+                self.identification = identification
+
+    def note_error(self, message: str) -> None:
+        with self._state_lock:
+            self.connected = False
+            self.last_error = message
+
+    def status(self) -> dict[str, Any]:
+        with self._state_lock:
+            return {
+                "resource": self.resource,
+                "simulated": self.sim is not None,
+                "connected": self.connected,
+                "identification": self.identification,
+                "last_error": self.last_error,
+            }
+
+    def close(self) -> None:
+        self._stack.close()

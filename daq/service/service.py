@@ -1,0 +1,118 @@
+"""The parts of ``daq serve`` and their life: the instrument link, the capture
+controller, the analysis workers, the event hub, and a cache of stored results."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from daq.service.capture_control import CaptureController, Conflict
+from daq.service.events import EventHub
+from daq.service.instrument_link import InstrumentLink, SimSpec
+from daq.service.jobs import JobRunner, analysis_result_name, fit_result_name
+from daq.store import Store, StoreError
+
+
+@dataclass
+class ServiceConfig:
+    """store_dir : the run store. resource / sim : the analyzer (one of them).
+    host, port : where HTTP is served. token : the access token.
+    workers : analysis worker processes. scheduler : a Dask scheduler instead."""
+
+    store_dir: Path
+    resource: str | None
+    sim: SimSpec | None
+    host: str
+    port: int
+    token: str
+    reads_need_token: bool
+    workers: int = field(default_factory=lambda: max(1, (os.cpu_count() or 2) - 1))
+    scheduler: str | None = None
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"http://{host}:{self.port}"
+
+
+class Service:
+    def __init__(self, config: ServiceConfig) -> None:
+        self.config = config
+        self.store = Store(config.store_dir)
+        self.hub = EventHub()
+        self.link = InstrumentLink(config.resource, config.sim, holder=f"daq serve at {config.url}")
+        self.jobs = JobRunner(config.store_dir, self.hub, config.workers, config.scheduler)
+        self.capture = CaptureController(self.link, config.store_dir, self.hub, on_sealed=self.jobs.submit)
+        self._results = _ResultCache(self.store)
+
+    def start(self) -> None:
+        """Take the instrument (ResourceBusy if someone has it), start the workers and
+        queue the store's backlog."""
+        self.store.ensure_writable()
+        self.link.start()
+        try:
+            self.jobs.start()
+        except BaseException:
+            self.link.close()
+            raise
+
+    def close(self) -> None:
+        with contextlib.suppress(Conflict):  # nothing running is the usual case
+            self.capture.stop("stop")  # a running capture seals what it has
+        self.capture.wait_idle(10.0)
+        self.jobs.close()
+        self.link.close()
+
+    # ------------------------------------------------------------ results
+    def analysis(self, run_id: str) -> dict[str, Any] | None:
+        return self._results.get(run_id, analysis_result_name())
+
+    def fits(self, run_id: str) -> dict[str, dict[str, Any]]:
+        out = {}
+        for path in sorted(self.store.path.glob(f"{run_id}.fit-*.h5")):
+            name = path.name[len(run_id) + 1 : -3]
+            payload = self._results.get(run_id, name)
+            if payload is not None:
+                out[name] = payload
+        return out
+
+    def default_fit(self, run_id: str) -> dict[str, Any] | None:
+        return self._results.get(run_id, fit_result_name())
+
+
+class _ResultCache:
+    """Stored results read once per version of the file (keyed by its size and mtime):
+    listing 1,000 runs with their modes must not open 2,000 HDF5 files each time."""
+
+    MAX_ENTRIES = 4096
+
+    def __init__(self, store: Store) -> None:
+        self.store = store
+        self._lock = threading.Lock()
+        self._entries: dict[tuple[str, str], tuple[tuple[int, int], dict[str, Any]]] = {}
+
+    def get(self, run_id: str, name: str) -> dict[str, Any] | None:
+        """The result's payload (summary and arrays), or None if absent or unreadable."""
+        path = self.store.path / f"{run_id}.{name}.h5"
+        try:
+            st = path.stat()
+        except OSError:
+            return None
+        version = (st.st_size, st.st_mtime_ns)
+        with self._lock:
+            hit = self._entries.get((run_id, name))
+        if hit is not None and hit[0] == version:
+            return hit[1]
+        try:
+            payload = self.store.read_result(run_id, name)
+        except StoreError:
+            return None
+        with self._lock:
+            if len(self._entries) >= self.MAX_ENTRIES:
+                self._entries.pop(next(iter(self._entries)))
+            self._entries[(run_id, name)] = (version, payload)
+        return payload
