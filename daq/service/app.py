@@ -24,9 +24,11 @@ from daq import __version__
 from daq.service.auth import token_matches
 from daq.service.capture_control import MAX_HITS_WANTED, Conflict
 from daq.service.events import plain
+from daq.service.jobs import analysis_result_name
 from daq.service.limits import BodyLimit
 from daq.service.service import Service
 from daq.store import StoreError
+from daq.store.ids import RUN_ID_PATTERN
 from drivers.errors import DriverError
 
 #: Seconds between keep-alive comments on an idle event stream (proxies and browsers
@@ -68,15 +70,16 @@ def create_app(service: Service) -> FastAPI:
             return request.query_params.get("token")
         return None
 
-    def need_token(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
+    # async: no I/O here, and a sync dependency would cost every request a thread hop.
+    async def need_token(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
         if not token_matches(given_token(request, authorization), token):
             raise HTTPException(
                 401, "a valid token is needed (Authorization: Bearer <token>; daq serve --show-token)"
             )
 
-    def read_access(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
+    async def read_access(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
         if service.config.reads_need_token:
-            need_token(request, authorization)
+            await need_token(request, authorization)
 
     reads = [Depends(read_access)]
     writes = [Depends(need_token)]
@@ -170,8 +173,8 @@ def create_app(service: Service) -> FastAPI:
 
     # ------------------------------------------------------------ runs
     @app.get("/api/runs", dependencies=reads, summary="Every run of the store, with its results")
-    def runs() -> list[dict[str, Any]]:
-        return [_run_row(service, s) for s in _store_call(service.store.list)]
+    def runs() -> Response:
+        return _json_bytes(_store_call(service.runs_json, lambda s: _run_row(service, s)))
 
     @app.get("/api/runs/{run_id}", dependencies=reads, summary="One run, its analysis and fits")
     def run(run_id: str) -> dict[str, Any]:
@@ -193,8 +196,12 @@ def create_app(service: Service) -> FastAPI:
         )
 
     @app.get("/api/runs/{run_id}/analysis", dependencies=reads, summary="The run's analysis: modes, Table 2")
-    def run_analysis(run_id: str) -> dict[str, Any]:
-        return plain(_analysis(service, run_id)["summary"])
+    def run_analysis(run_id: str) -> Response:
+        rid = _resolve(service, run_id)
+        data = service.summary_json(rid, analysis_result_name())
+        if data is None:
+            raise HTTPException(404, f"run {rid} has no analysis yet ({service.jobs.state(rid)['analysis']})")
+        return _json_bytes(data)
 
     @app.get("/api/runs/{run_id}/frf", dependencies=reads, summary="The run's analysed FRF and coherence")
     def run_frf(run_id: str) -> dict[str, Any]:
@@ -300,6 +307,11 @@ async def _stream(service: Service, request: Request, since: int | None):
         service.hub.unsubscribe(sub)
 
 
+def _json_bytes(data: bytes) -> Response:
+    """Already-encoded JSON (FastAPI's encoder would walk every value again)."""
+    return Response(data, media_type="application/json")
+
+
 def _page(static: Any, name: str) -> Response:
     page = static / name
     if not page.is_file():
@@ -327,6 +339,8 @@ def _resolve(service: Service, run_id: str) -> str:
     otherwise. Names are checked against the id grammar before any path is formed."""
     if not run_id or len(run_id) > 64:
         raise HTTPException(404, "no such run")
+    if RUN_ID_PATTERN.fullmatch(run_id) and (service.store.path / f"{run_id}.h5").is_file():
+        return run_id  # a whole, well-formed id: no need to scan the store for prefixes
     return _store_call(service.store.resolve, run_id).stem
 
 

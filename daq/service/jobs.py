@@ -78,6 +78,8 @@ class JobRunner:
         self._counts = {"queued": 0, "running": 0, "done": 0, "failed": 0}
         self._pool: ProcessPoolExecutor | None = None
         self._closed = False
+        #: Grows with every change of a run's state (a cache key for listings).
+        self.version = 0
 
     # ------------------------------------------------------------ lifecycle
     def start(self) -> None:
@@ -170,6 +172,7 @@ class JobRunner:
 
     def _set(self, run_id: str, stage: str, state: str) -> None:
         with self._lock:
+            self.version += 1
             self._states.setdefault(run_id, {ANALYSIS: "none", FIT: "none"})[stage] = state
             if stage == ANALYSIS and state == "running":
                 self._counts["queued"] -= 1

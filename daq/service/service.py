@@ -4,14 +4,16 @@ controller, the analysis workers, the event hub, and a cache of stored results."
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from daq.service.capture_control import CaptureController, Conflict
-from daq.service.events import EventHub
+from daq.service.events import EventHub, plain
 from daq.service.instrument_link import InstrumentLink, SimSpec
 from daq.service.jobs import JobRunner, analysis_result_name, fit_result_name
 from daq.store import Store, StoreError
@@ -48,6 +50,8 @@ class Service:
         self.jobs = JobRunner(config.store_dir, self.hub, config.workers, config.scheduler)
         self.capture = CaptureController(self.link, config.store_dir, self.hub, on_sealed=self.jobs.submit)
         self._results = _ResultCache(self.store)
+        self._listing_lock = threading.Lock()
+        self._listing: tuple[Any, bytes] | None = None
 
     def start(self) -> None:
         """Take the instrument (ResourceBusy if someone has it), start the workers and
@@ -83,6 +87,24 @@ class Service:
     def default_fit(self, run_id: str) -> dict[str, Any] | None:
         return self._results.get(run_id, fit_result_name())
 
+    def summary_json(self, run_id: str, name: str) -> bytes | None:
+        """The stored result's summary as JSON bytes, encoded once per file version."""
+        return self._results.summary_json(run_id, name)
+
+    def runs_json(self, row: Callable[[Any], dict[str, Any]]) -> bytes:
+        """GET /api/runs as JSON bytes: ``row(summary)`` for every run, recomputed only
+        when a file of the store or a run's job state changed (50 clients polling a
+        1,000-run store must not re-read it 50 times)."""
+        with os.scandir(self.store.path) as it:
+            files = sorted((e.name, *_size_mtime(e)) for e in it if e.name.endswith(".h5"))
+        key = (tuple(files), self.jobs.version)
+        with self._listing_lock:
+            if self._listing is not None and self._listing[0] == key:
+                return self._listing[1]
+            data = json.dumps([row(s) for s in self.store.list()], separators=(",", ":")).encode()
+            self._listing = (key, data)
+            return data
+
 
 class _ResultCache:
     """Stored results read once per version of the file (keyed by its size and mtime):
@@ -94,6 +116,22 @@ class _ResultCache:
         self.store = store
         self._lock = threading.Lock()
         self._entries: dict[tuple[str, str], tuple[tuple[int, int], dict[str, Any]]] = {}
+        self._encoded: dict[int, tuple[dict[str, Any], bytes]] = {}
+
+    def summary_json(self, run_id: str, name: str) -> bytes | None:
+        payload = self.get(run_id, name)
+        if payload is None:
+            return None
+        with self._lock:
+            cached = self._encoded.get(id(payload))
+            if cached is not None and cached[0] is payload:
+                return cached[1]
+        data = json.dumps(plain(payload["summary"]), separators=(",", ":")).encode()
+        with self._lock:
+            if len(self._encoded) >= self.MAX_ENTRIES:
+                self._encoded.pop(next(iter(self._encoded)))
+            self._encoded[id(payload)] = (payload, data)
+        return data
 
     def get(self, run_id: str, name: str) -> dict[str, Any] | None:
         """The result's payload (summary and arrays), or None if absent or unreadable."""
@@ -116,3 +154,11 @@ class _ResultCache:
                 self._entries.pop(next(iter(self._entries)))
             self._entries[(run_id, name)] = (version, payload)
         return payload
+
+
+def _size_mtime(entry: os.DirEntry) -> tuple[int, int]:
+    try:
+        st = entry.stat()
+    except OSError:  # removed meanwhile
+        return (-1, -1)
+    return (st.st_size, st.st_mtime_ns)
