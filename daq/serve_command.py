@@ -122,7 +122,10 @@ def run_service(
     # Bind first, so that the port is known (for --port 0) and taken before anything starts.
     try:
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
-        sock = socket.socket(family, socket.SOCK_STREAM)
+        # IPPROTO_TCP said, not left 0: asyncio sets TCP_NODELAY on accepted connections only
+        # when the listening socket's proto says TCP; without it every response on a kept-alive
+        # connection waits ~40 ms for the client's delayed ACK (Nagle).
+        sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((host, port))
         sock.listen(2048)  # from now on connections queue until uvicorn accepts them

@@ -37,7 +37,7 @@ KEEPALIVE_S = 15.0
 
 
 class CaptureRequest(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # true or "5" is no int, "yes" no bool: 422
     hits: int = Field(5, ge=1, le=MAX_HITS_WANTED, description="Accepted hits to average.")
     operator: str = Field("", max_length=200)
     note: str = Field("", max_length=2000)
@@ -45,7 +45,7 @@ class CaptureRequest(BaseModel):
 
 
 class Decision(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)  # true or "5" is no int, "yes" no bool: 422
     index: int = Field(ge=0, description="0-based index of the pending hit.")
     accept: bool
     reason: str = Field("", max_length=500)
@@ -275,8 +275,11 @@ def create_app(service: Service) -> FastAPI:
         since: Annotated[int | None, Query(ge=0)] = None,
         last_event_id: Annotated[str | None, Header()] = None,
     ) -> StreamingResponse:
-        if since is None and last_event_id is not None and last_event_id.strip().isdigit():
-            since = int(last_event_id)
+        text = (last_event_id or "").strip()
+        # isascii: "\xb2" (superscript 2) is a digit to isdigit() but not to int(); and an
+        # id is far below 19 digits (int() refuses over 4300): anything else is no id.
+        if since is None and text.isascii() and text.isdigit() and len(text) < 19:
+            since = int(text)
         return StreamingResponse(
             _stream(service, request, since),
             media_type="text/event-stream",

@@ -56,15 +56,17 @@ def load_or_create_token(path: Path) -> tuple[str, bool]:
 
 def _read(path: Path) -> str:
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+        # O_NONBLOCK: a FIFO put in its place must not hang the open (no effect on files).
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
     except FileNotFoundError:
         raise
     except OSError as exc:
         raise TokenError(f"cannot read the token file {path}: {exc.strerror or exc}") from None
+    info = os.fstat(fd)  # before fdopen, which refuses a directory with IsADirectoryError
+    if not stat.S_ISREG(info.st_mode) or info.st_uid != os.getuid():
+        os.close(fd)
+        raise TokenError(f"token file {path} is not a regular file of ours: refused")
     with os.fdopen(fd, "r", encoding="ascii", errors="replace") as handle:
-        info = os.fstat(handle.fileno())
-        if not stat.S_ISREG(info.st_mode) or info.st_uid != os.getuid():
-            raise TokenError(f"token file {path} is not a regular file of ours: refused")
         if info.st_mode & (stat.S_IRWXG | stat.S_IRWXO):
             raise TokenError(
                 f"token file {path} is readable by others (mode {stat.S_IMODE(info.st_mode):04o}): "

@@ -66,6 +66,7 @@ class CaptureController:
         self.last_run_id: str | None = None
         self.last_outcome: str | None = None
         self.last_error: str | None = None
+        self.last_message: str | None = None
         self._reset(None, 0, False)
 
     def _reset(self, job: Capture | None, hits_wanted: int, auto: bool) -> None:
@@ -166,6 +167,7 @@ class CaptureController:
                 "last_run_id": self.last_run_id,
                 "last_outcome": self.last_outcome,
                 "last_error": self.last_error,
+                "last_message": self.last_message,
             }
 
     def hit_traces(self, index: int) -> dict[str, Any] | None:
@@ -213,6 +215,7 @@ class CaptureController:
             self.last_run_id = sealed.run_id if sealed is not None else self.last_run_id
             self.last_outcome = outcome
             self.last_error = message if outcome in ("failed", "incomplete") and message else None
+            self.last_message = message or None
             self.state = "idle"
             self._cond.notify_all()
         self.hub.publish("capture_ended", {"run_id": job.run_id, "outcome": outcome, "message": message})

@@ -1,0 +1,1068 @@
+/* The live capture page (index.html) of `daq serve`.
+ *
+ * State comes from GET /api/capture (on load, on every (re)connection of the
+ * event stream, after each action) and is kept current by the SSE events.
+ * Events that arrive while a snapshot is being fetched are held back and
+ * applied after it, so a late snapshot never overwrites a newer event.
+ */
+(function () {
+  "use strict";
+
+  const { api, el, $, fmt, events } = window.DAQ;
+
+  /* ------------------------------------------------------------------ state */
+
+  const cap = {
+    state: null, // "idle" | "running" | "stopping", null before the first snapshot
+    run_id: null,
+    hits_wanted: 0,
+    accepted: 0,
+    auto: false,
+    pending: null,
+    hits: new Map(), // index -> hit summary
+    settings: null,
+    last_run_id: null,
+    last_outcome: null,
+    last_error: null,
+    ended_run_id: null, // the capture the outcome is about, when we know it
+  };
+
+  let instrument = {};
+  let instrumentReq = 0;
+  let shownHitKey = null; // "<run_id>:<index>" of the traces on the plots
+  let tracesReq = 0;
+  let shownFrfKey = null; // "<run_id>:<n_averaged>"
+  let frfReq = 0;
+  let deciding = false;
+  let starting = false;
+
+  const results = {
+    runId: null,
+    analysis: null,
+    fits: null,
+    analysisState: null,
+    analysisError: null,
+    fitState: null,
+    fitError: null,
+    preferredFit: null,
+  };
+  const resultsReq = { states: 0, analysis: 0, fits: 0 };
+
+  /* ------------------------------------------------------------------ plots */
+
+  const plots = {
+    force: DAQ.plot($("force-plot"), {
+      xLabel: "Time (ms)",
+      yLabel: "Force (N)",
+      series: [{ label: "Force (N)", stroke: "#1d4ed8" }],
+      group: "traces",
+      emptyText: "no hit yet",
+    }),
+    response: DAQ.plot($("response-plot"), {
+      xLabel: "Time (ms)",
+      yLabel: "Response (m/s²)",
+      series: [{ label: "Response (m/s²)", stroke: "#c2410c" }],
+      group: "traces",
+      emptyText: "no hit yet",
+    }),
+    frf: DAQ.plot($("frf-plot"), {
+      xLabel: "Frequency (Hz)",
+      yLabel: "|H| ((m/s²)/N)",
+      series: [{ label: "|H| ((m/s²)/N)", stroke: "#1d4ed8" }],
+      logY: true,
+      group: "frf",
+      keepZoom: true,
+      emptyText: "no accepted hit yet",
+    }),
+    coherence: DAQ.plot($("coherence-plot"), {
+      xLabel: "Frequency (Hz)",
+      yLabel: "Coherence",
+      series: [{ label: "Coherence", stroke: "#15803d" }],
+      yRange: [0, 1],
+      group: "frf",
+      keepZoom: true,
+      emptyText: "no accepted hit yet",
+    }),
+  };
+
+  /* --------------------------------------------------------------- helpers */
+
+  function latestIndex() {
+    let best = null;
+    for (const i of cap.hits.keys()) if (best === null || i > best) best = i;
+    return best;
+  }
+
+  function verdictText(h) {
+    if (!h.decided) return "pending";
+    if (h.accepted) return "accepted";
+    return h.reason ? "rejected: " + h.reason : "rejected";
+  }
+
+  function checksText(h) {
+    let text = h.passed ? "pass" : "fail" + (h.suggested_reason ? ": " + h.suggested_reason : "");
+    const ov = Array.isArray(h.overload) ? h.overload : [];
+    const which = [];
+    if (ov[0]) which.push("force");
+    if (ov[1]) which.push("response");
+    if (which.length) text += " · overload " + which.join(", ");
+    return text;
+  }
+
+  /* a hit summary from a `hit` event */
+  function summaryFromEvent(ev) {
+    return {
+      index: ev.index,
+      decided: false,
+      accepted: null,
+      reason: "",
+      peak_force_n: ev.peak_force_n,
+      overload: ev.overload,
+      timestamp_utc: ev.timestamp_utc,
+      passed: ev.passed,
+      suggested_reason: ev.suggested_reason || "",
+      checks: ev.checks || [],
+    };
+  }
+
+  /* --------------------------------------------------------------- render */
+
+  function renderState() {
+    const box = $("capture-state");
+    const st = cap.state;
+    box.textContent = st === null ? "unknown" : st;
+    box.className = "state state-" + (st || "unknown");
+    $("start").disabled = st !== "idle" || starting;
+    $("stop").disabled = st !== "running";
+    $("abort").disabled = st !== "running";
+    document.body.dataset.captureState = st || "unknown";
+    renderProgress();
+  }
+
+  function renderProgress() {
+    const box = $("capture-progress");
+    if (!cap.run_id) {
+      box.textContent = cap.state === "idle" ? "No capture yet." : "";
+      return;
+    }
+    const taken = cap.hits.size;
+    const mode = cap.auto ? "the checks decide" : "you decide each hit";
+    const counts =
+      cap.accepted + " of " + cap.hits_wanted + " accepted, " + fmt.plural(taken, "hit", "hits") + " taken";
+    if (cap.state === "running" || cap.state === "stopping") {
+      box.textContent = "Run " + cap.run_id + ": " + counts + " (" + mode + ").";
+    } else {
+      box.textContent = "Last capture " + cap.run_id + ": " + counts + ".";
+    }
+  }
+
+  function renderSettings() {
+    const box = $("capture-settings");
+    const s = cap.settings;
+    if (!s || typeof s !== "object") {
+      box.textContent = "";
+      return;
+    }
+    const parts = [];
+    const known = { span_hz: ["span", "Hz"], record_length_s: ["record", "s"] };
+    for (const [k, [label, unit]] of Object.entries(known)) {
+      if (typeof s[k] === "number") parts.push(label + " " + fmt.sig(s[k], 5) + " " + unit);
+    }
+    for (const [k, v] of Object.entries(s)) {
+      if (k in known || parts.length >= 10) continue;
+      if (typeof v === "number") parts.push(k + " " + fmt.sig(v, 5));
+      else if (typeof v === "string" || typeof v === "boolean") parts.push(k + " " + v);
+    }
+    box.textContent = parts.length ? "Analyzer settings: " + parts.join(" · ") : "";
+  }
+
+  function renderInstrument() {
+    const box = $("instrument-status");
+    const i = instrument;
+    box.textContent = "";
+    if (!i || (i.resource === undefined && i.connected === undefined)) {
+      box.textContent = "…";
+      return;
+    }
+    box.className = "instrument " + (i.connected ? "connected" : "disconnected");
+    const resource = (i.resource || "analyzer") + (i.simulated ? " (simulated)" : "");
+    box.append(
+      el("span", { class: "dot", "aria-hidden": "true" }),
+      el("span", { class: "resource" }, resource),
+      " · ",
+      el("span", { class: "link-state" }, i.connected ? "connected" : "not connected")
+    );
+    if (i.identification) box.append(" · ", el("span", { class: "ident" }, i.identification));
+    if (i.last_error) box.append(" · ", el("span", { class: "last-error" }, i.last_error));
+    box.title = [resource, i.connected ? "connected" : "not connected", i.identification, i.last_error]
+      .filter(Boolean)
+      .join("\n");
+  }
+
+  function hitRow(h) {
+    const verdict = verdictText(h);
+    const state = !h.decided ? "pending" : h.accepted ? "accepted" : "rejected";
+    const tr = el(
+      "tr",
+      {
+        dataset: { index: String(h.index) },
+        class: "hit-row row-" + state + (shownHitKey === cap.run_id + ":" + h.index ? " shown" : ""),
+        title: h.timestamp_utc ? "taken " + fmt.time(h.timestamp_utc) + " (click to see its traces)" : null,
+      },
+      el("td", { class: "num" }, String(h.index + 1)),
+      el("td", { class: "num" }, fmt.fixed(h.peak_force_n, 2)),
+      el(
+        "td",
+        {
+          class: "checks-cell " + (h.passed ? "pass" : "fail"),
+          title: (h.checks || []).map((c) => (c.passed ? "✓ " : "✗ ") + c.name + ": " + c.detail).join("\n") || null,
+        },
+        checksText(h)
+      ),
+      el("td", { class: "verdict" }, verdict)
+    );
+    return tr;
+  }
+
+  function renderHitsTable() {
+    const body = $("hits-table").tBodies[0];
+    const rows = [...cap.hits.values()].sort((a, b) => a.index - b.index).map(hitRow);
+    body.replaceChildren(...rows);
+    scrollHitsToEnd();
+  }
+
+  function upsertHitRow(h) {
+    const body = $("hits-table").tBodies[0];
+    const row = hitRow(h);
+    const old = body.querySelector('tr[data-index="' + h.index + '"]');
+    if (old) {
+      old.replaceWith(row);
+      return;
+    }
+    // keep the rows in hit order
+    const after = [...body.rows].find((r) => Number(r.dataset.index) > h.index);
+    body.insertBefore(row, after || null);
+    scrollHitsToEnd();
+  }
+
+  function scrollHitsToEnd() {
+    const wrap = $("hits-table").parentElement;
+    wrap.scrollTop = wrap.scrollHeight;
+  }
+
+  function markShownRow() {
+    for (const r of $("hits-table").tBodies[0].rows) {
+      r.classList.toggle("shown", shownHitKey === cap.run_id + ":" + r.dataset.index);
+    }
+  }
+
+  let lastPendingShown = null;
+
+  function renderPending() {
+    const idx = cap.pending;
+    const h = idx !== null && idx !== undefined ? cap.hits.get(idx) : null;
+    const panel = $("pending");
+    const waiting = idx !== null && idx !== undefined;
+    panel.classList.toggle("waiting", waiting);
+    if (waiting) $("pending-index").textContent = "Hit " + (idx + 1);
+    else if (cap.auto && cap.state === "running") $("pending-index").textContent = "none (the checks decide)";
+    else $("pending-index").textContent = "none";
+
+    const list = $("checks");
+    list.replaceChildren(
+      ...(h && h.checks ? h.checks : []).map((c) =>
+        el(
+          "li",
+          { class: c.passed ? "pass" : "fail" },
+          el("span", { class: "check-mark", "aria-hidden": "true" }, c.passed ? "✓" : "✗"),
+          el("span", { class: "check-name" }, c.name),
+          c.detail ? el("span", { class: "check-detail" }, c.detail) : null
+        )
+      )
+    );
+
+    const sug = $("suggested");
+    if (h) {
+      sug.textContent = h.passed
+        ? "The checks suggest: accept"
+        : "The checks suggest: reject" + (h.suggested_reason ? " (" + h.suggested_reason + ")" : "");
+      sug.className = "suggested " + (h.passed ? "pass" : "fail");
+    } else {
+      sug.textContent = waiting ? "" : "No hit is waiting for a decision.";
+      sug.className = "suggested muted";
+    }
+
+    const reason = $("reject-reason");
+    if (idx !== lastPendingShown) {
+      reason.value = "";
+      lastPendingShown = idx;
+    }
+    reason.placeholder = h && !h.passed && h.suggested_reason ? h.suggested_reason : "";
+    $("accept").disabled = !waiting || deciding;
+    $("reject").disabled = !waiting || deciding;
+  }
+
+  function renderAverages(n) {
+    $("n-averaged").textContent = fmt.plural(n || 0, "hit", "hits") + " averaged";
+  }
+
+  function renderLastRun() {
+    const box = $("last-run");
+    box.textContent = "";
+    if (cap.last_run_id) {
+      const id = cap.last_run_id;
+      box.append(
+        el("a", { href: DAQ.withToken("/api/runs/" + encodeURIComponent(id) + "/report"), target: "_blank", rel: "noopener" }, id)
+      );
+    } else {
+      box.textContent = "none yet";
+    }
+    const out = $("run-outcome");
+    const o = cap.last_outcome;
+    out.textContent = o ? o + (cap.last_error ? ": " + cap.last_error : "") : "";
+    out.className = "outcome" + (o ? " outcome-" + o : "");
+    const note = $("outcome-note");
+    if (note) {
+      const ended = cap.ended_run_id;
+      note.textContent =
+        o && ended && ended !== cap.last_run_id ? "(capture " + ended + " was not stored)" : "";
+    }
+  }
+
+  function renderResultsStatus() {
+    const box = $("analysis-status");
+    if (!results.runId) {
+      box.textContent = "";
+      return;
+    }
+    const a = results.analysisState || "none";
+    const f = results.fitState || "none";
+    let text = "Results of " + results.runId + ". Analysis: " + a;
+    if (results.analysisError) text += " (" + results.analysisError + ")";
+    text += " · fit: " + f;
+    if (results.fitError) text += " (" + results.fitError + ")";
+    box.textContent = text;
+  }
+
+  function renderModes() {
+    const body = $("modes-table").tBodies[0];
+    const modes = (results.analysis && results.analysis.modes) || [];
+    body.replaceChildren(
+      ...modes.map((m, i) =>
+        el(
+          "tr",
+          null,
+          el("td", { class: "num" }, String(i + 1)),
+          el(
+            "td",
+            { class: "num", title: typeof m.frequency_std_hz === "number" ? "± " + fmt.sig(m.frequency_std_hz, 2) + " Hz" : null },
+            fmt.fixed(m.frequency_hz, 4)
+          ),
+          el(
+            "td",
+            { class: "num", title: typeof m.damping_std === "number" ? "± " + fmt.pct(m.damping_std, 3) + " %" : null },
+            fmt.pct(m.damping_ratio, 3)
+          )
+        )
+      )
+    );
+  }
+
+  function renderTable2() {
+    const body = $("table2").tBodies[0];
+    const t2 = results.analysis && results.analysis.table2;
+    const rows = (t2 && t2.rows) || [];
+    $("table2-caption").textContent = t2
+      ? [t2.beam ? "beam: " + t2.beam : null, t2.n_functions ? "Ritz N = " + t2.n_functions : null]
+          .filter(Boolean)
+          .join(", ")
+      : "";
+    body.replaceChildren(
+      ...rows.map((r) =>
+        el(
+          "tr",
+          null,
+          el("td", { class: "num" }, r.mode === undefined || r.mode === null ? "–" : String(r.mode)),
+          el("td", { class: "num" }, fmt.fixed(r.ritz_hz, 2)),
+          el("td", { class: "num" }, fmt.fixed(r.exact_hz, 2)),
+          el("td", { class: "num" }, fmt.fixed(r.identified_hz, 2)),
+          el("td", { class: "num" }, fmt.fixed(r.difference_exact_pct, 2)),
+          el("td", { class: "num" }, fmt.pct(r.damping_ratio, 3))
+        )
+      )
+    );
+  }
+
+  /* "R12", "R1_2", "R(1,2)" -> [0, 1] (0-based); null when the name does not say.
+   * Without a separator the digits split in two halves ("R1012" -> 10, 12); an odd
+   * count ("R110") takes the split whose indices both lie in 1..n. */
+  function termIndices(name, n) {
+    const s = String(name).trim();
+    let m = /^R_?\(?(\d+)\s*[,_ ]\s*(\d+)\)?$/.exec(s);
+    let pairs;
+    if (m) {
+      pairs = [[Number(m[1]), Number(m[2])]];
+    } else {
+      m = /^R_?(\d+)$/.exec(s);
+      if (!m || m[1].length < 2) return null;
+      const d = m[1];
+      const h = Math.floor(d.length / 2);
+      pairs =
+        d.length % 2 === 0
+          ? [[Number(d.slice(0, h)), Number(d.slice(h))]]
+          : [
+              [Number(d.slice(0, h)), Number(d.slice(h))],
+              [Number(d.slice(0, h + 1)), Number(d.slice(h + 1))],
+            ];
+    }
+    const ok = pairs.find(([i, j]) => i >= 1 && j >= 1 && i <= n && j <= n);
+    return ok ? [ok[0] - 1, ok[1] - 1] : null;
+  }
+
+  function chooseFit() {
+    const fits = results.fits || {};
+    const names = Object.keys(fits);
+    if (!names.length) return null;
+    const select = $("fit-select");
+    const pref = results.preferredFit;
+    let pick = null;
+    if (pref) pick = names.find((n) => n === pref) || names.find((n) => fits[n] && fits[n].method === pref) || null;
+    if (!pick && select.value && names.includes(select.value)) pick = select.value;
+    return pick || names[0];
+  }
+
+  function renderFits() {
+    const table = $("damping-matrix");
+    const body = table.tBodies[0];
+    const summary = $("fit-summary");
+    const select = $("fit-select");
+    const fits = results.fits || {};
+    const names = Object.keys(fits);
+
+    select.hidden = names.length < 2;
+    select.replaceChildren(...names.map((n) => el("option", { value: n }, n)));
+    const name = chooseFit();
+    if (name) select.value = name;
+
+    const fit = name ? fits[name] : null;
+    if (table.tHead) table.tHead.remove();
+    if (!fit || !Array.isArray(fit.damping_matrix)) {
+      body.replaceChildren();
+      summary.textContent = results.fitState === "failed" ? "The fit failed." : "No fit yet.";
+      return;
+    }
+    const R = fit.damping_matrix;
+    const n = R.length;
+    const unc = fit.uncertainty || {};
+    const terms = new Map(); // "i,j" -> {std, determined}
+    (unc.names || []).forEach((nm, k) => {
+      const ij = termIndices(nm, n);
+      if (!ij) return;
+      terms.set(ij[0] + "," + ij[1], {
+        std: Array.isArray(unc.std) ? unc.std[k] : undefined,
+        determined: Array.isArray(unc.determined) ? unc.determined[k] : undefined,
+      });
+    });
+    const term = (i, j) => terms.get(i + "," + j) || terms.get(j + "," + i) || null;
+
+    const head = table.createTHead();
+    head.append(el("tr", null, el("th", null, ""), ...R.map((_, j) => el("th", { class: "num" }, String(j + 1)))));
+    body.replaceChildren(
+      ...R.map((row, i) =>
+        el(
+          "tr",
+          null,
+          el("th", { scope: "row" }, String(i + 1)),
+          ...(row || []).map((v, j) => {
+            const t = term(i, j);
+            let text = fmt.sig(v, 4);
+            if (t && t.std !== undefined && t.std !== null) text += " ± " + fmt.sig(t.std, 2);
+            const undetermined = t && t.determined === false;
+            if (undetermined) text += "?";
+            return el(
+              "td",
+              { class: "num" + (undetermined ? " undetermined" : ""), title: undetermined ? "not determined by the data" : null },
+              text
+            );
+          })
+        )
+      )
+    );
+    const parts = [];
+    parts.push("method: " + (fit.method || name));
+    parts.push("Psi = " + fmt.sig(fit.psi, 4));
+    parts.push("noise floor = " + fmt.sig(fit.psi_noise_floor, 4));
+    if (Array.isArray(fit.modes) && fit.modes.length) {
+      parts.push(
+        "modes: " +
+          fit.modes.map((m) => fmt.fixed(m.frequency_hz, 2) + " Hz (" + fmt.pct(m.damping_ratio, 3) + " %)").join(", ")
+      );
+    }
+    summary.textContent = parts.join(" · ");
+  }
+
+  function renderResults() {
+    renderResultsStatus();
+    renderModes();
+    renderTable2();
+    renderFits();
+  }
+
+  function renderAll() {
+    renderState();
+    renderSettings();
+    renderHitsTable();
+    renderPending();
+    renderLastRun();
+  }
+
+  /* --------------------------------------------------------- traces, FRF */
+
+  function showTraces(runId, h) {
+    const fs = Number(h.sample_rate_hz);
+    const start = Number(h.start_s) || 0;
+    const force = h.force_n || [];
+    const resp = h.response_m_s2 || [];
+    const n = Math.max(force.length, resp.length);
+    const t = new Array(n);
+    for (let k = 0; k < n; k++) t[k] = (start + k / fs) * 1000;
+    plots.force.setData(t, force);
+    plots.response.setData(t, resp);
+    shownHitKey = runId + ":" + h.index;
+    $("traces-hit").textContent = "hit " + (h.index + 1);
+    markShownRow();
+  }
+
+  function clearTraces() {
+    plots.force.clear();
+    plots.response.clear();
+    shownHitKey = null;
+    $("traces-hit").textContent = "";
+    markShownRow();
+  }
+
+  async function loadTraces(index) {
+    const runId = cap.run_id;
+    const my = ++tracesReq;
+    let h;
+    try {
+      h = await api("GET", "/api/capture/hits/" + index, null, { quiet404: true });
+    } catch (e) {
+      return;
+    }
+    if (my !== tracesReq || runId !== cap.run_id) return; // a newer hit came meanwhile
+    if (h) showTraces(runId, h);
+  }
+
+  function showFrf(runId, f) {
+    plots.frf.setData(f.frequency_hz || [], f.frf_abs || []);
+    plots.coherence.setData(f.frequency_hz || [], f.coherence || []);
+    const n = f.n_averaged === undefined ? cap.accepted : f.n_averaged;
+    renderAverages(n);
+    shownFrfKey = runId + ":" + n;
+  }
+
+  function clearFrf() {
+    plots.frf.clear();
+    plots.coherence.clear();
+    renderAverages(0);
+    shownFrfKey = null;
+  }
+
+  async function loadFrf() {
+    const runId = cap.run_id;
+    const my = ++frfReq;
+    let f;
+    try {
+      f = await api("GET", "/api/capture/frf", null, { quiet404: true });
+    } catch (e) {
+      return;
+    }
+    if (my !== frfReq || runId !== cap.run_id) return;
+    if (f) showFrf(runId, f);
+    else clearFrf();
+  }
+
+  async function loadInstrument() {
+    const my = ++instrumentReq;
+    try {
+      const i = await api("GET", "/api/instrument");
+      if (my === instrumentReq && i) {
+        instrument = i;
+        renderInstrument();
+      }
+    } catch (e) {
+      /* shown in #error */
+    }
+  }
+
+  /* ----------------------------------------------------------- results */
+
+  function resetResults(runId) {
+    Object.assign(results, {
+      runId,
+      analysis: null,
+      fits: null,
+      analysisState: null,
+      analysisError: null,
+      fitState: null,
+      fitError: null,
+    });
+    resultsReq.states++;
+    resultsReq.analysis++;
+    resultsReq.fits++;
+    renderResults();
+  }
+
+  /* The run's analysis and fit states; null when they could not be read. */
+  async function loadStates(runId) {
+    const my = ++resultsReq.states;
+    let r;
+    try {
+      r = await api("GET", "/api/runs/" + encodeURIComponent(runId), null, { quiet404: true });
+    } catch (e) {
+      return null;
+    }
+    if (!r) return null;
+    if (my === resultsReq.states && runId === results.runId) {
+      results.analysisState = r.analysis_state || results.analysisState;
+      results.fitState = r.fit_state || results.fitState;
+      renderResultsStatus();
+    }
+    return r;
+  }
+
+  async function loadAnalysis(runId) {
+    const my = ++resultsReq.analysis;
+    let a;
+    try {
+      a = await api("GET", "/api/runs/" + encodeURIComponent(runId) + "/analysis", null, { quiet404: true });
+    } catch (e) {
+      return;
+    }
+    if (my !== resultsReq.analysis || runId !== results.runId) return;
+    results.analysis = a;
+    renderModes();
+    renderTable2();
+  }
+
+  async function loadFits(runId) {
+    const my = ++resultsReq.fits;
+    let f;
+    try {
+      f = await api("GET", "/api/runs/" + encodeURIComponent(runId) + "/fits", null, { quiet404: true });
+    } catch (e) {
+      return;
+    }
+    if (my !== resultsReq.fits || runId !== results.runId) return;
+    results.fits = f && typeof f === "object" ? f : null;
+    renderFits();
+  }
+
+  /* Everything about a run's results. Asks for the analysis and the fits only
+   * when the run says they exist (no 404s to clutter the console), or when its
+   * states could not be read. */
+  async function loadResults(runId) {
+    if (!runId) {
+      resetResults(null);
+      return;
+    }
+    if (results.runId !== runId) resetResults(runId);
+    const r = await loadStates(runId);
+    if (runId !== results.runId) return;
+    const tasks = [];
+    const hasAnalysis = !r || r.analysis_state === "done" || (r.analysis && typeof r.analysis === "object");
+    const hasFits = !r || r.fit_state === "done" || (r.fits && Object.keys(r.fits).length > 0);
+    if (hasAnalysis) tasks.push(loadAnalysis(runId));
+    if (hasFits) tasks.push(loadFits(runId));
+    await Promise.allSettled(tasks);
+  }
+
+  /* ----------------------------------------------------- snapshot, rebuild */
+
+  let holding = false; // a snapshot is on its way: hold events back
+  let held = [];
+
+  function applySnapshot(s) {
+    const newRun = s.run_id !== cap.run_id;
+    cap.state = s.state || null;
+    cap.run_id = s.run_id || null;
+    cap.hits_wanted = s.hits_wanted || 0;
+    cap.accepted = s.accepted || 0;
+    cap.auto = Boolean(s.auto);
+    cap.pending = s.pending === undefined ? null : s.pending;
+    cap.hits = new Map((s.hits || []).map((h) => [h.index, h]));
+    cap.settings = s.settings || null;
+    cap.last_run_id = s.last_run_id || null;
+    cap.last_outcome = s.last_outcome || null;
+    cap.last_error = s.last_message || s.last_error || null; // the capture_ended message
+    cap.ended_run_id = cap.state === "idle" && cap.last_outcome ? cap.run_id : null;
+    if (newRun) {
+      // another capture than the one on the plots: clear them until its data come
+      tracesReq++;
+      frfReq++;
+      clearTraces();
+      clearFrf();
+    }
+    renderAll();
+  }
+
+  let rebuildRunning = false;
+  let rebuildAgain = false;
+  let rebuildFull = false;
+
+  /* Fetch the capture snapshot and whatever the page shows that is not current.
+   * full: fetch everything again (after a (re)connection of the event stream). */
+  async function rebuild(full) {
+    rebuildFull = rebuildFull || Boolean(full);
+    if (rebuildRunning) {
+      rebuildAgain = true;
+      return;
+    }
+    rebuildRunning = true;
+    try {
+      do {
+        rebuildAgain = false;
+        const f = rebuildFull;
+        rebuildFull = false;
+        await rebuildOnce(f);
+      } while (rebuildAgain);
+    } finally {
+      rebuildRunning = false;
+    }
+  }
+
+  async function rebuildOnce(full) {
+    holding = true;
+    let snap = null;
+    try {
+      snap = await api("GET", "/api/capture");
+      if (snap) applySnapshot(snap);
+    } catch (e) {
+      snap = null;
+    } finally {
+      holding = false;
+      const queue = held;
+      held = [];
+      for (const [fn, data] of queue) {
+        try {
+          fn(data);
+        } catch (e) {
+          console.error(e);
+        }
+      }
+    }
+    const tasks = [];
+    if (full || !instrument.resource) tasks.push(loadInstrument());
+    if (!snap) return Promise.allSettled(tasks);
+
+    const latest = latestIndex();
+    if (latest === null) {
+      if (shownHitKey !== null) clearTraces();
+    } else {
+      const shownIndex = shownHitKey && shownHitKey.startsWith(cap.run_id + ":") ? Number(shownHitKey.split(":").pop()) : null;
+      const stillThere = shownIndex !== null && cap.hits.has(shownIndex);
+      if (full || !stillThere) tasks.push(loadTraces(latest));
+    }
+
+    if (cap.accepted > 0) {
+      if (full || shownFrfKey !== cap.run_id + ":" + cap.accepted) tasks.push(loadFrf());
+    } else if (shownFrfKey !== null || full) {
+      clearFrf();
+    }
+
+    if (cap.last_run_id) {
+      if (full || results.runId !== cap.last_run_id) tasks.push(loadResults(cap.last_run_id));
+    } else if (results.runId !== null || full) {
+      resetResults(null);
+    }
+    return Promise.allSettled(tasks);
+  }
+
+  /* ---------------------------------------------------------------- events */
+
+  function on(type, fn) {
+    events.on(type, (data) => {
+      if (holding) held.push([fn, data]);
+      else fn(data);
+    });
+  }
+
+  const isCurrent = (ev) => ev && ev.run_id && ev.run_id === cap.run_id;
+  const isLastRun = (ev) => ev && ev.run_id && ev.run_id === cap.last_run_id;
+
+  on("capture_started", (ev) => {
+    cap.state = "running";
+    cap.run_id = ev.run_id;
+    cap.hits_wanted = ev.hits_wanted || 0;
+    cap.auto = Boolean(ev.auto);
+    cap.accepted = 0;
+    cap.pending = null;
+    cap.hits = new Map();
+    cap.settings = null;
+    cap.ended_run_id = null;
+    tracesReq++;
+    frfReq++;
+    clearTraces();
+    clearFrf();
+    renderAll();
+  });
+
+  on("configured", (ev) => {
+    if (!isCurrent(ev)) return;
+    cap.settings = ev.settings || null;
+    renderSettings();
+    if (ev.identification) {
+      instrument = Object.assign({}, instrument, { identification: ev.identification, connected: true });
+      instrumentReq++;
+      renderInstrument();
+    }
+  });
+
+  on("hit", (ev) => {
+    if (!isCurrent(ev)) return;
+    const h = summaryFromEvent(ev);
+    cap.hits.set(h.index, h);
+    if (typeof ev.accepted_so_far === "number") cap.accepted = ev.accepted_so_far;
+    if (!cap.auto) cap.pending = h.index;
+    upsertHitRow(h);
+    tracesReq++; // a fetch of older traces must not overwrite these
+    if (Array.isArray(ev.force_n)) showTraces(cap.run_id, ev);
+    renderPending();
+    renderProgress();
+  });
+
+  on("hit_decided", (ev) => {
+    if (!isCurrent(ev)) return;
+    const h = cap.hits.get(ev.index) || { index: ev.index, checks: [], passed: true };
+    h.decided = true;
+    h.accepted = Boolean(ev.accepted);
+    h.reason = ev.reason || "";
+    cap.hits.set(ev.index, h);
+    if (typeof ev.accepted_so_far === "number") cap.accepted = ev.accepted_so_far;
+    if (cap.pending === ev.index) cap.pending = null;
+    upsertHitRow(h);
+    renderPending();
+    renderProgress();
+  });
+
+  on("frf", (ev) => {
+    if (!isCurrent(ev)) return;
+    frfReq++;
+    showFrf(cap.run_id, ev);
+  });
+
+  on("run_sealed", (ev) => {
+    if (!isCurrent(ev)) return;
+    cap.last_run_id = ev.run_id;
+    renderLastRun();
+    loadResults(ev.run_id);
+  });
+
+  on("capture_ended", (ev) => {
+    if (!isCurrent(ev)) return;
+    cap.state = "idle";
+    cap.pending = null;
+    cap.last_outcome = ev.outcome || null;
+    cap.last_error = ev.message || null;
+    cap.ended_run_id = ev.run_id;
+    renderState();
+    renderPending();
+    renderLastRun();
+  });
+
+  function resultsEvent(fn) {
+    return (ev) => {
+      if (!isLastRun(ev)) return;
+      if (results.runId !== ev.run_id) resetResults(ev.run_id);
+      fn(ev);
+      renderResultsStatus();
+    };
+  }
+
+  on(
+    "analysis_started",
+    resultsEvent(() => {
+      resultsReq.states++;
+      results.analysisState = "running";
+      results.analysisError = null;
+    })
+  );
+  on(
+    "analysis_done",
+    resultsEvent((ev) => {
+      resultsReq.states++;
+      results.analysisState = "done";
+      results.analysisError = null;
+      loadAnalysis(ev.run_id);
+    })
+  );
+  on(
+    "analysis_failed",
+    resultsEvent((ev) => {
+      resultsReq.states++;
+      results.analysisState = "failed";
+      results.analysisError = ev.error || null;
+    })
+  );
+  on(
+    "fit_done",
+    resultsEvent((ev) => {
+      resultsReq.states++;
+      results.fitState = "done";
+      results.fitError = null;
+      if (ev.method) results.preferredFit = ev.method;
+      loadFits(ev.run_id);
+    })
+  );
+  on(
+    "fit_failed",
+    resultsEvent((ev) => {
+      resultsReq.states++;
+      results.fitState = "failed";
+      results.fitError = (ev.method ? ev.method + ": " : "") + (ev.error || "failed");
+      renderFits();
+    })
+  );
+
+  on("instrument", (ev) => {
+    instrumentReq++;
+    instrument = Object.assign({}, instrument, ev);
+    renderInstrument();
+  });
+
+  /* --------------------------------------------------------------- actions */
+
+  $("capture-form").addEventListener("submit", async (e) => {
+    e.preventDefault();
+    const hitsInput = $("hits-wanted");
+    const hits = Number(hitsInput.value);
+    if (!Number.isInteger(hits) || hits < 1 || hits > 999) {
+      DAQ.showError("Hits wanted: a whole number from 1 to 999.");
+      hitsInput.focus();
+      return;
+    }
+    const body = {
+      hits,
+      operator: $("operator").value.trim(),
+      note: $("note").value.trim(),
+      auto: $("auto").checked,
+    };
+    starting = true;
+    renderState();
+    try {
+      await api("POST", "/api/capture", body);
+      try {
+        localStorage.setItem("daq-operator", body.operator);
+      } catch (err) {
+        /* not kept */
+      }
+    } catch (err) {
+      /* #error says why */
+    } finally {
+      starting = false;
+      renderState();
+    }
+    rebuild(false);
+  });
+
+  $("stop").addEventListener("click", async () => {
+    try {
+      await api("POST", "/api/capture/stop");
+    } catch (e) {
+      /* #error says why */
+    }
+    rebuild(false);
+  });
+
+  $("abort").addEventListener("click", async () => {
+    const n = cap.hits.size;
+    const ok = window.confirm(
+      "Abort the capture? Its " + fmt.plural(n, "hit", "hits") + " will be discarded and nothing is stored."
+    );
+    if (!ok) return;
+    try {
+      await api("POST", "/api/capture/abort");
+    } catch (e) {
+      /* #error says why */
+    }
+    rebuild(false);
+  });
+
+  async function decide(accept) {
+    const index = cap.pending;
+    if (index === null || index === undefined || deciding) return;
+    const h = cap.hits.get(index);
+    const body = { index, accept };
+    if (!accept) {
+      const typed = $("reject-reason").value.trim();
+      const reason = typed || (h && !h.passed ? h.suggested_reason : "");
+      if (reason) body.reason = reason;
+    }
+    deciding = true;
+    renderPending();
+    try {
+      const r = await api("POST", "/api/capture/decision", body);
+      // The hit_decided event confirms; show the decision now so a second tap cannot repeat it.
+      const hit = cap.hits.get(index);
+      if (hit && !hit.decided) {
+        hit.decided = true;
+        hit.accepted = r && typeof r.accepted === "boolean" ? r.accepted : accept;
+        hit.reason = accept ? "" : body.reason || "";
+        upsertHitRow(hit);
+      }
+      if (cap.pending === index) cap.pending = null;
+    } catch (e) {
+      if (e.status === 409) rebuild(false);
+    } finally {
+      deciding = false;
+      renderPending();
+    }
+  }
+
+  $("accept").addEventListener("click", () => decide(true));
+  $("reject").addEventListener("click", () => decide(false));
+  $("reject-reason").addEventListener("keydown", (e) => {
+    if (e.key === "Enter") {
+      e.preventDefault();
+      decide(false);
+    }
+  });
+
+  $("hits-table").tBodies[0].addEventListener("click", (e) => {
+    const row = e.target.closest("tr[data-index]");
+    if (!row) return;
+    loadTraces(Number(row.dataset.index));
+  });
+
+  $("fit-select").addEventListener("change", () => {
+    results.preferredFit = $("fit-select").value;
+    renderFits();
+  });
+
+  DAQ.onToken(() => renderLastRun());
+
+  /* ------------------------------------------------------------------ start */
+
+  try {
+    const op = localStorage.getItem("daq-operator");
+    if (op && !$("operator").value) $("operator").value = op;
+  } catch (e) {
+    /* nothing kept */
+  }
+
+  renderAll();
+  renderAverages(0);
+  renderResults();
+
+  let helloSeen = false;
+  events.onHello(() => {
+    helloSeen = true;
+    rebuild(true);
+  });
+  events.start();
+  // If the event stream does not come up quickly (e.g. it needs a token), show what the API says anyway.
+  setTimeout(() => {
+    if (!helloSeen) rebuild(true);
+  }, 1500);
+})();

@@ -1,0 +1,135 @@
+/* The runs page (runs.html) of `daq serve`: the store's runs, newest first,
+ * refreshed from GET /api/runs on load, on every (re)connection of the event
+ * stream, and (debounced) when a run is sealed or its analysis or fit ends. */
+(function () {
+  "use strict";
+
+  const { api, el, $, fmt, events } = window.DAQ;
+
+  let runs = [];
+  let loading = false;
+  let again = false;
+
+  function runUrl(id, tail) {
+    return DAQ.withToken("/api/runs/" + encodeURIComponent(id) + tail);
+  }
+
+  function link(href, text, title) {
+    return el("a", { href, title: title || null }, text);
+  }
+
+  function firstThree(list, format) {
+    if (!Array.isArray(list) || !list.length) return "–";
+    return list.slice(0, 3).map(format).join(", ");
+  }
+
+  function newestFirst(a, b) {
+    const ta = Date.parse(a.start_time);
+    const tb = Date.parse(b.start_time);
+    const va = Number.isNaN(ta) ? -Infinity : ta;
+    const vb = Number.isNaN(tb) ? -Infinity : tb;
+    if (va !== vb) return vb - va;
+    return String(b.run_id).localeCompare(String(a.run_id));
+  }
+
+  function row(r) {
+    const id = r.run_id;
+    const analysis = r.analysis || "none";
+    const cells = [
+      el(
+        "td",
+        {
+          class: "run-id",
+          title: [r.operator ? "operator: " + r.operator : "", r.note ? "note: " + r.note : ""].filter(Boolean).join("\n") || null,
+        },
+        id
+      ),
+      el("td", { class: "time" }, fmt.time(r.start_time)),
+      el("td", null, r.kind || "–"),
+      el("td", { class: r.complete ? "complete" : "incomplete" }, r.complete ? "complete" : "incomplete"),
+      el("td", { class: "num" }, (r.n_accepted ?? "–") + "/" + (r.n_hits ?? "–")),
+      el("td", { class: "analysis-state state-" + analysis, title: r.fit ? "fit: " + r.fit : null }, analysis),
+    ];
+    if (r.error) {
+      cells.push(el("td", { class: "run-error", colspan: "3" }, r.error));
+    } else {
+      cells.push(
+        el("td", { class: "num frequencies" }, firstThree(r.frequencies_hz, (f) => fmt.fixed(f, 2))),
+        el("td", { class: "num damping" }, firstThree(r.damping_ratios, (d) => fmt.pct(d, 2))),
+        el("td", { class: "num psi", title: r.fit ? "fit: " + r.fit : null }, fmt.sig(r.fit_psi, 3))
+      );
+    }
+    cells.push(
+      el(
+        "td",
+        { class: "links" },
+        link(runUrl(id, "/report"), "report"),
+        " ",
+        link(runUrl(id, "/file"), "HDF5", "the sealed run file"),
+        " ",
+        link(runUrl(id, "/export?format=csv"), "CSV"),
+        " ",
+        link(runUrl(id, "/export?format=uff"), "UFF")
+      )
+    );
+    // labels for the stacked layout on narrow screens (style.css)
+    const labels = ["Run", "Started", "Kind", "Complete", "Accepted", "Analysis"].concat(
+      r.error ? ["Error"] : ["Frequencies (Hz)", "Damping (%)", "Fit Psi"],
+      ["Files"]
+    );
+    cells.forEach((c, i) => c.setAttribute("data-label", labels[i]));
+    return el("tr", { dataset: { runId: id }, class: r.error ? "damaged" : null }, ...cells);
+  }
+
+  function render() {
+    const body = $("runs-table").tBodies[0];
+    const sorted = [...runs].sort(newestFirst);
+    if (!sorted.length) {
+      body.replaceChildren(el("tr", { class: "empty-row" }, el("td", { colspan: "10" }, "No runs in the store yet.")));
+    } else {
+      body.replaceChildren(...sorted.map(row));
+    }
+    const damaged = sorted.filter((r) => r.error).length;
+    $("runs-summary").textContent =
+      fmt.plural(sorted.length, "run", "runs") + (damaged ? ", " + damaged + " damaged" : "");
+  }
+
+  async function load() {
+    if (loading) {
+      again = true;
+      return;
+    }
+    loading = true;
+    try {
+      do {
+        again = false;
+        try {
+          const list = await api("GET", "/api/runs");
+          runs = Array.isArray(list) ? list : [];
+          render();
+        } catch (e) {
+          /* #error or the token panel says why */
+        }
+      } while (again);
+    } finally {
+      loading = false;
+    }
+  }
+
+  let timer = null;
+  function refreshSoon() {
+    clearTimeout(timer);
+    timer = setTimeout(load, 300);
+  }
+
+  for (const type of ["run_sealed", "analysis_started", "analysis_done", "analysis_failed", "fit_done", "fit_failed"]) {
+    events.on(type, refreshSoon);
+  }
+  events.onHello(refreshSoon);
+  DAQ.onToken(() => render()); // the links carry the token
+
+  $("refresh").addEventListener("click", load);
+
+  load();
+  events.start();
+})();
