@@ -7,6 +7,8 @@ page or HTTP API, seals each run, and analyses and fits every run as it lands.
 from __future__ import annotations
 
 import os
+import signal
+import socket
 import sys
 from typing import Annotated
 
@@ -81,6 +83,14 @@ def serve(
     if workers is not None and workers < 1:
         raise UserError("--workers must be at least 1", exit_code=2)
     real = None if sim else configured_resource(resource)
+    if real is None and not sim:
+        # Unlike daq capture, never fall back to the simulator: a service left running on
+        # it by mistake would collect runs nobody measured.
+        raise UserError(
+            "no analyzer configured: give --resource <resource> (or set $DAQ_RESOURCE, or resource "
+            "in the config file), or --sim for the built-in simulator",
+            exit_code=2,
+        )
     sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale}
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
@@ -139,43 +149,90 @@ def run_service(
     if workers is not None:
         config.workers = workers
     service = Service(config)
+    _stop_on_signals()
+    # Everything after this point ends in close(): a Ctrl-C that lands during start-up,
+    # before uvicorn handles signals, must not leave the simulator's or the workers'
+    # threads keeping the process alive.
     try:
-        service.start()
-    except (DriverError, StoreError, ValueError) as exc:
+        try:
+            service.start()
+        except (DriverError, StoreError, ValueError) as exc:
+            raise UserError(str(exc)) from None
+        server = _make_server_class()(
+            uvicorn.Config(
+                create_app(service),
+                log_level="warning",
+                access_log=False,
+                lifespan="off",
+                timeout_graceful_shutdown=3,
+            ),
+            service,
+        )
+        _banner(service, config, store_dir, scheduler, created, token_file, loopback, host, token)
+        server.run(sockets=[sock])
+    except _Shutdown:
+        pass
+    finally:
+        service.close()
         sock.close()
-        raise UserError(str(exc)) from None
+    sys.stderr.write("daq serve: stopped\n")
+
+
+class _Shutdown(Exception):
+    """SIGTERM or SIGINT: stop as Ctrl-C does (the capture in progress is sealed)."""
+
+
+def _raise_shutdown(signum: int, frame: object) -> None:
+    raise _Shutdown
+
+
+def _stop_on_signals() -> None:
+    """SIGTERM (systemd, kill, shutdown) and SIGINT stop the service the same way.
+    uvicorn handles both while it serves, then restores these handlers and raises the
+    signal again: without them SIGTERM would end the process before the capture in
+    progress is sealed. An ignored SIGINT (a background job of a shell) stays ignored."""
+    signal.signal(signal.SIGTERM, _raise_shutdown)
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, _raise_shutdown)
+
+
+def _make_server_class():
+    import uvicorn
+
+    class Server(uvicorn.Server):
+        """uvicorn's server, ending the live event streams first when it shuts down:
+        an open page would otherwise hold the shutdown until its grace period ends."""
+
+        def __init__(self, config: uvicorn.Config, service) -> None:
+            super().__init__(config)
+            self.service = service
+
+        async def shutdown(self, sockets=None) -> None:
+            self.service.hub.close()
+            await super().shutdown(sockets=sockets)
+
+    return Server
+
+
+def _banner(service, config, store_dir, scheduler, created, token_file, loopback, host, token) -> None:
     status = service.link.status()
     what = "simulated analyzer" if status["simulated"] else "analyzer"
     state = status["identification"] or f"not answering: {status['last_error']}"
     say = sys.stderr.write
     say(f"daq serve: {what} at {status['resource']} ({state})\n")
-    say(
-        f"daq serve: store {store_dir}; {config.workers} analysis workers"
-        + (f" on {scheduler}" if scheduler else "")
-        + "\n"
-    )
+    plural = "" if config.workers == 1 else "s"
+    workers = f"{config.workers} analysis worker{plural}" + (f" on {scheduler}" if scheduler else "")
+    say(f"daq serve: store {store_dir}; {workers}\n")
     if created:
         say(f"daq serve: a new access token was made in {token_file}\n")
     if loopback:
         say(f"daq serve: open {config.url}/#token={token}\n")
     else:
+        reachable = config.url
+        if host in ("0.0.0.0", "::"):  # every address: name the machine, not the wildcard
+            reachable = f"http://{socket.gethostname()}:{config.port}"
         say(
             f"daq serve: listening on {host}, beyond this machine: EVERY request needs the token "
-            f"(daq serve --show-token); open {config.url}/#token=<token>\n"
+            f"(daq serve --show-token); open {reachable}/#token=<token>\n"
         )
     say("daq serve: Ctrl-C stops the service\n")
-    server = uvicorn.Server(
-        uvicorn.Config(
-            create_app(service),
-            log_level="warning",
-            access_log=False,
-            lifespan="off",
-            timeout_graceful_shutdown=3,
-        )
-    )
-    try:
-        server.run(sockets=[sock])
-    finally:
-        service.close()
-        sock.close()
-    say("daq serve: stopped\n")

@@ -7,25 +7,28 @@ them in its thread pool, so the event loop only ever streams events.
 from __future__ import annotations
 
 import asyncio
+import re
 import tempfile
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any
+from urllib.parse import parse_qs
 
 import numpy as np
 from fastapi import Depends, FastAPI, Header, HTTPException, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response, StreamingResponse
 from fastapi.staticfiles import StaticFiles
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 from starlette.background import BackgroundTask
+from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from daq import __version__
 from daq.service.auth import token_matches
 from daq.service.capture_control import MAX_HITS_WANTED, Conflict
 from daq.service.events import plain
 from daq.service.jobs import analysis_result_name
-from daq.service.limits import BodyLimit
+from daq.service.limits import BodyLimit, TokenGate
 from daq.service.service import Service
 from daq.store import StoreError
 from daq.store.ids import RUN_ID_PATTERN
@@ -36,6 +39,17 @@ from drivers.errors import DriverError
 KEEPALIVE_S = 15.0
 
 
+#: Control characters other than tab and line breaks: refused in text a run stores (a NUL
+#: cannot be stored at all, an escape sequence would drive a terminal that lists runs).
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+
+def _plain_text(value: str, one_line: bool) -> str:
+    if _CONTROL.search(value) or (one_line and re.search(r"[\r\n\t]", value)):
+        raise ValueError("control characters are not allowed" + (" (one line of text)" if one_line else ""))
+    return value
+
+
 class CaptureRequest(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)  # true or "5" is no int, "yes" no bool: 422
     hits: int = Field(5, ge=1, le=MAX_HITS_WANTED, description="Accepted hits to average.")
@@ -43,12 +57,27 @@ class CaptureRequest(BaseModel):
     note: str = Field("", max_length=2000)
     auto: bool = Field(False, description="Decide each hit by the checks instead of waiting for a decision.")
 
+    @field_validator("operator")
+    @classmethod
+    def _operator(cls, value: str) -> str:
+        return _plain_text(value, one_line=True)
+
+    @field_validator("note")
+    @classmethod
+    def _note(cls, value: str) -> str:
+        return _plain_text(value, one_line=False)
+
 
 class Decision(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)  # true or "5" is no int, "yes" no bool: 422
     index: int = Field(ge=0, description="0-based index of the pending hit.")
     accept: bool
     reason: str = Field("", max_length=500)
+
+    @field_validator("reason")
+    @classmethod
+    def _reason(cls, value: str) -> str:
+        return _plain_text(value, one_line=True)
 
 
 def create_app(service: Service) -> FastAPI:
@@ -59,50 +88,59 @@ def create_app(service: Service) -> FastAPI:
         docs_url=None,  # Swagger UI loads scripts from a CDN; the lab PC may have no network
         redoc_url=None,
     )
-    app.add_middleware(BodyLimit)
     app.state.service = service
     token = service.config.token
 
-    def given_token(request: Request, authorization: str | None) -> str | None:
-        if authorization and authorization.lower().startswith("bearer "):
-            return authorization[7:].strip()
-        if request.method == "GET":
-            return request.query_params.get("token")
-        return None
+    def needs_token(method: str, path: str) -> bool:
+        if method not in ("GET", "HEAD"):
+            return True
+        return service.config.reads_need_token and path.startswith("/api/")
 
-    # async: no I/O here, and a sync dependency would cost every request a thread hop.
-    async def need_token(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
-        if not token_matches(given_token(request, authorization), token):
-            raise HTTPException(
-                401, "a valid token is needed (Authorization: Bearer <token>; daq serve --show-token)"
-            )
+    def given_ok(method: str, authorization: str, query: str) -> bool:
+        given = None
+        if authorization.lower().startswith("bearer "):
+            given = authorization[7:].strip()
+        elif method in ("GET", "HEAD"):
+            given = parse_qs(query).get("token", [None])[0]
+        return token_matches(given, token)
 
-    async def read_access(request: Request, authorization: Annotated[str | None, Header()] = None) -> None:
-        if service.config.reads_need_token:
-            await need_token(request, authorization)
+    # Added last runs first: the host check, then the token, then the body's size.
+    app.add_middleware(BodyLimit)
+    app.add_middleware(TokenGate, needs_token=needs_token, given_ok=given_ok)
+    if not service.config.reads_need_token:
+        # On loopback the reads need no token, so a page elsewhere whose name was made
+        # to resolve to 127.0.0.1 (DNS rebinding) must not be served: only loopback names.
+        app.add_middleware(TrustedHostMiddleware, allowed_hosts=["127.0.0.1", "localhost", "[::1]", "::1"])
 
-    reads = [Depends(read_access)]
-    writes = [Depends(need_token)]
+    # The token is checked by TokenGate; these only mark the routes in the OpenAPI description.
+    reads: list[Any] = [Depends(_documented_token)] if service.config.reads_need_token else []
+    writes: list[Any] = [Depends(_documented_token)]
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
         first = exc.errors()[0] if exc.errors() else {}
-        where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "request"
+        where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "body"
         message = first.get("msg", "invalid request")
         if first.get("type") == "json_invalid":
-            message = "the body is not valid JSON"
+            where, message = "body", "not valid JSON"
         return JSONResponse({"detail": f"{where}: {message}"}, status_code=422)
 
     # ------------------------------------------------------------ pages
     static = resources.files("daq.service") / "static"
 
+    reads_need_token = "true" if service.config.reads_need_token else "false"
+
     @app.get("/", include_in_schema=False)
     def live_page() -> Response:
-        return _page(static, "index.html")
+        return _page(static, "index.html", reads_need_token)
 
     @app.get("/runs", include_in_schema=False)
     def runs_page() -> Response:
-        return _page(static, "runs.html")
+        return _page(static, "runs.html", reads_need_token)
+
+    @app.get("/favicon.ico", include_in_schema=False)
+    def favicon() -> Response:
+        return Response(status_code=204)  # none: but no 404 in the browser's console
 
     app.mount("/static", StaticFiles(directory=str(static), check_dir=False), name="static")
 
@@ -259,11 +297,9 @@ def create_app(service: Service) -> FastAPI:
         summary="The run's report",
     )
     def run_report(run_id: str) -> HTMLResponse:
-        from daq.report.build import build_report
-
         rid = _resolve(service, run_id)
         try:
-            html, _ = build_report(service.store.path, rid)
+            html = service.report_html(rid)
         except (StoreError, ValueError) as exc:
             raise HTTPException(422, f"no report for run {rid}: {' '.join(str(exc).split())}") from None
         return HTMLResponse(html)
@@ -310,16 +346,20 @@ async def _stream(service: Service, request: Request, since: int | None):
         service.hub.unsubscribe(sub)
 
 
+async def _documented_token(authorization: Annotated[str | None, Header()] = None) -> None:
+    """Declares the Authorization header in the OpenAPI description (TokenGate checks it)."""
+
+
 def _json_bytes(data: bytes) -> Response:
     """Already-encoded JSON (FastAPI's encoder would walk every value again)."""
     return Response(data, media_type="application/json")
 
 
-def _page(static: Any, name: str) -> Response:
+def _page(static: Any, name: str, reads_need_token: str) -> Response:
     page = static / name
     if not page.is_file():
         raise HTTPException(404, f"{name} is not installed")
-    return HTMLResponse(page.read_text(encoding="utf-8"))
+    return HTMLResponse(page.read_text(encoding="utf-8").replace("{{READS_NEED_TOKEN}}", reads_need_token))
 
 
 def _stop(service: Service, how: str) -> dict[str, Any]:

@@ -10,6 +10,7 @@ link or an instrument error. Only Abort discards them, as asked.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 from collections.abc import Callable
@@ -192,7 +193,7 @@ class CaptureController:
         outcome, message, sealed = "failed", "", None
         try:
             sealed = self._iterate(job)
-            outcome, message = "sealed", f"{job.accepted} hits averaged"
+            outcome, message = "sealed", f"{_hits(job.accepted)} averaged"
         except _Stopped:
             pass
         except Interrupted:
@@ -207,10 +208,25 @@ class CaptureController:
             log.exception("capture %s failed", job.run_id)
             message = f"internal error: {type(exc).__name__}: {exc}"
         finally:
-            dsa.close()
-        if sealed is None:
-            outcome, message, sealed = self._keep_partial(job, outcome, message)
+            with contextlib.suppress(Exception):
+                dsa.close()
+        try:
+            if sealed is None:
+                outcome, message, sealed = self._keep_partial(job, outcome, message)
+        except Exception as exc:  # a bug: never leave the capture "running" for good
+            log.exception("capture %s could not be kept", job.run_id)
+            outcome, message = "failed", f"{message or 'stopped'}; internal error keeping the hits: {exc}"
+        finally:
+            self._finish(job, outcome, message, sealed)
+
+    def _finish(self, job: Capture, outcome: str, message: str, sealed: Run | None) -> None:
+        """Back to idle; undecided hits get the verdict the run (or the abort) gave them."""
+        reason = "discarded (capture aborted)" if outcome == "aborted" else "interrupted before a decision"
         with self._cond:
+            undecided = [h for h in self.hits if not h["decided"]]
+            for hit in undecided:
+                hit.update(decided=True, accepted=False, reason=reason)
+            accepted_so_far = sum(1 for h in self.hits if h["accepted"])
             self.pending = None
             self.last_run_id = sealed.run_id if sealed is not None else self.last_run_id
             self.last_outcome = outcome
@@ -218,6 +234,12 @@ class CaptureController:
             self.last_message = message or None
             self.state = "idle"
             self._cond.notify_all()
+        for hit in undecided:
+            self.hub.publish(
+                "hit_decided",
+                {"run_id": job.run_id, "index": hit["index"], "accepted": False, "reason": reason,
+                 "accepted_so_far": accepted_so_far},
+            )  # fmt: skip
         self.hub.publish("capture_ended", {"run_id": job.run_id, "outcome": outcome, "message": message})
         if sealed is not None:
             self.on_sealed(sealed.run_id)
@@ -227,7 +249,9 @@ class CaptureController:
         with self._cond:
             how = self._stop
         if how == "abort":
-            return "aborted", f"{len(job.hits)} hits discarded", None
+            with self._cond:
+                taken = len(self.hits)  # the hit waiting for a decision too
+            return "aborted", f"{_hits(taken)} discarded", None
         why = message or "stopped"
         try:
             run = job.partial_run()
@@ -237,9 +261,9 @@ class CaptureController:
             return ("stopped" if how == "stop" else outcome), f"{why}; no hits to keep", None
         try:
             self._seal(run)
-        except StoreError as exc:
-            return "failed", f"{why}; the {run.hits.n_hits} hits so far could not be sealed: {exc}", None
-        return "incomplete", f"{why}; {run.hits.n_hits} hits kept as an incomplete run", run
+        except (StoreError, ValueError) as exc:
+            return "failed", f"{why}; the {_hits(run.hits.n_hits)} so far could not be sealed: {exc}", None
+        return "incomplete", f"{why}; {_hits(run.hits.n_hits)} kept as an incomplete run", run
 
     def _seal(self, run: Run) -> None:
         Store(self.store_dir).seal(run)
@@ -324,6 +348,10 @@ class CaptureController:
             with self._cond:
                 self._frf = frf
             self.hub.publish("frf", {"run_id": job.run_id, **frf})
+
+
+def _hits(n: int) -> str:
+    return f"{n} hit" if n == 1 else f"{n} hits"
 
 
 class _Stopped(Exception):

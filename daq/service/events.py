@@ -14,6 +14,7 @@ EventSource reconnects and catches up from the history).
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import math
 import threading
@@ -59,6 +60,7 @@ class EventHub:
         self._max_events = history_events
         self._max_bytes = history_bytes
         self._subscribers: set[Subscriber] = set()
+        self._closed = False
 
     @property
     def last_id(self) -> int:
@@ -93,8 +95,22 @@ class EventHub:
         sub = Subscriber(asyncio.get_running_loop())
         with self._lock:
             backlog = [e for e in self._history if since is not None and e.id > since]
-            self._subscribers.add(sub)
+            if self._closed:
+                sub.queue.put_nowait(None)
+            else:
+                self._subscribers.add(sub)
         return sub, backlog
+
+    def close(self) -> None:
+        """End every stream (the service stops): each subscriber gets the end marker,
+        so that its connection closes at once instead of holding the shutdown."""
+        with self._lock:
+            subscribers, self._subscribers = list(self._subscribers), set()
+            self._closed = True
+        for sub in subscribers:
+            sub.dropped = True
+            with contextlib.suppress(RuntimeError):  # its loop is already closed
+                sub.loop.call_soon_threadsafe(sub.queue.put_nowait, None)
 
     def unsubscribe(self, sub: Subscriber) -> None:
         with self._lock:

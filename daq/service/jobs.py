@@ -15,7 +15,10 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+import os
 import threading
+import time
+from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -27,6 +30,8 @@ from daq.service.events import EventHub
 log = logging.getLogger(__name__)
 
 ANALYSIS, FIT = "analysis", "fit"
+#: Seconds between looks for runs sealed into the store by other processes.
+WATCH_S = 2.0
 
 
 def analysis_result_name() -> str:
@@ -61,6 +66,15 @@ def _init_worker() -> None:
     from daq.memory_tuning import keep_freed_memory
 
     keep_freed_memory()
+    threading.Thread(target=_exit_with_parent, args=(os.getppid(),), name="parent-watch", daemon=True).start()
+
+
+def _exit_with_parent(parent: int) -> None:
+    """End this worker when the service is gone (SIGKILL leaves no one to stop it):
+    an orphan would finish its run and then wait under init for ever."""
+    while os.getppid() == parent:
+        time.sleep(1.0)
+    os._exit(0)
 
 
 class JobRunner:
@@ -78,6 +92,8 @@ class JobRunner:
         self._counts = {"queued": 0, "running": 0, "done": 0, "failed": 0}
         self._pool: ProcessPoolExecutor | None = None
         self._closed = False
+        self._waiting: deque[tuple[str, str]] = deque()
+        self._inflight = 0
         #: Grows with every change of a run's state (a cache key for listings).
         self.version = 0
 
@@ -94,17 +110,44 @@ class JobRunner:
             self._pool.shutdown(wait=False, cancel_futures=True)
 
     def _backlog(self) -> None:
-        """Queue every run whose analysis or default fit is missing."""
+        """Remove temporaries a crash left (older than an hour: a younger one may be
+        another process's write in progress), then queue every run whose analysis or
+        default fit is missing."""
         from daq.store import Store, StoreError
 
         try:
+            removed = Store(self.store_dir).clean_temporaries()
+            if removed:
+                log.warning("removed %d stale temporary files from %s", len(removed), self.store_dir)
             summaries = Store(self.store_dir).list()
         except StoreError as exc:
             log.error("cannot list the store for its backlog: %s", exc)
             return
+        seen = set()
         for summary in summaries:
+            seen.add(summary.run_id)
             if summary.error is None and not self._on_disk(summary.run_id, FIT):
                 self.submit(summary.run_id)
+        self._watch(seen)
+
+    def _watch(self, seen: set[str]) -> None:
+        """Runs that other processes seal into the store (daq capture, daq import
+        beside the service) are queued too, within WATCH_S."""
+        from daq.store.store import is_run_file_name
+
+        while not self._closed:
+            time.sleep(WATCH_S)
+            try:
+                with os.scandir(self.store_dir) as it:
+                    names = [e.name for e in it if is_run_file_name(e.name)]
+            except OSError:
+                continue
+            for name in names:
+                run_id = name.removesuffix(".h5")
+                if run_id not in seen:
+                    seen.add(run_id)
+                    if not self._on_disk(run_id, FIT):
+                        self.submit(run_id)
 
     # ------------------------------------------------------------ queueing
     def submit(self, run_id: str) -> None:
@@ -114,7 +157,19 @@ class JobRunner:
                 return
             self._states[run_id] = {ANALYSIS: "queued", FIT: "queued"}
             self._counts["queued"] += 1
-        self._dispatch(run_id, ANALYSIS)
+            self._waiting.append((run_id, ANALYSIS))
+        self._pump()
+
+    def _pump(self) -> None:
+        """Hand waiting work to free workers. Only as much as there are workers is in
+        the pool at a time, so that "running" and analysis_started mean running."""
+        while True:
+            with self._lock:
+                if self._closed or self._inflight >= self.workers or not self._waiting:
+                    return
+                run_id, stage = self._waiting.popleft()
+                self._inflight += 1
+            self._dispatch(run_id, stage)
 
     def _dispatch(self, run_id: str, stage: str) -> None:
         worker: Callable[[Path, str], dict | str] = analyse_in_worker if stage == ANALYSIS else fit_in_worker
@@ -153,14 +208,20 @@ class JobRunner:
     def _finished(self, run_id: str, stage: str, outcome: dict[str, Any] | str) -> None:
         failed = isinstance(outcome, str)
         self._set(run_id, stage, "failed" if failed else "done")
+        with self._lock:
+            self._inflight -= 1
         if stage == ANALYSIS:
             if failed:
                 self.hub.publish("analysis_failed", {"run_id": run_id, "error": outcome})
                 self._set(run_id, FIT, "none")
                 self._count_end(failed=True)
-                return
-            self.hub.publish("analysis_done", {"run_id": run_id, "n_modes": len(outcome.get("modes", []))})
-            self._dispatch(run_id, FIT)
+            else:
+                self.hub.publish(
+                    "analysis_done", {"run_id": run_id, "n_modes": len(outcome.get("modes", []))}
+                )
+                with self._lock:
+                    self._waiting.appendleft((run_id, FIT))  # its fit before the next run's analysis
+            self._pump()
             return
         if failed:
             self.hub.publish("fit_failed", {"run_id": run_id, "method": "ls", "error": outcome})
@@ -169,6 +230,7 @@ class JobRunner:
                 "fit_done", {"run_id": run_id, "method": outcome.get("method"), "psi": outcome.get("psi")}
             )
         self._count_end(failed=failed)
+        self._pump()
 
     def _set(self, run_id: str, stage: str, state: str) -> None:
         with self._lock:

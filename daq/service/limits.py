@@ -1,7 +1,10 @@
-"""Request bodies are small (a capture's hits, operator and note; a decision): anything
+"""What a request must be before the application sees it.
+
+Request bodies are small (a capture's hits, operator and note; a decision): anything
 bigger is refused before it is read, so that no client can make the service buffer
-megabytes. A body must announce its length; one that sends more than it announced
-is cut off by the server (uvicorn's h11 enforces Content-Length)."""
+megabytes. A body must announce its length (a chunked one is refused); one that sends
+more than it announced is cut off by the server (uvicorn's h11 enforces
+Content-Length). Requests that need the token are refused before anything else."""
 
 from __future__ import annotations
 
@@ -25,20 +28,41 @@ class BodyLimit:
         if scope["type"] == "http" and scope["method"] in _METHODS_WITH_BODY:
             headers = dict(scope.get("headers") or [])
             length = headers.get(b"content-length")
-            if length is None:
+            if length is None and b"transfer-encoding" in headers:
                 return await _refuse(send, 411, "a body needs a Content-Length header")
-            if not length.isdigit() or int(length) > self.max_bytes:
+            if length is not None and (not length.isdigit() or int(length) > self.max_bytes):
                 return await _refuse(send, 413, f"the body must be at most {self.max_bytes} bytes")
         await self.app(scope, receive, send)
 
 
-async def _refuse(send: Any, status: int, detail: str) -> None:
+class TokenGate:
+    """ASGI middleware: requests that need the token are refused (401) before their
+    body is read or parsed, so that no one without it learns anything from the
+    validation of a body. ``needs_token(method, path)`` says which; ``check(request
+    headers and query)`` compares in constant time."""
+
+    def __init__(self, app: Any, needs_token: Any, given_ok: Any) -> None:
+        self.app = app
+        self.needs_token = needs_token
+        self.given_ok = given_ok
+
+    async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
+        if scope["type"] == "http" and self.needs_token(scope["method"], scope["path"]):
+            headers = dict(scope.get("headers") or [])
+            authorization = headers.get(b"authorization", b"").decode("latin-1")
+            query = scope.get("query_string", b"").decode("latin-1")
+            if not self.given_ok(scope["method"], authorization, query):
+                return await _refuse(
+                    send,
+                    401,
+                    "a valid token is needed (Authorization: Bearer <token>; daq serve --show-token)",
+                    [(b"www-authenticate", b'Bearer realm="daq serve"')],
+                )
+        await self.app(scope, receive, send)
+
+
+async def _refuse(send: Any, status: int, detail: str, extra: list | None = None) -> None:
     body = json.dumps({"detail": detail}).encode()
-    await send(
-        {
-            "type": "http.response.start",
-            "status": status,
-            "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())],
-        }
-    )
+    headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
+    await send({"type": "http.response.start", "status": status, "headers": headers + (extra or [])})
     await send({"type": "http.response.body", "body": body})

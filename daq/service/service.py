@@ -17,6 +17,7 @@ from daq.service.events import EventHub, plain
 from daq.service.instrument_link import InstrumentLink, SimSpec
 from daq.service.jobs import JobRunner, analysis_result_name, fit_result_name
 from daq.store import Store, StoreError
+from drivers.locking import ResourceLock
 
 
 @dataclass
@@ -50,6 +51,12 @@ class Service:
         self.jobs = JobRunner(config.store_dir, self.hub, config.workers, config.scheduler)
         self.capture = CaptureController(self.link, config.store_dir, self.hub, on_sealed=self.jobs.submit)
         self._results = _ResultCache(self.store)
+        where = os.path.realpath(config.store_dir)
+        self._store_lock = ResourceLock(
+            f"STORE::{where}", f"store {where}", holder=f"daq serve at {config.url}"
+        )
+        self._reports: dict[str, tuple[Any, str]] = {}
+        self._reports_lock = threading.Lock()
         self._listing_lock = threading.Lock()
         self._listing: tuple[Any, bytes] | None = None
 
@@ -57,6 +64,8 @@ class Service:
         """Take the instrument (ResourceBusy if someone has it), start the workers and
         queue the store's backlog."""
         self.store.ensure_writable()
+        # One service per store: two would analyse every run twice.
+        self._store_lock.acquire()
         self.link.start()
         try:
             self.jobs.start()
@@ -65,11 +74,14 @@ class Service:
             raise
 
     def close(self) -> None:
+        # Workers first: a run sealed now is analysed at the next start (the store is
+        # the queue), and the stop waits only for the analysis already running.
+        self.jobs.close()
         with contextlib.suppress(Conflict):  # nothing running is the usual case
             self.capture.stop("stop")  # a running capture seals what it has
         self.capture.wait_idle(10.0)
-        self.jobs.close()
         self.link.close()
+        self._store_lock.release()
 
     # ------------------------------------------------------------ results
     def analysis(self, run_id: str) -> dict[str, Any] | None:
@@ -86,6 +98,27 @@ class Service:
 
     def default_fit(self, run_id: str) -> dict[str, Any] | None:
         return self._results.get(run_id, fit_result_name())
+
+    def report_html(self, run_id: str) -> str:
+        """The run's report page, built again only when the run or a result changed
+        (building takes seconds: figures for every hit, the fit's response)."""
+        from daq.report.build import build_report
+
+        def key() -> tuple:
+            files = sorted(self.store.path.glob(f"{run_id}.*h5"))
+            return tuple((p.name, *_size_mtime_path(p)) for p in files)
+
+        before = key()
+        with self._reports_lock:
+            cached = self._reports.get(run_id)
+        if cached is not None and cached[0] == before:
+            return cached[1]
+        html, _ = build_report(self.store.path, run_id)
+        with self._reports_lock:
+            if len(self._reports) >= 32:
+                self._reports.pop(next(iter(self._reports)))
+            self._reports[run_id] = (key(), html)  # after: the build may have fitted the run
+        return html
 
     def summary_json(self, run_id: str, name: str) -> bytes | None:
         """The stored result's summary as JSON bytes, encoded once per file version."""
@@ -160,5 +193,13 @@ def _size_mtime(entry: os.DirEntry) -> tuple[int, int]:
     try:
         st = entry.stat()
     except OSError:  # removed meanwhile
+        return (-1, -1)
+    return (st.st_size, st.st_mtime_ns)
+
+
+def _size_mtime_path(path: Path) -> tuple[int, int]:
+    try:
+        st = path.stat()
+    except OSError:
         return (-1, -1)
     return (st.st_size, st.st_mtime_ns)

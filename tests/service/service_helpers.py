@@ -24,6 +24,7 @@ import httpx
 from cli_helpers import DAQ, ENV
 
 ADDRESS_LINE = re.compile(r"open (http://[^/\s]+)/#token=([0-9a-f]+)")
+BEYOND_LOOPBACK_LINE = re.compile(r"listening on (\S+), .*open http://\S+:(\d+)/#token=")
 
 
 @dataclass
@@ -60,37 +61,8 @@ def service_env(tmp_path: Path) -> dict[str, str]:
     return env
 
 
-def start_service(tmp_path: Path, *args: str, store: Path | None = None, timeout_s: float = 60.0) -> Served:
-    store = store or tmp_path / "store"
-    env = service_env(tmp_path)
-    proc = subprocess.Popen(
-        [str(DAQ), "serve", "--port", "0", "--store", str(store), *args],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-        start_new_session=True,  # a test's SIGINT/SIGKILL reaches the service's workers too
-    )
-    lines: list[str] = []
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        line = proc.stderr.readline()
-        if not line:
-            proc.wait(5)
-            raise AssertionError(f"daq serve exited ({proc.returncode}): {''.join(lines)}")
-        lines.append(line)
-        match = ADDRESS_LINE.search(line)
-        if match:
-            served = Served(match.group(1), match.group(2), proc, store, env, lines)
-            threading.Thread(target=_drain, args=(proc, lines), daemon=True).start()
-            return served
-    proc.kill()
-    raise AssertionError(f"daq serve printed no address in {timeout_s} s: {''.join(lines)}")
-
-
-def _drain(proc: subprocess.Popen, lines: list[str]) -> None:
-    for line in proc.stderr:
-        lines.append(line)
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def stop_service(served: Served, timeout_s: float = 30.0) -> int:
@@ -107,17 +79,61 @@ def stop_service(served: Served, timeout_s: float = 30.0) -> int:
 
 
 @contextlib.contextmanager
-def serving(tmp_path: Path, *args: str, **kwargs: Any) -> Iterator[Served]:
-    served = start_service(tmp_path, *args, **kwargs)
+def serving(
+    tmp_path: Path, *args: str, host: str | None = None, store: Path | None = None, timeout_s: float = 60.0
+) -> Iterator[Served]:
+    """`daq serve --port 0 --store <store> ...` with its own token file, lock
+    directory and config, until the block ends (SIGINT; SIGKILL of its process group
+    if it hangs). ``host`` may be beyond loopback: the service is then reached through
+    127.0.0.1, and the token, which its banner does not print, is read from the token
+    file as `daq serve --show-token` would. The thread that drains its stderr is joined
+    before the pipe is closed (a test may SIGKILL the service at any moment)."""
+    store = store or tmp_path / "store"
+    env = service_env(tmp_path)
+    where = ("--host", host) if host else ()
+    proc = subprocess.Popen(
+        [str(DAQ), "serve", *where, "--port", "0", "--store", str(store), *args],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        start_new_session=True,  # its own process group: a SIGKILL of the group takes its workers
+        # pytest-xdist's workers ignore SIGINT, and a child inherits that: the service
+        # would ignore a Ctrl-C that lands before uvicorn installs its own handler.
+        preexec_fn=_default_sigint,
+    )
+    lines: list[str] = []
+    drain = None
     try:
+        deadline = time.monotonic() + timeout_s
+        url = token = None
+        while url is None and time.monotonic() < deadline:
+            line = proc.stderr.readline()
+            if not line:
+                raise AssertionError(f"daq serve exited ({proc.wait(10)}): {''.join(lines)}")
+            lines.append(line)
+            if match := ADDRESS_LINE.search(line):
+                url, token = match.group(1), match.group(2)
+            elif match := BEYOND_LOOPBACK_LINE.search(line):
+                url = f"http://127.0.0.1:{match.group(2)}"
+                token = Path(env["DAQ_TOKEN_FILE"]).read_text().strip()
+        if url is None or token is None:
+            raise AssertionError(f"daq serve printed no address in {timeout_s} s: {''.join(lines)}")
+        served = Served(url, token, proc, store, env, lines)
+        drain = threading.Thread(target=lambda: lines.extend(proc.stderr), daemon=True)
+        drain.start()
         yield served
     finally:
         try:
-            if served.proc.poll() is None:
-                stop_service(served)
+            if proc.poll() is None:
+                stop_service(Served("", "", proc, store, env))
         finally:
-            served.proc.wait(10)
-            served.proc.stderr.close()
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(10)
+            if drain is not None:
+                drain.join(10)
+            proc.stderr.close()
 
 
 def wait_for(predicate: Callable[[], Any], timeout_s: float = 60.0, what: str = "the condition") -> Any:

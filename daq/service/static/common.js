@@ -68,8 +68,15 @@
 
   /* The URL with ?token=<token> (or &token=) when a token is known: for links
    * (downloads, report) and the event stream, which cannot send headers. */
+  function readsNeedToken() {
+    /* The service says so in the page (a <meta> it fills in); on loopback it is false,
+     * and a link that carried the token would put it in history and in copied links. */
+    const meta = document.querySelector('meta[name="daq-reads-need-token"]');
+    return !meta || meta.content !== "false";
+  }
+
   function withToken(url) {
-    if (!token) return url;
+    if (!token || !readsNeedToken()) return url;
     const sep = url.includes("?") ? "&" : "?";
     return url + sep + "token=" + encodeURIComponent(token);
   }
