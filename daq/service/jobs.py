@@ -20,7 +20,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any
@@ -62,6 +62,24 @@ def fit_in_worker(store_dir: Path, run_id: str) -> dict[str, Any] | str:
     return fit_one(store_dir, run_id, FitOptions(), False)
 
 
+def on_cluster(address: str, store_dir: Path, run_id: str, kind: str) -> dict[str, Any] | str:
+    """Analyse ("analyze") or fit ("fit") one run on the Dask cluster at ``address``
+    (daq/dask_batch.py: the run's bytes go to a worker, the result comes back and is
+    stored here); the summary or a one-line reason."""
+    from analysis.run_analysis import AnalysisOptions
+    from daq.dask_batch import run_on_cluster
+    from daq.errors import UserError
+    from daq.fit_store import FitOptions
+
+    outcomes: dict[str, dict[str, Any] | str] = {}
+    options = AnalysisOptions() if kind == "analyze" else FitOptions()
+    try:
+        run_on_cluster(address, store_dir, [run_id], options, False, kind, outcomes.__setitem__)
+    except UserError as exc:
+        return str(exc)
+    return outcomes.get(run_id, "the cluster returned no result")
+
+
 def _init_worker() -> None:
     from daq.memory_tuning import keep_freed_memory
 
@@ -91,6 +109,7 @@ class JobRunner:
         self._states: dict[str, dict[str, str]] = {}
         self._counts = {"queued": 0, "running": 0, "done": 0, "failed": 0}
         self._pool: ProcessPoolExecutor | None = None
+        self._cluster_calls: ThreadPoolExecutor | None = None
         self._closed = False
         self._waiting: deque[tuple[str, str]] = deque()
         self._inflight = 0
@@ -101,6 +120,8 @@ class JobRunner:
     def start(self) -> None:
         if self.scheduler is None:
             self._pool = self._new_pool()
+        else:  # each call blocks until the cluster has done the run: one thread per slot
+            self._cluster_calls = ThreadPoolExecutor(self.workers, thread_name_prefix="dask")
         threading.Thread(target=self._backlog, name="backlog", daemon=True).start()
 
     def close(self) -> None:
@@ -108,6 +129,8 @@ class JobRunner:
             self._closed = True
         if self._pool is not None:
             self._pool.shutdown(wait=False, cancel_futures=True)
+        if self._cluster_calls is not None:
+            self._cluster_calls.shutdown(wait=False, cancel_futures=True)
 
     def _backlog(self) -> None:
         """Remove temporaries a crash left (older than an hour: a younger one may be
@@ -185,9 +208,9 @@ class JobRunner:
 
     def _submit(self, worker: Callable[[Path, str], dict | str], run_id: str) -> Future:
         if self.scheduler is not None:
-            from daq.dask_batch import submit_one
-
-            return submit_one(self.scheduler, worker, self.store_dir, run_id)
+            kind = "analyze" if worker is analyse_in_worker else "fit"
+            assert self._cluster_calls is not None
+            return self._cluster_calls.submit(on_cluster, self.scheduler, self.store_dir, run_id, kind)
         assert self._pool is not None
         try:
             return self._pool.submit(worker, self.store_dir, run_id)
