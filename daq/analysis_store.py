@@ -155,13 +155,11 @@ def _num(value: float) -> float | None:
     return value if np.isfinite(value) else None
 
 
-def payload(result: RunAnalysis, info: dict[str, Any], key: str) -> dict[str, Any]:
-    """What the result file holds: the arrays a report plots and the summary."""
+def result_arrays(result: RunAnalysis) -> dict[str, np.ndarray]:
+    """The arrays a result file holds beside the summary: those a report plots."""
     stab = result.modal.stability
     orders = np.concatenate([np.full(len(p), o) for o, p in zip(stab.orders, stab.poles, strict=True)])
-    out: dict[str, Any] = {
-        "summary": info,
-        "cache_key": key,
+    out: dict[str, np.ndarray] = {
         "frequency_hz": result.frequency_hz,
         "frf": result.frf,
         "synthesized_frequency_hz": result.modal.frequency_hz,
@@ -179,6 +177,42 @@ def payload(result: RunAnalysis, info: dict[str, Any], key: str) -> dict[str, An
     return out
 
 
+def payload(result: RunAnalysis, info: dict[str, Any], key: str) -> dict[str, Any]:
+    """What the result file holds: the summary, the cache key and the arrays."""
+    return {"summary": info, "cache_key": key, **result_arrays(result)}
+
+
+# The analysis in two steps, so that the computing can happen where the store is not
+# (a Dask worker, daq/dask_batch.py) and the storing where it is: compute_analysis
+# takes a run in memory and touches no file; cached_analysis and store_analysis are
+# the store's side, with the cache key computed beside the run file.
+
+
+def compute_analysis(run: Run, options: AnalysisOptions) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """(summary, arrays) of analysing ``run``, in memory: no file read or written."""
+    result, notes = analyze(run, options)
+    info = summary(run, result, notes, options)
+    return info, result_arrays(result)
+
+
+def cached_analysis(store: Store, run_id: str, key: str) -> dict[str, Any] | None:
+    """The stored analysis of run ``run_id`` (summary, cache key, arrays) if its cache
+    key is ``key``; None if there is none, it is unreadable or it is out of date."""
+    try:
+        stored = store.read_result(run_id, RESULT_NAME)
+    except StoreError:
+        return None
+    return stored if stored.get("cache_key") == key else None
+
+
+def store_analysis(
+    store: Store, run_id: str, key: str, info: dict[str, Any], arrays: dict[str, np.ndarray]
+) -> Path:
+    """Write (or replace, atomically) the analysis result of run ``run_id``."""
+    payload = {"summary": info, "cache_key": key, **arrays}
+    return store.write_result(run_id, RESULT_NAME, payload, overwrite=True)
+
+
 def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, force: bool = False) -> dict:
     """Analyse run ``run_id`` of the store (or reuse its up-to-date result); its summary
     with ``cached`` saying which. StoreError / ValueError name what is wrong."""
@@ -186,14 +220,10 @@ def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, force
     path = store.resolve(run_id)
     key = cache_key(path, options)
     if not force:
-        try:
-            stored = store.read_result(path.stem, RESULT_NAME)
-        except StoreError:
-            stored = None
-        if stored is not None and stored.get("cache_key") == key:
+        stored = cached_analysis(store, path.stem, key)
+        if stored is not None:
             return {**stored["summary"], "cached": True}
     run = store.open(path.stem)
-    result, notes = analyze(run, options)
-    info = summary(run, result, notes, options)
-    store.write_result(run.run_id, RESULT_NAME, payload(result, info, key), overwrite=True)
+    info, arrays = compute_analysis(run, options)
+    store_analysis(store, run.run_id, key, info, arrays)
     return {**info, "cached": False}

@@ -1,5 +1,6 @@
 """`daq analyze RUN... | --all`: FRFs, modes and Table 2 of stored runs, kept beside each
-run (daq/analysis_store.py), in parallel over the cores, with a progress bar.
+run (daq/analysis_store.py), in parallel over the cores, or on a Dask cluster with
+--scheduler (daq/dask_batch.py), with a progress bar.
 
 Without --json it prints each run's modes; with --json a list with one object per
 run (``run_id``, ``modes`` sorted by frequency, ``table2``, ...). A run that cannot
@@ -18,9 +19,20 @@ from typing import Annotated, Any
 
 import typer
 
+from daq.dask_batch import failure_reason, run_on_cluster, scheduler_address
 from daq.errors import UserError
 from daq.memory_tuning import keep_freed_memory
 from daq.runs_command import JsonOption, StoreOption
+
+#: --scheduler of `daq analyze` and `daq fit`.
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option(
+        metavar="<tcp://host:port>",
+        show_default=False,
+        help="Run on this Dask cluster instead of the local cores [default: $DAQ_SCHEDULER if set].",
+    ),
+]
 
 
 def register(app: typer.Typer) -> None:
@@ -75,6 +87,7 @@ def analyze(
     jobs: Annotated[
         int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
     ] = None,
+    scheduler: SchedulerOption = None,
     force: Annotated[
         bool, typer.Option("--force", help="Analyse again even if a result is up to date.")
     ] = False,
@@ -99,7 +112,9 @@ def analyze(
         # The options' names as the user typed them.
         text = str(exc).replace("max_order", "--max-order").replace("estimator", "--estimator")
         raise UserError(text.replace("band ", "--band "), exit_code=2) from None
-    run_batch(runs, all_runs, store, options, force, jobs, json_output, analyze_one, _print, "analyse")
+    run_batch(
+        runs, all_runs, store, options, force, jobs, json_output, analyze_one, _print, "analyse", scheduler
+    )
 
 
 def run_batch(
@@ -113,15 +128,21 @@ def run_batch(
     worker: Any,
     printer: Any,
     verb: str,
+    scheduler: str | None = None,
 ) -> None:
     """The part `daq analyze` and `daq fit` share: pick the runs (named, or every run
     file with --all, damaged ones too so that they fail with a line, never silently),
-    run ``worker`` on each in worker processes, print each summary (``printer``) or
-    the JSON list, and end with one error line if any run failed."""
+    run ``worker`` on each in worker processes (or on the Dask cluster of
+    ``scheduler``, the --scheduler option, else $DAQ_SCHEDULER), print each summary
+    (``printer``) or the JSON list, and end with one error line if any run failed."""
     from daq.store import Store, StoreError, resolve_store_dir
 
     if jobs is not None and jobs < 1:
         raise UserError("--jobs must be at least 1", exit_code=2)
+    if jobs is not None and scheduler is not None:
+        raise UserError("give --jobs (local worker processes) or --scheduler (a Dask cluster), not both", 2)
+    # An explicit --jobs asks for the local pool, whatever $DAQ_SCHEDULER says.
+    address = None if jobs is not None else scheduler_address(scheduler)
     store_dir, _ = resolve_store_dir(store)
     the_store = Store(store_dir)
     try:
@@ -134,7 +155,8 @@ def run_batch(
     if not ids:
         raise UserError(f"no runs to {verb} in {store_dir}")
     label = {"analyse": "analysing", "fit": "fitting"}.get(verb, verb)
-    results, failures = run_all(store_dir, ids, options, force, jobs, worker, label, quiet=len(ids) == 1)
+    quiet = len(ids) == 1
+    results, failures = run_all(store_dir, ids, options, force, jobs, worker, label, quiet, address)
     if json_output:
         typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
     else:
@@ -158,11 +180,16 @@ def run_all(
     worker: Any = None,
     label: str = "analysing",
     quiet: bool = False,
+    scheduler: str | None = None,
 ) -> tuple[dict[str, dict], list[tuple[str, str]]]:
     """Run ``worker(store_dir, run_id, options, force)`` (default: analyze_one) on
     ``ids`` in worker processes; (summaries by run id, failed ids). A worker returns a
     summary dict or a one-line reason; failures, (run id, reason), are reported on
-    stderr unless ``quiet`` (one run: the caller makes its reason the one error line)."""
+    stderr unless ``quiet`` (one run: the caller makes its reason the one error line).
+
+    scheduler: a Dask scheduler's address (daq/dask_batch.scheduler_address): the
+    runs are computed on its cluster instead (the same outcomes and stored results;
+    ``jobs`` unused)."""
     worker = worker or analyze_one
     command = "fit" if worker is not analyze_one else "analyze"
     from rich.console import Console
@@ -185,7 +212,9 @@ def run_all(
                 results[run_id] = outcome
             progress.advance(task)
 
-        if workers == 1:
+        if scheduler is not None:
+            run_on_cluster(scheduler, store_dir, ids, options, force, command, done)
+        elif workers == 1:
             for run_id in ids:
                 done(run_id, worker(store_dir, run_id, options, force))
         else:
@@ -199,14 +228,14 @@ def run_all(
 def analyze_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:
     """The summary of one run's analysis, or a one-line reason it failed (picklable)."""
     from daq.analysis_store import analyze_stored
-    from daq.store import StoreError
 
     try:
         return analyze_stored(store_dir, run_id, options, force)
-    except (StoreError, ValueError) as exc:
-        return " ".join(str(exc).split())
-    except np_errors() as exc:
-        return f"numerical failure ({type(exc).__name__}: {' '.join(str(exc).split())})"
+    except Exception as exc:
+        reason = failure_reason(exc)  # the reasons a run on a Dask cluster gives too
+        if reason is None:
+            raise
+        return reason
 
 
 def np_errors() -> tuple[type[BaseException], ...]:

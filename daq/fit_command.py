@@ -1,5 +1,6 @@
 """`daq fit RUN... | --all`: the damping matrix of stored runs (daq/fit_store.py), each
-result beside its run, in worker processes with a progress bar."""
+result beside its run, in worker processes (or on a Dask cluster with --scheduler)
+with a progress bar."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from typing import Annotated, Any
 
 import typer
 
+from daq.analyze_command import SchedulerOption
 from daq.errors import UserError
 from daq.runs_command import JsonOption, StoreOption
 
@@ -58,6 +60,7 @@ def fit(
     jobs: Annotated[
         int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
     ] = None,
+    scheduler: SchedulerOption = None,
     force: Annotated[bool, typer.Option("--force", help="Fit again even if a result is up to date.")] = False,
     json_output: JsonOption = False,
     store: StoreOption = None,
@@ -88,7 +91,7 @@ def fit(
         for name, option in OPTION_NAMES:
             text = text.replace(f"{name} must", f"{option} must")
         raise UserError(text, exit_code=2) from None
-    run_batch(runs, all_runs, store, options, force, jobs, json_output, fit_one, print_fit, "fit")
+    run_batch(runs, all_runs, store, options, force, jobs, json_output, fit_one, print_fit, "fit", scheduler)
 
 
 def fit_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:

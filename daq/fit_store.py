@@ -353,6 +353,41 @@ def _jsonable(value: Any) -> Any:
     return clean(plain)
 
 
+# Like the analysis (daq/analysis_store.py), the fit in two steps: fit_run computes in
+# memory (a run and its analysis in, summary and arrays out); fit_cache_key,
+# cached_fit and store_fit are the store's side. daq/dask_batch.py runs fit_run on a
+# Dask worker and the other three beside the store.
+
+
+def fit_cache_key(path: Path, analysis_key: str | None, options: FitOptions) -> str:
+    """The cache key of fitting the run file at ``path`` with ``options``, given the
+    cache key of the run's stored analysis (the one with default options)."""
+    stat = path.stat()
+    identity = {
+        "analysis": analysis_key, "options": asdict(options), "software": SOFTWARE,
+        "fit_version": FIT_VERSION, "size": stat.st_size, "mtime_ns": stat.st_mtime_ns,
+    }  # fmt: skip
+    return hashlib.sha256(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def cached_fit(store: Store, run_id: str, options: FitOptions, key: str) -> dict[str, Any] | None:
+    """The stored fit summary of run ``run_id`` with ``options`` if its cache key is
+    ``key``; None if there is none, it is unreadable or it is out of date."""
+    try:
+        stored = store.read_result(run_id, options.result_name)
+    except StoreError:
+        return None
+    return stored["summary"] if stored.get("cache_key") == key else None
+
+
+def store_fit(
+    store: Store, run_id: str, options: FitOptions, key: str, summary: dict[str, Any], arrays: dict[str, Any]
+) -> Path:
+    """Write (or replace, atomically) the fit result of run ``run_id`` with ``options``."""
+    payload = {"summary": summary, "cache_key": key, **arrays}
+    return store.write_result(run_id, options.result_name, payload, overwrite=True)
+
+
 def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = False) -> dict[str, Any]:
     """Fit run ``run_id`` of the store (or reuse an up-to-date result); its summary."""
     store = Store(store_dir)
@@ -360,25 +395,18 @@ def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = 
     analysis = analyze_stored(store_dir, path.stem, AnalysisOptions())
     stored_analysis = store.read_result(path.stem, ANALYSIS_RESULT)
     analysis["arrays"] = {k: v for k, v in stored_analysis.items() if isinstance(v, np.ndarray)}
-    stat = path.stat()
-    identity = {
-        "analysis": stored_analysis.get("cache_key"), "options": asdict(options), "software": SOFTWARE,
-        "fit_version": FIT_VERSION, "size": stat.st_size, "mtime_ns": stat.st_mtime_ns,
-    }  # fmt: skip
-    key = hashlib.sha256(json.dumps(identity, sort_keys=True, default=str).encode()).hexdigest()
+    key = fit_cache_key(path, stored_analysis.get("cache_key"), options)
     if not force:
-        try:
-            stored = store.read_result(path.stem, options.result_name)
-        except StoreError:
-            stored = None
-        if stored is not None and stored.get("cache_key") == key:
-            return {**stored["summary"], "cached": True}
+        stored = cached_fit(store, path.stem, options, key)
+        if stored is not None:
+            return {**stored, "cached": True}
     run = store.open(path.stem)
     summary, arrays = fit_run(run, analysis, options)
-    store.write_result(
-        run.run_id, options.result_name, {"summary": summary, "cache_key": key, **arrays}, overwrite=True
-    )
+    store_fit(store, run.run_id, options, key, summary, arrays)
     return {**summary, "cached": False}
 
 
-__all__ = ["ANALYSIS_RESULT", "METHODS", "FitOptions", "fit_run", "fit_stored"]
+__all__ = [
+    "ANALYSIS_RESULT", "METHODS", "FitOptions", "cached_fit", "fit_cache_key", "fit_run", "fit_stored",
+    "store_fit",
+]  # fmt: skip
