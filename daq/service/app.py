@@ -21,14 +21,13 @@ from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 from starlette.background import BackgroundTask
-from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from daq import __version__
 from daq.service.auth import token_matches
 from daq.service.capture_control import MAX_HITS_WANTED, Conflict
 from daq.service.events import plain
 from daq.service.jobs import analysis_result_name
-from daq.service.limits import BodyLimit, TokenGate
+from daq.service.limits import BodyLimit, LoopbackHost, TokenGate
 from daq.service.service import Service
 from daq.store import StoreError
 from daq.store.ids import RUN_ID_PATTERN
@@ -110,7 +109,7 @@ def create_app(service: Service) -> FastAPI:
     if not service.config.reads_need_token:
         # On loopback the reads need no token, so a page elsewhere whose name was made
         # to resolve to 127.0.0.1 (DNS rebinding) must not be served: only loopback names.
-        app.add_middleware(TrustedHostMiddleware, allowed_hosts=["127.0.0.1", "localhost", "[::1]", "::1"])
+        app.add_middleware(LoopbackHost)
 
     # The token is checked by TokenGate; these only mark the routes in the OpenAPI description.
     reads: list[Any] = [Depends(_documented_token)] if service.config.reads_need_token else []

@@ -66,3 +66,32 @@ async def _refuse(send: Any, status: int, detail: str, extra: list | None = None
     headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
     await send({"type": "http.response.start", "status": status, "headers": headers + (extra or [])})
     await send({"type": "http.response.body", "body": body})
+
+
+#: Names a browser on this machine uses for the service when it listens on loopback.
+LOOPBACK_NAMES = frozenset({"127.0.0.1", "localhost", "[::1]"})
+
+
+def host_name(header: str) -> str:
+    """The name part of a Host header: ``[::1]:8000`` -> ``[::1]``, ``a:80`` -> ``a``."""
+    header = header.strip().lower()
+    if header.startswith("["):
+        return header[: header.find("]") + 1] if "]" in header else header
+    return header.rsplit(":", 1)[0] if ":" in header else header
+
+
+class LoopbackHost:
+    """ASGI middleware for a service on loopback, whose reads need no token: a request
+    must name it as 127.0.0.1, localhost or [::1] (400 otherwise), so that a web page
+    elsewhere whose name was made to resolve to 127.0.0.1 (DNS rebinding) gets nothing."""
+
+    def __init__(self, app: Any) -> None:
+        self.app = app
+
+    async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
+        if scope["type"] == "http":
+            headers = dict(scope.get("headers") or [])
+            name = host_name(headers.get(b"host", b"").decode("latin-1"))
+            if name not in LOOPBACK_NAMES:
+                return await _refuse(send, 400, "this service answers only to 127.0.0.1, localhost or [::1]")
+        await self.app(scope, receive, send)

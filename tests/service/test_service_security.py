@@ -430,7 +430,7 @@ def test_loopback_refuses_foreign_host_names_and_401_comes_before_the_body(tmp_p
             answer = raw_request(served.url, f"GET /api/runs HTTP/1.1\r\nHost: {host}")
             assert answer.status == 400, (host, answer.status)
         port = served.url.rsplit(":", 1)[1]
-        for host in (f"127.0.0.1:{port}", f"localhost:{port}"):
+        for host in (f"127.0.0.1:{port}", f"localhost:{port}", f"[::1]:{port}", "LOCALHOST"):
             assert raw_request(served.url, f"GET /api/runs HTTP/1.1\r\nHost: {host}").status == 200
         # Without the token nothing is learnt from the body: 401 for malformed JSON too,
         # with the scheme the client should use.
