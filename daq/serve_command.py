@@ -165,6 +165,10 @@ def run_service(
                 access_log=False,
                 lifespan="off",
                 timeout_graceful_shutdown=3,
+                # uvicorn closes idle keep-alive connections after 5 s by default; a client
+                # that sends on one just then gets "disconnected without a response". Pages
+                # poll and browsers keep connections far longer: keep them a minute.
+                timeout_keep_alive=60,
             ),
             service,
         )
