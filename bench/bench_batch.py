@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import logging
 import os
 import time
 import warnings
@@ -107,6 +108,9 @@ def main_bench(folder: Path, n_runs: int) -> None:
         analyse, fit = batch(store_dir, ids, jobs, None)
         rows.append((name, analyse, fit))
     again_local = cached(store_dir, ids, None)
+    # The LocalCluster's scheduler and nannies live in this process; under load they
+    # log that workers were slow to stop, which is not what is measured here.
+    logging.getLogger("distributed").setLevel(logging.ERROR)
     with warnings.catch_warnings():
         # distributed may warn at shutdown about connections it closes; not ours.
         warnings.simplefilter("ignore", ResourceWarning)
