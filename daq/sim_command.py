@@ -1,4 +1,4 @@
-"""`daq sim serve`: run the simulated HP 35660A in the foreground."""
+"""`daq sim serve`: run a simulated HP analyzer (35660A, 3562A, 35670A) in the foreground."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import typer
 from daq.errors import UserError
 
 sim_app = typer.Typer(
-    help="Run the simulated HP 35660A, or list the commands it speaks.\n\n"
+    help="Run a simulated HP analyzer (35660A, 3562A, 35670A), or list the commands it speaks.\n\n"
     "The simulator is what tests, demos and new users run against when the lab's "
     "analyzer is not at hand.",
     invoke_without_command=True,
@@ -35,6 +35,13 @@ class Scenario(StrEnum):
     realistic = "realistic"
 
 
+MODEL_METAVAR = "35660A|3562A|35670A|35665A"
+MODEL_HELP = (
+    "The analyzer simulated: 35660A or 3562A (HP mnemonics, docs/instrument.md) or 35670A or 35665A "
+    "(SCPI, docs/instrument-scpi.md)."
+)
+
+
 # Shared with `daq demo`, so that the same option reads the same in both helps.
 SCENARIO_HELP = (
     "The specimen simulated: seed (the paper's 3-function model and eq (18) damping) "
@@ -44,6 +51,16 @@ SEED_HELP = "Random seed of the simulated hammer and noise: the same seed gives 
 TIME_SCALE_HELP = (
     "Speed of simulated time: 1 = real time (a hit every 0.5-2 s), 0.1 = ten times faster, 0 = instant."
 )
+
+
+def _model(name: str):
+    """The sims Model called ``name``; a usage error (exit 2) naming the choices if none is."""
+    from sims.models import get_model
+
+    try:
+        return get_model(name)
+    except ValueError as exc:
+        raise UserError(f"--model: {exc}", exit_code=2) from None
 
 
 @sim_app.command()
@@ -97,6 +114,7 @@ def serve(
             help="Adjust the simulated hammer, e.g. peak_force_n=3,pulse_width_s=0.001.",
         ),
     ] = None,
+    model: Annotated[str, typer.Option(metavar=MODEL_METAVAR, help=MODEL_HELP)] = "35660A",
 ) -> None:
     """Serve the simulated analyzer until Ctrl-C.
 
@@ -108,6 +126,7 @@ def serve(
     from sims.instrument import Analyzer
     from sims.sources import PhysicsSource, ReplaySource
 
+    instrument = _model(model)
     if pty and tcp is not None:
         raise UserError("choose one of --tcp PORT and --pty", exit_code=2)
     if not 0 <= gpib_address <= 30:
@@ -130,7 +149,10 @@ def serve(
         from daq.recorded_hits import load_recorded_hits
 
         hits = load_recorded_hits(replay)
-        source: PhysicsSource | ReplaySource = ReplaySource(hits, loop=loop)
+        try:
+            source: PhysicsSource | ReplaySource = ReplaySource(hits, loop=loop, model=instrument)
+        except ValueError as exc:
+            raise UserError(f"--replay {replay}: {exc}", exit_code=2) from None
         what = f"replay of {replay} ({len(hits)} hits)"
     else:
         source = PhysicsSource(scenario.value, seed=seed)
@@ -143,7 +165,7 @@ def serve(
             except ValueError as exc:
                 raise UserError(f"--hammer: {exc}", exit_code=2) from None
         what = f"scenario {scenario.value}, seed {seed}{'' if noise else ', no noise'}"
-    analyzer = Analyzer(source, time_scale=time_scale)
+    analyzer = Analyzer(source, time_scale=time_scale, model=instrument)
 
     server: object
     if pty:
@@ -182,7 +204,7 @@ def serve(
     # the line and stops the server at once must still get a clean stop.
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:
-        console.print(f"Simulated HP 35660A ({what}, time scale {time_scale:g}) on {where}")
+        console.print(f"Simulated HP {instrument.name} ({what}, time scale {time_scale:g}) on {where}")
         if faults:
             console.print(f"Faults on every connection: {', '.join(faults)}")
         console.print("Ctrl-C stops it.")
@@ -198,24 +220,45 @@ def serve(
 
 
 @sim_app.command()
-def commands() -> None:
+def commands(
+    model: Annotated[str, typer.Option(metavar=MODEL_METAVAR, help=MODEL_HELP)] = "35660A",
+) -> None:
     """List the commands the simulated analyzer understands.
 
-    Each entry says where it comes from: seen in code driving an HP 3562A, or a
-    project choice still to be confirmed on a real 35660A.
+    Each entry says where it comes from. For the 35660A and 3562A: seen in code
+    driving an HP 3562A, or a project choice still to be confirmed on a real
+    35660A. For the 35670A and 35665A (SCPI): the IEEE 488.2 / SCPI standard, seen
+    in public driver code (PyMeasure), or a project choice.
     """
     from rich.console import Console
     from rich.table import Table
 
-    from sims.command_table import COMMANDS
+    instrument = _model(model)
+    console = Console()
+    if instrument.dialect == "scpi":
+        from sims.scpi_table import COMMANDS as SCPI_COMMANDS
 
-    table = Table(title="HP 35660A command set (3562A family dialect)", title_justify="left")
+        table = Table(title=f"HP {instrument.name} command set (SCPI subset)", title_justify="left")
+        for column in ("Sent", "Long form", "Kind", "Source", "What it does"):
+            table.add_column(column)
+        for c in SCPI_COMMANDS:
+            sent = f"{c.sent} / {c.sent}?" if c.kind == "setting" else c.sent
+            table.add_row(sent, c.pattern, c.kind, c.source, c.doc)
+        console.print(table)
+        console.print(
+            "std: IEEE 488.2 / SCPI. peer: seen in PyMeasure's 35670A driver. proj: a project choice, "
+            "to be confirmed on a real instrument (docs/instrument-scpi.md). Simulator control (SIM:FAULT, "
+            "SIM:NOISE, ...) is listed in sims/session.py."
+        )
+        return
+    from sims.command_table import commands_for
+
+    table = Table(title=f"HP {instrument.name} command set (3562A family dialect)", title_justify="left")
     for column in ("Mnemonic", "Kind", "Source", "What it does"):
         table.add_column(column)
-    for c in COMMANDS:
+    for c in commands_for(instrument.name):
         mnemonic = f"{c.mnemonic} / {c.mnemonic}?" if c.kind == "setting" else c.mnemonic
         table.add_row(mnemonic, c.kind, c.source, c.doc)
-    console = Console()
     console.print(table)
     console.print(
         "3562A: seen in public code driving an HP 3562A. proj: a project choice, to be confirmed "

@@ -16,7 +16,7 @@ zero-phase low-pass: the time record stays aligned with the trigger and the
 in-band phase is flat at every span (docs/simulator.md, "Anti-alias filtering
 and decimation"). It is modelled as H(s) H(-s) with H a 9th-order inverse
 Chebyshev low-pass (0.05 dB at the span, 50 dB from 1.56 x span), so 0.1 dB to
-the span and 104 dB from 1.56 x span, where aliases would fold into the 400
+the span and 104 dB from 1.56 x span, where aliases would fold into the
 lines; its right half-plane poles act anti-causally
 (``PoleResidueSystem.respond``). Both
 channels share it, so it cancels in the frequency response as it does in the
@@ -91,8 +91,9 @@ class NoiseModel:
 class Record:
     """Two digitised channels of one hit.
 
-    force_n, acceleration_m_s2 : engineering units, quantised; (1024,) float64 at
-        baseband, (512,) complex128 in zoom (the band mixed down by the center).
+    force_n, acceleration_m_s2 : engineering units, quantised; (2.56 x lines,)
+        float64 at baseband, (1.28 x lines,) complex128 in zoom (the band mixed down
+        by the center); (1024,) and (512,) on the 35660A.
     start_s : time of the first sample relative to the trigger, s.
     sample_rate_hz : Hz.
     overload : (ch1, ch2) the input exceeded its range during the record.
@@ -135,18 +136,23 @@ def channel_chains(specimen_acceleration: PoleResidueSystem, settings: AnalyzerS
     return ChannelChains((raw[0], raw[1]), (filtered[0], filtered[1]))
 
 
-def digitise(volts: np.ndarray, range_v: float, span_hz: float) -> np.ndarray:
+def digitise(
+    volts: np.ndarray, range_v: float, span_hz: float, top_span_hz: float = MAX_SPAN_HZ
+) -> np.ndarray:
     """Clip at the range and quantise, volts (real and imaginary parts apart).
 
-    The ADC converts 16 bits at the full rate (2.56 x 102.4 kHz); the analyzer's
-    decimating filters then average its quantisation noise down by the ratio of
-    the full span to this span. Quantising the record to a grid of
-    lsb * sqrt(span / 102.4 kHz) gives that same noise power: exactly 16 bits at
-    full span, finer on narrow spans, as on the instrument.
+    The ADC converts 16 bits at the full rate (2.56 x the model's top span,
+    ``top_span_hz``); the analyzer's decimating filters then average its
+    quantisation noise down by the ratio of the top span to this span. Quantising
+    the record to a grid of lsb * sqrt(span / top span) gives that same noise
+    power: exactly 16 bits at the top span, finer on narrow spans, as on the
+    instrument.
     """
     if np.iscomplexobj(volts):
-        return digitise(volts.real, range_v, span_hz) + 1j * digitise(volts.imag, range_v, span_hz)
-    lsb = range_v / 2 ** (ADC_BITS - 1) * math.sqrt(span_hz / MAX_SPAN_HZ)
+        return digitise(volts.real, range_v, span_hz, top_span_hz) + 1j * digitise(
+            volts.imag, range_v, span_hz, top_span_hz
+        )
+    lsb = range_v / 2 ** (ADC_BITS - 1) * math.sqrt(span_hz / top_span_hz)
     top = range_v * (1 - 2.0 ** -(ADC_BITS - 1))
     return np.round(np.clip(volts, -range_v, top) / lsb) * lsb
 
@@ -260,7 +266,7 @@ def acquire(
         raw_peak = float(np.max(np.abs(chains.raw[ch].respond(hit.pulses, watch))))
         peaks.append(max(raw_peak, float(np.max(np.abs(volts)))))
         overload.append(peaks[-1] > ranges[ch])
-        channels.append(digitise(volts, ranges[ch], settings.span_hz) / sens[ch])
+        channels.append(digitise(volts, ranges[ch], settings.span_hz, settings.model.top_span_hz) / sens[ch])
     return Record(
         force_n=channels[0],
         acceleration_m_s2=channels[1],

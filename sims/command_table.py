@@ -13,7 +13,7 @@ tests/ pin both to the same bytes. A setting's query form is its mnemonic plus
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from sims.units import ArgumentError, Dimension, parse_quantity
@@ -199,6 +199,19 @@ COMMANDS: tuple[Command, ...] = (
 )
 
 BY_MNEMONIC: dict[str, Command] = {c.mnemonic: c for c in COMMANDS}
+
+#: What the 3562A's copy of the table says differently (the commands are the same).
+_3562A_DOCS = {
+    "ID?": "identify: replies HP3562A",
+    "FRS": "frequency span: 100 kHz / 2^n, rounded up",
+}
+
+
+def commands_for(model: str) -> tuple[Command, ...]:
+    """The table as the simulated ``model`` ("35660A" or "3562A") documents it."""
+    if model == "3562A":
+        return tuple(replace(c, doc=_3562A_DOCS.get(c.mnemonic, c.doc)) for c in COMMANDS)
+    return COMMANDS
 
 
 def split_message(message: str) -> list[str]:

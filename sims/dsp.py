@@ -38,28 +38,30 @@ def window(
     raise ValueError(f"unknown window {kind}")
 
 
-def line_spectrum(record: np.ndarray, win: np.ndarray) -> np.ndarray:
-    """Unscaled spectrum of the windowed record on the 401 lines, (401,) complex.
+def line_spectrum(record: np.ndarray, win: np.ndarray, n_lines: int = N_LINES) -> np.ndarray:
+    """Unscaled spectrum of the windowed record on the lines, (n_lines + 1,) complex.
 
-    A real (baseband) record gives lines 0..400 of its FFT; a complex (zoom)
-    record of 512 points gives the 401 lines centred on the mixed-down center.
+    A real (baseband) record of 2.56 x n_lines samples gives lines 0..n_lines of
+    its FFT; a complex (zoom) record of 1.28 x n_lines points gives the
+    n_lines + 1 lines centred on the mixed-down center (401 of 1024 or 512 on
+    the 35660A).
     """
     if np.iscomplexobj(record):
         spectrum = np.fft.fftshift(np.fft.fft(record * win))
         middle = record.size // 2
-        return spectrum[middle - N_LINES // 2 : middle + N_LINES // 2 + 1]
-    return np.fft.rfft(record * win)[: N_LINES + 1]
+        return spectrum[middle - n_lines // 2 : middle + n_lines // 2 + 1]
+    return np.fft.rfft(record * win)[: n_lines + 1]
 
 
-def peak_scale(win: np.ndarray, zoom: bool) -> np.ndarray:
-    """Per-line factor from an unscaled spectrum to peak amplitude, (401,).
+def peak_scale(win: np.ndarray, zoom: bool, n_lines: int = N_LINES) -> np.ndarray:
+    """Per-line factor from an unscaled spectrum to peak amplitude, (n_lines + 1,).
 
     2 / sum(w) turns a sinusoid's line into its peak; the DC line of a real record
     takes 1 / sum(w). A zoom record carries each real sinusoid as one complex
     exponential of half its amplitude, so every zoom line takes 2 / sum(w).
     """
     total = float(win.sum())
-    scale = np.full(N_LINES + 1, 2.0 / total if total > 0 else 0.0)
+    scale = np.full(n_lines + 1, 2.0 / total if total > 0 else 0.0)
     if not zoom:
         scale[0] /= 2
     return scale
@@ -70,15 +72,22 @@ class Average:
     """Running sums over the accepted hits (unscaled spectra, so that different
     windows on the two channels cannot bias ch2/ch1)."""
 
+    n_lines: int = N_LINES
     count: int = 0
-    g11: np.ndarray = field(default_factory=lambda: np.zeros(N_LINES + 1))
-    g22: np.ndarray = field(default_factory=lambda: np.zeros(N_LINES + 1))
-    g21: np.ndarray = field(default_factory=lambda: np.zeros(N_LINES + 1, complex))
-    x1: np.ndarray = field(default_factory=lambda: np.zeros(N_LINES + 1, complex))
-    x2: np.ndarray = field(default_factory=lambda: np.zeros(N_LINES + 1, complex))
-    scale1: np.ndarray = field(default_factory=lambda: np.ones(N_LINES + 1))
-    scale2: np.ndarray = field(default_factory=lambda: np.ones(N_LINES + 1))
     overload: list[bool] = field(default_factory=lambda: [False, False])
+    g11: np.ndarray = field(init=False)
+    g22: np.ndarray = field(init=False)
+    g21: np.ndarray = field(init=False)
+    x1: np.ndarray = field(init=False)
+    x2: np.ndarray = field(init=False)
+    scale1: np.ndarray = field(init=False)
+    scale2: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        n = self.n_lines + 1
+        self.g11, self.g22 = np.zeros(n), np.zeros(n)
+        self.g21, self.x1, self.x2 = np.zeros(n, complex), np.zeros(n, complex), np.zeros(n, complex)
+        self.scale1, self.scale2 = np.ones(n), np.ones(n)
 
     def add(
         self,
@@ -98,7 +107,7 @@ class Average:
         self.overload = [self.overload[0] or overload[0], self.overload[1] or overload[1]]
 
     def trace(self, function: str) -> np.ndarray:
-        """The averaged display function on 401 lines: complex for LSP/FRSP, real otherwise.
+        """The averaged display function on n_lines + 1 lines: complex for LSP/FRSP, real otherwise.
 
         Linear spectra are peak-scaled (see ``peak_scale``), EU; power spectra are
         their squared magnitude, EU^2; FRSP is H1 = G21 / G11; COHR is

@@ -7,11 +7,11 @@ the first ``after`` of them, ``count`` times (``count=always`` for ever).
 | name     | eligible event     | what happens                                                  |
 |----------|--------------------|---------------------------------------------------------------|
 | slow     | every reply        | the reply is held back ``delay`` seconds (default 0.5; always)|
-| no_hit   | STRT               | the hammer never strikes: the analyzer waits for a trigger    |
+| no_hit   | STRT (SCPI: INIT)  | the hammer never strikes: the analyzer waits for a trigger    |
 | truncate | a binary block     | only ``keep`` of it is sent (default 0.5), the rest never     |
 | garbage  | every reply        | ``nbytes`` random bytes (default 8) are sent before the reply |
 | drop     | a binary block     | ``keep`` of it is sent, then the connection is closed         |
-| error    | (at once)          | the instrument enters a hardware-fault state until RST        |
+| error    | (at once)          | the instrument enters a hardware-fault state until (*)RST     |
 """
 
 from __future__ import annotations

@@ -18,7 +18,8 @@ from sims.session import Session
 class InProcessConnection:
     def __init__(self, analyzer: Analyzer, faults: Sequence[str] = ()) -> None:
         self.session = Session(analyzer, tuple(faults))
-        self._out: deque[tuple[bytearray, float]] = deque()
+        # (bytes, when they may go, what they wait for besides: SCPI's *OPC?)
+        self._out: deque[list] = deque()
         self._closed = False
         self._drop_pending = False
 
@@ -31,7 +32,7 @@ class InProcessConnection:
             # A slow instrument answers one reply after the other: delays add up.
             ready += chunk.delay_s
             if chunk.data:
-                self._out.append((bytearray(chunk.data), ready))
+                self._out.append([bytearray(chunk.data), ready, chunk.until])
             if chunk.close:
                 self._drop_pending = True
 
@@ -39,7 +40,7 @@ class InProcessConnection:
         """Up to ``size`` bytes (all that are ready if -1); TimeoutError if none come in time."""
         deadline = time.monotonic() + timeout_s
         while True:
-            if self._out and self._out[0][1] <= time.monotonic():
+            if self._out and self._ready(self._out[0]):
                 break
             if not self._out and self._drop_pending:
                 self._closed = True
@@ -48,14 +49,24 @@ class InProcessConnection:
                 raise TimeoutError(f"no reply within {timeout_s:g} s")
             time.sleep(0.001)
         data = bytearray()
-        while self._out and self._out[0][1] <= time.monotonic() and (size < 0 or len(data) < size):
-            chunk, _ready = self._out[0]
+        while self._out and self._ready(self._out[0]) and (size < 0 or len(data) < size):
+            chunk = self._out[0][0]
             take = len(chunk) if size < 0 else min(len(chunk), size - len(data))
             data += chunk[:take]
             del chunk[:take]
             if not chunk:
                 self._out.popleft()
         return bytes(data)
+
+    @staticmethod
+    def _ready(entry: list) -> bool:
+        if entry[1] > time.monotonic():
+            return False
+        if entry[2] is not None:
+            if not entry[2]():
+                return False
+            entry[2] = None  # once ready, it stays ready
+        return True
 
     def clear(self) -> None:
         """Device clear: pending output and partial input are discarded."""

@@ -96,7 +96,7 @@ class PrologixPty:
         self.read_tmo_ms = 500
         # Replies the instrument holds until the controller addresses it to talk:
         # (bytes, time from which they can be read).
-        self._outbox: collections.deque[tuple[bytes, float]] = collections.deque()
+        self._outbox: collections.deque[tuple] = collections.deque()  # (bytes, ready at, until)
 
     def _run(self) -> None:
         buffer = b""
@@ -145,7 +145,7 @@ class PrologixPty:
         for chunk in chunks:
             ready += chunk.delay_s  # replies come one after the other: delays add up
             if chunk.data:
-                self._outbox.append((chunk.data, ready))
+                self._outbox.append((chunk.data, ready, chunk.until))
             if chunk.close:
                 # A serial line cannot be closed by the far end: the transfer just
                 # stops short, and the instrument listens again, as on a new link.
@@ -188,12 +188,12 @@ class PrologixPty:
                 self.session.clear()
         elif name == "spoll":
             target = int(arg.split()[0]) if arg[:1].isdigit() else self.address
-            status = self.analyzer.execute("STA?")[0].data.strip() if target == self.gpib_address else b"0"
+            status = self.analyzer.serial_poll() if target == self.gpib_address else 0
             self._write(str(int(status) & 0xFF).encode() + b"\r\n")
         elif name == "srq":
             self._write(b"0\r\n")
         elif name == "loc":
-            self.analyzer.execute("LCL")
+            self.analyzer.go_to_local()
         elif name == "rst":
             self._reset_controller()
         elif name in ("ifc", "llo", "trg", "savecfg"):
@@ -209,13 +209,13 @@ class PrologixPty:
         out = bytearray()
         eoi = False
         while not self._stop.is_set():
-            if self._outbox and self._outbox[0][1] <= time.monotonic():
-                data, _ = self._outbox.popleft()
+            if self._outbox and self._outbox[0][1] <= time.monotonic() and _released(self._outbox[0]):
+                data = self._outbox.popleft()[0]
                 if until.isdigit():  # stop at a character, keep the rest for later
                     cut = data.find(bytes([int(until)]))
                     if cut >= 0:
                         if data[cut + 1 :]:
-                            self._outbox.appendleft((data[cut + 1 :], 0.0))
+                            self._outbox.appendleft((data[cut + 1 :], 0.0, None))
                         out += data[: cut + 1]
                         break
                 out += data
@@ -241,6 +241,11 @@ class PrologixPty:
                     view = view[os.write(self._master, view[:4096]) :]
                 except BlockingIOError:
                     continue
+
+
+def _released(entry: tuple) -> bool:
+    """A queued reply is not held back by a condition (SCPI's *OPC? waits for the measurement)."""
+    return entry[2] is None or bool(entry[2]())
 
 
 def _take_line(buffer: bytes) -> tuple[bytes | None, int]:

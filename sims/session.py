@@ -4,7 +4,8 @@ Front ends (TCP, the Prologix pty, in-process) own the bytes; a Session turns
 complete messages into instrument commands and the instrument's replies into
 ``Chunk``s to send, with the faults armed on this connection applied.
 
-Simulator control travels in-band, in a namespace no instrument command uses:
+Simulator control travels in-band, in a namespace no instrument command uses
+(on a SCPI model too: its commands go to the instrument together, SIM: apart):
 
 | command                 | effect                                                        |
 |-------------------------|---------------------------------------------------------------|
@@ -22,11 +23,13 @@ Simulator control travels in-band, in a namespace no instrument command uses:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from sims.faults import Fault, garbage_bytes, parse_fault
 from sims.hammer import adjusted
 from sims.instrument import Analyzer, Reply
+from sims.scpi_table import split_units
 from sims.sources import PhysicsSource
 
 #: A client that sends this much without a line end is not talking to us.
@@ -35,11 +38,13 @@ MAX_PENDING_BYTES = 65536
 
 @dataclass(frozen=True)
 class Chunk:
-    """Bytes to send after waiting ``delay_s``; ``close`` ends the connection after them."""
+    """Bytes to send after waiting ``delay_s``; ``close`` ends the connection after them.
+    ``until``, if given, holds them back until it returns True (SCPI's ``*OPC?``)."""
 
     data: bytes
     delay_s: float = 0.0
     close: bool = False
+    until: Callable[[], bool] | None = None
 
 
 class Session:
@@ -96,6 +101,8 @@ class Session:
         """One complete message: commands separated by ``;``."""
         # Bytes that are not ASCII become '?': they must not reach a reply undecodable.
         text = raw.decode("ascii", errors="replace").replace("\ufffd", "?")
+        if self.analyzer.model.dialect == "scpi":
+            return self._scpi_message(text)
         out: list[Chunk] = []
         for part in text.replace("\r", "").split(";"):
             part = part.strip()
@@ -115,6 +122,36 @@ class Session:
                     return out
         return out
 
+    def _scpi_message(self, text: str) -> list[Chunk]:
+        """A SCPI message: the instrument's commands go to it together (SCPI's path
+        rule spans a message), SIM: controls apart; replies end with LF."""
+        out: list[Chunk] = []
+        batch: list[str] = []
+
+        def flush() -> bool:
+            replies = self.analyzer.execute(";".join(batch), on_start=self._no_hit) if batch else []
+            batch.clear()
+            for reply in replies:
+                out.extend(self._deliver(reply))
+                if self.closed:
+                    return False
+            return True
+
+        for unit in split_units(text):
+            if not unit.upper().startswith("SIM:"):
+                batch.append(unit)
+                continue
+            if not flush():
+                return out
+            answer = self._control(unit)
+            if answer is not None:
+                out.extend(self._deliver(Reply(answer.encode("ascii") + b"\n")))
+        flush()
+        return out
+
+    def _no_hit(self) -> bool:
+        return self._fault("no_hit") is not None
+
     def _deliver(self, reply: Reply) -> list[Chunk]:
         delay = 0.0
         slow = self._fault("slow")
@@ -131,8 +168,8 @@ class Session:
                 return [Chunk(data[: int(len(data) * drop.params["keep"])], delay, close=True)]
             truncate = self._fault("truncate")
             if truncate:
-                return [Chunk(data[: int(len(data) * truncate.params["keep"])], delay)]
-        return [Chunk(data, delay)]
+                return [Chunk(data[: int(len(data) * truncate.params["keep"])], delay, until=reply.ready)]
+        return [Chunk(data, delay, until=reply.ready)]
 
     # ------------------------------------------------------------- control
     def _control(self, text: str) -> str | None:

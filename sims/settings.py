@@ -1,4 +1,9 @@
-"""The simulated analyzer's settings, their preset and the record geometry they imply."""
+"""The simulated analyzer's settings, their preset and the record geometry they imply.
+
+The geometry (lines, record samples, spans, ranges) comes from the settings'
+Model (sims/models.py); the module constants below are the 35660A's, kept for
+code that means that instrument.
+"""
 
 from __future__ import annotations
 
@@ -8,16 +13,17 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from sims.command_table import DISPLAY_CODES
+from sims.models import DEFAULT_MODEL, SAMPLES_PER_LINE, Model, get_model
 
-#: Maximum span and the number of halvings the analyzer offers (102.4 kHz / 2^n).
-MAX_SPAN_HZ = 102_400.0
-N_SPANS = 20
-SPANS_HZ = tuple(MAX_SPAN_HZ / 2**n for n in range(N_SPANS))
-#: Input ranges, V peak: 1 dB steps from -51 dBV to +27 dBV.
-RANGES_V = tuple(10.0 ** (db / 20.0) for db in range(-51, 28))
-N_LINES = 400
-RECORD_SAMPLES = 1024
-SAMPLE_RATE_PER_SPAN = 2.56
+#: The 35660A's geometry (the default model): 102.4 kHz / 2^n, 400 lines, 1024 samples.
+MAX_SPAN_HZ = DEFAULT_MODEL.top_span_hz
+N_SPANS = len(DEFAULT_MODEL.spans_hz)
+SPANS_HZ = DEFAULT_MODEL.spans_hz
+#: Input ranges of the 35660A, V peak: 1 dB steps from -51 dBV to +27 dBV.
+RANGES_V = DEFAULT_MODEL.ranges_v
+N_LINES = DEFAULT_MODEL.preset_lines
+RECORD_SAMPLES = DEFAULT_MODEL.record_samples(N_LINES)
+SAMPLE_RATE_PER_SPAN = SAMPLES_PER_LINE
 ADC_BITS = 16
 
 #: The state dump (DSAN, DSAS): its length is documented, its layout is ours (proj,
@@ -61,22 +67,36 @@ class AnalyzerSettings:
     trigger_delay_s: float = 0.0
     trace: str = "A"
     display: dict[str, str] = field(default_factory=lambda: {"A": "FRSP", "B": "COHR"})
+    lines: int = N_LINES
+    model: Model = field(default=DEFAULT_MODEL, repr=False, compare=False)
+
+    @classmethod
+    def preset(cls, model: Model | str = DEFAULT_MODEL) -> AnalyzerSettings:
+        """The preset of ``model``: its widest span at baseband, its preset lines and range."""
+        m = get_model(model)
+        top, rng = m.top_span_hz, m.preset_range_v
+        return cls(span_hz=top, center_hz=top / 2, range1_v=rng, range2_v=rng, lines=m.preset_lines, model=m)
 
     # -- derived geometry
     @property
     def zoom(self) -> bool:
         """A zoom measurement: the span does not start at 0 Hz. Its time records are
-        complex (the band mixed down by the center frequency), 512 points at
-        1.28 x span, so that the record length stays 400 / span."""
+        complex (the band mixed down by the center frequency), 1.28 x lines points
+        at 1.28 x span, so that the record length stays lines / span."""
         return self.start_hz > 1e-9 * self.span_hz
 
     @property
+    def record_samples(self) -> int:
+        """Real samples of a baseband record: 2.56 x lines."""
+        return self.model.record_samples(self.lines)
+
+    @property
     def record_points(self) -> int:
-        return RECORD_SAMPLES // 2 if self.zoom else RECORD_SAMPLES
+        return self.record_samples // 2 if self.zoom else self.record_samples
 
     @property
     def sample_rate_hz(self) -> float:
-        return SAMPLE_RATE_PER_SPAN * self.span_hz / (2 if self.zoom else 1)
+        return SAMPLES_PER_LINE * self.span_hz / (2 if self.zoom else 1)
 
     @property
     def record_length_s(self) -> float:
@@ -84,7 +104,7 @@ class AnalyzerSettings:
 
     @property
     def line_spacing_hz(self) -> float:
-        return self.span_hz / N_LINES
+        return self.span_hz / self.lines
 
     @property
     def start_hz(self) -> float:
@@ -140,23 +160,26 @@ class AnalyzerSettings:
         return values
 
 
-def coerce_span(value_hz: float) -> float:
-    """The smallest offered span at or above ``value_hz``; ValueError outside the offer."""
-    if not (math.isfinite(value_hz) and SPANS_HZ[-1] * (1 - 1e-9) <= value_hz <= MAX_SPAN_HZ * (1 + 1e-9)):
-        raise ValueError(f"span must be {SPANS_HZ[-1]:.8g} Hz to {MAX_SPAN_HZ:g} Hz")
-    return min(s for s in SPANS_HZ if s >= value_hz * (1 - 1e-9))
+def coerce_span(value_hz: float, model: Model = DEFAULT_MODEL) -> float:
+    """The smallest span ``model`` offers at or above ``value_hz``; ValueError outside the offer."""
+    spans, top = model.spans_hz, model.top_span_hz
+    if not (math.isfinite(value_hz) and spans[-1] * (1 - 1e-9) <= value_hz <= top * (1 + 1e-9)):
+        raise ValueError(f"span must be {spans[-1]:.8g} Hz to {top:g} Hz")
+    return min(s for s in spans if s >= value_hz * (1 - 1e-9))
 
 
-def coerce_range(value_v: float) -> float:
-    """The smallest input range at or above ``value_v`` (V peak)."""
-    if not (math.isfinite(value_v) and 0 < value_v <= RANGES_V[-1] * (1 + 1e-9)):
-        raise ValueError(f"range must be up to {RANGES_V[-1]:.4g} V")
-    return min((r for r in RANGES_V if r >= value_v * (1 - 1e-9)), default=RANGES_V[0])
+def coerce_range(value_v: float, model: Model = DEFAULT_MODEL) -> float:
+    """The smallest input range of ``model`` at or above ``value_v`` (V peak)."""
+    ranges = model.ranges_v
+    if not (math.isfinite(value_v) and 0 < value_v <= ranges[-1] * (1 + 1e-9)):
+        raise ValueError(f"range must be up to {ranges[-1]:.4g} V")
+    return min((r for r in ranges if r >= value_v * (1 - 1e-9)), default=ranges[0])
 
 
-def check_center(center_hz: float, span_hz: float) -> float:
-    """``center_hz`` if the band [center - span/2, center + span/2] fits 0..102.4 kHz."""
-    low, high = span_hz / 2, MAX_SPAN_HZ - span_hz / 2
+def check_center(center_hz: float, span_hz: float, model: Model = DEFAULT_MODEL) -> float:
+    """``center_hz`` if the band [center - span/2, center + span/2] fits 0 .. the top span."""
+    top = model.top_span_hz
+    low, high = span_hz / 2, top - span_hz / 2
     if not (math.isfinite(center_hz) and low * (1 - 1e-9) <= center_hz <= high + low * 1e-9):
         raise ValueError(f"with a {span_hz:g} Hz span the center must be {low:g} Hz to {high:g} Hz")
-    return min(max(center_hz, span_hz / 2), MAX_SPAN_HZ - span_hz / 2)
+    return min(max(center_hz, span_hz / 2), top - span_hz / 2)

@@ -10,11 +10,12 @@ import numpy as np
 
 from sims.acquisition import ChannelChains, NoiseModel, Record, acquire, channel_chains
 from sims.hammer import HammerModel, draw_hit
+from sims.models import DEFAULT_MODEL, Model, get_model
 from sims.pole_residue import PoleResidueSystem
 from sims.scenarios import Specimen, build_specimen
 from sims.settings import RECORD_SAMPLES, SAMPLE_RATE_PER_SPAN, AnalyzerSettings
 
-#: Samples of a zoom record: complex, half as many as a baseband record.
+#: Samples of a 35660A zoom record: complex, half as many as a baseband record.
 ZOOM_RECORD_SAMPLES = RECORD_SAMPLES // 2
 
 #: A technician who sees no trigger hits again; after this many misses the
@@ -62,6 +63,7 @@ class PhysicsSource:
     def _chains(self, settings: AnalyzerSettings) -> ChannelChains:
         key = (
             settings.span_hz,
+            settings.center_hz,
             settings.sensitivity1_v_per_eu,
             settings.sensitivity2_v_per_eu,
             settings.ac_coupled1,
@@ -95,8 +97,9 @@ class PhysicsSource:
 class RecordedHit:
     """One hit of a recorded run: the two channels in engineering units.
 
-    force_n, acceleration_m_s2 : (1024,) float64 at baseband, or (512,) complex128 for
-        a zoom record (the band mixed down by ``center_hz``), N and m/s^2.
+    force_n, acceleration_m_s2 : (n,) float64 at baseband, or (n/2,) complex128 for
+        a zoom record (the band mixed down by ``center_hz``), N and m/s^2; n = 2.56 x
+        lines, 1024 on the 35660A, 2048 on the 3562A.
     sample_rate_hz : Hz (2.56 x span at baseband, 1.28 x span in zoom).
     start_s : time of the first sample after the trigger, s.
     center_hz : 0 at baseband, the zoom centre frequency otherwise, Hz.
@@ -118,20 +121,33 @@ class RecordedHit:
 class ReplaySource:
     """Serves recorded hits in order, bit for bit, instead of physics.
 
-    The analyzer must be set to the recording's span (sample rate); ``loop``
-    starts over after the last hit, otherwise the hammer falls silent.
+    ``model`` is the instrument the hits are served to: each hit must hold a record
+    length that model can take (2.56 x one of its line counts real samples, or half
+    as many complex ones), otherwise ValueError at once: a 1024-sample run cannot be
+    replayed into a 3562A (2048 samples). The analyzer must then be set to the
+    recording's span (sample rate) and, on a model with a choice of lines, to the
+    lines that give the recording's length: otherwise it reports an error when it
+    arms. ``loop`` starts over after the last hit, otherwise the hammer falls silent.
     """
 
     hits: Sequence[RecordedHit]
     loop: bool = False
     position: int = field(default=0)
+    model: Model | str = DEFAULT_MODEL
 
     def __post_init__(self) -> None:
+        self.model = get_model(self.model)
+        lengths = self.model.record_samples_offered
         for i, hit in enumerate(self.hits):
-            n = ZOOM_RECORD_SAMPLES if hit.zoom else RECORD_SAMPLES
+            n = hit.force_n.shape[0] if hit.force_n.ndim == 1 else -1
             kind = "complex (zoom)" if hit.zoom else "real"
-            if hit.force_n.shape != (n,) or hit.acceleration_m_s2.shape != (n,):
-                raise ValueError(f"recorded hit {i} does not hold two {n}-sample {kind} channels")
+            offered = tuple(x // 2 for x in lengths) if hit.zoom else lengths
+            wanted = "/".join(str(x) for x in offered)
+            if n not in offered or hit.acceleration_m_s2.shape != (n,):
+                raise ValueError(
+                    f"recorded hit {i} does not hold two {wanted}-sample {kind} channels "
+                    f"(the {self.model.name} records {wanted})"
+                )
             if np.iscomplexobj(hit.acceleration_m_s2) != hit.zoom:
                 raise ValueError(f"recorded hit {i} mixes a real and a complex channel")
             if hit.zoom != (hit.center_hz > 0):
@@ -148,6 +164,12 @@ class ReplaySource:
                 raise SourceError(f"replay of a zoom record: set CF to its center, {hit.center_hz:g} Hz")
         elif settings.zoom:
             raise SourceError("replay serves baseband records: set CF to span/2")
+        if hit.force_n.size != settings.record_points:
+            lines = round(hit.force_n.size * (2 if hit.zoom else 1) / SAMPLE_RATE_PER_SPAN)
+            raise SourceError(
+                f"replay holds {hit.force_n.size}-sample records, the analyzer records "
+                f"{settings.record_points}: set {lines} lines"
+            )
         if not math.isclose(hit.sample_rate_hz, settings.sample_rate_hz, rel_tol=1e-9):
             per_span = SAMPLE_RATE_PER_SPAN / (2 if hit.zoom else 1)
             raise SourceError(

@@ -109,6 +109,8 @@ class TcpServer:
                 for chunk in session.feed(data):
                     if chunk.delay_s and not self._hold(conn, chunk.delay_s):
                         return
+                    if chunk.until is not None and not self._await(conn, chunk.until):
+                        return
                     if chunk.data:
                         self._send(conn, chunk.data)
                     if chunk.close:
@@ -129,6 +131,19 @@ class TcpServer:
         deadline = time.monotonic() + delay_s
         while (left := deadline - time.monotonic()) > 0:
             if self._stop.wait(min(POLL_S, left)):
+                return False
+            try:
+                if conn.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b"":
+                    return False
+            except (BlockingIOError, TimeoutError):
+                pass
+        return True
+
+    def _await(self, conn: socket.socket, until) -> bool:
+        """Hold a reply until ``until()`` (SCPI's *OPC? waits for the measurement);
+        False if the server closes or the client leaves meanwhile."""
+        while not until():
+            if self._stop.wait(0.005):
                 return False
             try:
                 if conn.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b"":
