@@ -46,8 +46,10 @@ format: $(VENV)/.installed-dev
 bench: $(VENV)/.installed-dev
 	$(BIN)/python bench/bench_model.py
 	$(BIN)/python bench/bench_driver.py
+	$(BIN)/python bench/bench_dialects.py
 	$(BIN)/python bench/sim_frf_accuracy.py
 	$(BIN)/python bench/bench_store.py
+	$(BIN)/python bench/bench_sdf_import.py
 	$(BIN)/python bench/bench_spectra.py
 	$(BIN)/python bench/bench_modal.py
 	$(BIN)/python bench/bench_analysis.py

@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
 
 DAQ = Path(sys.executable).with_name("daq")

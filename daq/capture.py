@@ -21,7 +21,8 @@ import numpy as np
 from analysis.beam import TABLE_1
 from analysis.hit_checks import HitCheck, failed_names, run_checks
 from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, new_run_id
-from drivers.hp35660a import HP35660A
+from drivers.analyzer import SignalAnalyzer
+from drivers.dialects import model_of
 from drivers.settings import ChannelSetup, ImpactSettings
 
 #: The reason stored for a hit rejected by hand with no reason given.
@@ -34,7 +35,10 @@ class CaptureError(Exception):
 
 @dataclass(frozen=True)
 class Connected:
+    """identification : the instrument's reply; dialect : the dialect spoken and why."""
+
     identification: str
+    dialect: str = ""
 
 
 @dataclass(frozen=True)
@@ -117,6 +121,7 @@ def utc_now() -> str:
 def settings_as_dict(settings: ImpactSettings) -> dict[str, Any]:
     """JSON- and TOML-friendly dict of ``settings`` (windows as their mnemonics)."""
     out = asdict(settings)
+    out.pop("defaulted")  # how the settings were made, not what they are
     for channel in ("hammer", "accelerometer"):
         out[channel]["window"] = str(getattr(settings, channel).window.value)
     return out
@@ -153,7 +158,7 @@ class Capture:
     replayed_from : the original run's provenance when this is a replay (kind "replayed").
     """
 
-    driver: HP35660A
+    driver: SignalAnalyzer
     settings: ImpactSettings
     hits_wanted: int
     policy: Policy = checks_policy
@@ -195,9 +200,12 @@ class Capture:
     def __iter__(self) -> Iterator[Event]:
         dsa = self.driver
         self.identification = dsa.identify()
-        yield Connected(self.identification)
+        yield Connected(self.identification, f"{dsa.dialect.name} ({dsa.detection})")
         wanted = replace(self.settings, averages=self.hits_wanted, preview=True)
-        self.actual = dsa.configure(wanted)
+        try:
+            self.actual = dsa.configure(wanted)
+        except ValueError as exc:  # settings this analyzer cannot take (lines, pre-trigger)
+            raise CaptureError(f"{dsa.dialect.name} analyzer: {exc}") from None
         yield Configured(self.actual)
         range_v = self.actual.hammer.range_v
         range_n = None if range_v is None else range_v / self.actual.hammer.sensitivity_v_per_eu
@@ -293,11 +301,11 @@ class Capture:
             checks=[h.checks for h in self.hits],
         )
         instrument = Instrument(
-            model="HP 35660A",
+            model=model_of(self.driver.dialect, self.identification),
             identification=self.identification,
             resource=self.resource,
             transport=self.transport,
-            dialect="35660A",
+            dialect=self.driver.dialect.name,
             settings=settings_as_dict(self.actual),
         )
         provenance: dict[str, Any] = {"hits_wanted": self.hits_wanted}

@@ -17,14 +17,15 @@ from typing import Annotated, Any
 import typer
 
 from daq.errors import UserError
-from daq.instrument import configured_resource
+from daq.instrument import SimModel, configured_resource
 from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+from daq.talk_command import DialectOption, check_dialect
 from drivers.settings import ChannelSetup, ImpactSettings
 
 #: Keys of a setup file: top level, and of each [hammer] / [accelerometer] table.
 TOP_KEYS = {
     "span_hz": float, "center_hz": float, "averages": int, "trigger_source": str,
-    "trigger_level_eu": float, "trigger_slope": str, "pre_trigger_s": float,
+    "trigger_level_eu": float, "trigger_slope": str, "pre_trigger_s": float, "lines": int,
 }  # fmt: skip
 CHANNEL_KEYS = {
     "window": str, "sensitivity_v_per_eu": float, "range_v": (float, str), "force_width_s": float,
@@ -55,7 +56,8 @@ def setup_toml(settings: ImpactSettings) -> str:
 
     lines = [
         "# daq capture setup (SI units; EU = N for the hammer, m/s^2 for the accelerometer)",
-        line("span_hz", settings.span_hz, "the analyzer rounds up to 102.4 kHz / 2^n"),
+        line("span_hz", settings.span_hz, "the analyzer rounds up (35660A: to 102.4 kHz / 2^n)"),
+        "# lines = 400  # default: the analyzer's own (35660A 400, 3562A 800); a 35670A takes 100 to 1600",
         line("center_hz", settings.center_hz or 0.0, "0 = baseband, else a zoom around it"),
         line("averages", settings.averages, "accepted hits wanted (--hits overrides)"),
         line("trigger_source", settings.trigger_source),
@@ -150,6 +152,7 @@ def capture(
     sim: Annotated[
         bool, typer.Option("--sim", help="Use the built-in simulator even if an analyzer is configured.")
     ] = False,
+    dialect: DialectOption = None,
     setup: Annotated[
         Path | None, typer.Option(metavar="<file.toml>", help="Settings file (see --print-setup).")
     ] = None,
@@ -185,6 +188,9 @@ def capture(
             metavar="<k=v,...>", help="Simulator only: the simulated hammer, e.g. double_hit_probability=1."
         ),
     ] = None,
+    model: Annotated[
+        SimModel | None, typer.Option(help="Simulator only: the model simulated [default: 35660A].")
+    ] = None,
     print_setup: Annotated[
         bool, typer.Option("--print-setup", help="Print the default setup file and exit.")
     ] = False,
@@ -206,7 +212,10 @@ def capture(
     if sim and resource:
         raise UserError("--sim and --resource exclude each other", exit_code=2)
     real = None if sim else configured_resource(resource)
-    sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--hammer": hammer}
+    sim_options = {
+        "--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--hammer": hammer,
+        "--model": model,
+    }  # fmt: skip
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
     if time_scale is not None and not time_scale >= 0:
@@ -215,6 +224,7 @@ def capture(
         real, settings, hits_wanted, yes, operator, note, store,
         scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
         time_scale=0.05 if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
+        dialect=check_dialect(dialect), model=(model or SimModel.hp35660a).value,
     )  # fmt: skip
 
 
@@ -231,6 +241,8 @@ def run_capture(
     time_scale: float,
     hammer: str | None,
     sim_asked: bool = False,
+    dialect: str | None = None,
+    model: str = "35660A",
 ) -> None:
     """Open the analyzer (or start the simulator when ``resource`` is None), run the
     capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
@@ -257,11 +269,14 @@ def run_capture(
             except ValueError as exc:
                 raise UserError(f"--hammer: {exc}", exit_code=2) from None
             source = PhysicsSource(scenario, hammer=hammer_model, seed=seed)
-            resource = serve_simulator(stack, source, time_scale)
-            simulator = {"scenario": scenario, "seed": seed, "time_scale": time_scale, "hammer": hammer or ""}
+            resource = serve_simulator(stack, source, time_scale, model)
+            simulator = {
+                "scenario": scenario, "seed": seed, "time_scale": time_scale, "hammer": hammer or "",
+                "model": model,
+            }  # fmt: skip
             why = "--sim" if sim_asked else "no analyzer configured (--resource, $DAQ_RESOURCE, config file)"
-            console.print(f"Simulated analyzer ({scenario} beam) at {resource}: {why}")
-        dsa = open_analyzer(stack, resource)
+            console.print(f"Simulated {model} ({scenario} beam) at {resource}: {why}")
+        dsa = open_analyzer(stack, resource, dialect)
         job = Capture(
             dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
             simulator=simulator, operator=operator, note=note,

@@ -28,22 +28,26 @@ def sparkline(values: np.ndarray, width: int = 32) -> str:
     return "".join(SPARK[min(len(SPARK) - 1, int(p / top * (len(SPARK) - 1) + 0.5))] for p in peaks)
 
 
-def serve_simulator(stack: contextlib.ExitStack, source: Any, time_scale: float) -> str:
-    """Start the simulated analyzer serving ``source`` on a loopback TCP socket for as
-    long as ``stack`` lives; its VISA resource string."""
+def serve_simulator(
+    stack: contextlib.ExitStack, source: Any, time_scale: float, model: str = "35660A"
+) -> str:
+    """Start the simulated analyzer (of ``model``) serving ``source`` on a loopback TCP
+    socket for as long as ``stack`` lives; its VISA resource string."""
     from sims.instrument import Analyzer
     from sims.tcp_server import TcpServer
 
-    server = stack.enter_context(TcpServer(Analyzer(source, time_scale=time_scale)))
+    analyzer = Analyzer(source, time_scale=time_scale, model=model)
+    server = stack.enter_context(TcpServer(analyzer))
     return server.resource
 
 
-def open_analyzer(stack: contextlib.ExitStack, resource: str) -> Any:
-    """The driver on ``resource``, closed with ``stack``; bad resources are a UserError."""
-    from drivers.hp35660a import HP35660A
+def open_analyzer(stack: contextlib.ExitStack, resource: str, dialect: str | None = None) -> Any:
+    """The driver on ``resource`` (of ``dialect``, else of what answers), closed with
+    ``stack``; bad resources are a UserError."""
+    from drivers.family import open_analyzer as open_resource
 
     try:
-        return stack.enter_context(HP35660A.open(resource, timeout_s=5.0))
+        return stack.enter_context(open_resource(resource, timeout_s=5.0, dialect=dialect))
     except ValueError as exc:
         raise UserError(f"--resource {resource}: {exc}") from None
 
@@ -73,11 +77,11 @@ def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
     try:
         for event in job:
             if isinstance(event, Connected):
-                console.print(f"Analyzer: {event.identification}")
+                console.print(f"Analyzer: {event.identification}, dialect {event.dialect}")
             elif isinstance(event, Configured):
                 s = event.settings
                 console.print(
-                    f"Span {s.span_hz:g} Hz, {s.record_length_s:g} s records, trigger "
+                    f"Span {s.span_hz:g} Hz, {s.lines} lines, {s.record_length_s:g} s records, trigger "
                     f"{s.trigger_level_eu:g} N, {hits_wanted} hits wanted. Hammer away."
                 )
             elif isinstance(event, HitArrived):

@@ -326,7 +326,9 @@ def _noise_floor(run: Run, domain: str, model: Any, damping: np.ndarray) -> floa
     sigma_f = float(np.sqrt(np.mean(np.concatenate([q[0] - q[0].mean() for q in quiet]) ** 2)))
     sigma_y = float(np.sqrt(np.mean(np.concatenate([q[1] - q[1].mean() for q in quiet]) ** 2)))
     span_hz = hits.sample_rate_hz / 2.56
-    h = frequency_response(model, damping, np.linspace(0.0, span_hz, 401), "acceleration")
+    # The lines of the run's own record (2.56 samples a line), whichever analyzer made it.
+    n_points = hits.n_samples * 100 // 256 + 1
+    h = frequency_response(model, damping, np.linspace(0.0, span_hz, n_points), "acceleration")
     sigma = np.sqrt(sigma_y**2 + sigma_f**2 * float(np.mean(np.abs(h) ** 2)))
     return float(sigma / np.sqrt(response.size))
 

@@ -3,12 +3,22 @@ built-in simulator (resource ``sim``, ``sim:seed`` or ``sim:realistic``)."""
 
 from __future__ import annotations
 
+import enum
 import os
 
-from drivers.hp35660a import HP35660A
+from drivers.analyzer import SignalAnalyzer
 from drivers.loopback import LoopbackTransport
 
 SIM_RESOURCES = ("sim", "sim:seed", "sim:realistic")
+
+
+class SimModel(enum.StrEnum):
+    """The models the simulator plays (sims/), by the name the CLI takes."""
+
+    hp35660a = "35660A"
+    hp3562a = "3562A"
+    hp35670a = "35670A"
+    hp35665a = "35665A"
 
 
 def configured_resource(option: str | None) -> str | None:
@@ -27,9 +37,19 @@ def is_simulated(resource: str) -> bool:
     return resource.strip().lower() in SIM_RESOURCES
 
 
-def open_analyzer(resource: str, timeout_s: float = 5.0, seed: int = 0, time_scale: float = 0.0) -> HP35660A:
-    """An open driver. ``sim`` runs the simulated analyzer in this process (scenario
-    after the colon, ``seed`` by default), at ``time_scale`` (0: hits land at once)."""
+def open_analyzer(
+    resource: str,
+    timeout_s: float = 5.0,
+    seed: int = 0,
+    time_scale: float = 0.0,
+    dialect: str | None = None,
+) -> SignalAnalyzer:
+    """An open driver, of the dialect detection finds (``dialect`` forces one). ``sim``
+    runs the simulated analyzer in this process (scenario after the colon, ``seed`` by
+    default), at ``time_scale`` (0: hits land at once)."""
+    from drivers.family import connect
+    from drivers.family import open_analyzer as open_resource
+
     if is_simulated(resource):
         from sims.inprocess import InProcessConnection
         from sims.instrument import Analyzer
@@ -39,5 +59,9 @@ def open_analyzer(resource: str, timeout_s: float = 5.0, seed: int = 0, time_sca
         analyzer = Analyzer(PhysicsSource(scenario or "seed", seed=seed), time_scale=time_scale)
         transport = LoopbackTransport(lambda: InProcessConnection(analyzer), resource, timeout_s)
         transport.open()
-        return HP35660A(transport)
-    return HP35660A.open(resource, timeout_s=timeout_s)
+        try:
+            return connect(transport, dialect)
+        except BaseException:
+            transport.close()
+            raise
+    return open_resource(resource, timeout_s=timeout_s, dialect=dialect)

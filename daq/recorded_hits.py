@@ -7,7 +7,9 @@ Two kinds of file are accepted:
 - a minimal hand-made file laid out as docs/simulator.md (replay) describes:
   ``/entry/hits/force`` and ``/entry/hits/response`` (n_hits x 1024 float64, or
   n_hits x 512 complex with a ``center_hz`` attribute on ``/entry/hits``, N and
-  m/s^2), ``/entry/hits/time`` (n_samples, s, relative to the trigger) and optionally
+  m/s^2; or the record of another model of the family: 2.56 x lines real samples,
+  half as many complex, docs/dialects.md), ``/entry/hits/time`` (n_samples, s,
+  relative to the trigger) and optionally
   ``/entry/hits/accepted`` and ``/entry/hits/overload`` (n_hits x 2).
 
 Either way a file that links or maps data outside itself is refused.
@@ -23,8 +25,13 @@ from daq.errors import UserError
 from daq.store import Hits, StoreError, open_run
 from daq.store.h5io import refuse_outside_references
 from daq.store.layout import ATTR_SCHEMA
-from sims.settings import RECORD_SAMPLES
-from sims.sources import ZOOM_RECORD_SAMPLES, RecordedHit
+from drivers.dialects import DIALECTS, Geometry
+from sims.sources import RecordedHit
+
+#: Real samples of a baseband record of any model of the family, at any of its lines.
+FAMILY_RECORD_SAMPLES = sorted(
+    {Geometry(n).record_samples for d in DIALECTS.values() for n in d.line_choices}
+)
 
 
 def recorded_hits(hits: Hits, accepted_only: bool = False) -> list[RecordedHit]:
@@ -102,14 +109,16 @@ def _read_minimal(f, path: Path, accepted_only: bool) -> list[RecordedHit]:
     assert response is not None
     assert time_s is not None
     zoom = force.dtype.kind == "c" or response.dtype.kind == "c"
-    n = ZOOM_RECORD_SAMPLES if zoom else RECORD_SAMPLES
     force = force.astype(complex if zoom else float)
     response = response.astype(complex if zoom else float)
     time_s = time_s.astype(float)
-    if force.ndim != 2 or force.shape != response.shape or force.shape[1] != n:
+    lengths = [m // 2 for m in FAMILY_RECORD_SAMPLES] if zoom else FAMILY_RECORD_SAMPLES
+    n = force.shape[1] if force.ndim == 2 else -1
+    if force.ndim != 2 or force.shape != response.shape or n not in lengths:
         raise UserError(
-            f"{path}: force and response must both be n_hits x {n}"
-            f"{' (complex, zoom)' if zoom else ''}, got {force.shape} and {response.shape}"
+            f"{path}: force and response must both be n_hits x one of {', '.join(map(str, lengths))}"
+            f"{' (complex, zoom)' if zoom else ''} (a record of the family), "
+            f"got {force.shape} and {response.shape}"
         )
     if time_s.shape != (n,) or not np.all(np.isfinite(time_s)):
         raise UserError(f"{path}: /entry/hits/time must hold {n} finite instants")

@@ -22,10 +22,13 @@ import typer
 
 from daq.errors import UserError
 from daq.runs_command import StoreOption
-from drivers.record import MAX_SPAN_HZ, SAMPLE_RATE_PER_SPAN, TIME_POINTS
+from drivers.dialects import HP3562A, HP35660A, SAMPLE_RATE_PER_SPAN, SCPI, Dialect
 
-#: Spans the 35660A offers: MAX_SPAN_HZ / 2^n (drivers/record.py); the simulator's 20.
-SPANS_HZ = tuple(MAX_SPAN_HZ / 2**n for n in range(20))
+#: The simulated models a replay may use, the first whose records fit the run's: a run
+#: of another analyzer of the family replays through the model that records like it.
+#: The simulator offers 20 spans of each (max / 2^n).
+REPLAY_MODELS: tuple[tuple[str, Dialect], ...] = (("35660A", HP35660A), ("3562A", HP3562A), ("35670A", SCPI))
+N_SPANS = 20
 
 
 def register(app: typer.Typer) -> None:
@@ -112,14 +115,19 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
     if original.hits is None:
         raise UserError(f"run {original.run_id} holds FRFs only, no time records: nothing to replay")
     hits = original.hits
-    settings = replay_settings(original, settings_from_dict)
+    model, settings = replay_settings(original, settings_from_dict)
     n_accepted = int(hits.accepted.sum())
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     console = Console(highlight=False, soft_wrap=True)
     with contextlib.ExitStack() as stack:
-        resource = serve_simulator(stack, ReplaySource(recorded_hits(hits)), time_scale=0.0)
+        try:
+            source = ReplaySource(recorded_hits(hits), model=model)
+        except ValueError as exc:  # replay_model chose the model: this would be our bug, said plainly
+            raise UserError(f"run {original.run_id}: the simulated {model} cannot serve it: {exc}") from None
+        resource = serve_simulator(stack, source, time_scale=0.0, model=model)
         console.print(
-            f"Replaying run {original.run_id} ({hits.n_hits} hits) through the simulator at {resource}"
+            f"Replaying run {original.run_id} ({hits.n_hits} hits) "
+            f"through the simulated {model} at {resource}"
         )
         dsa = open_analyzer(stack, resource)
 
@@ -134,7 +142,7 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
             policy=original_verdict,
             resource=resource,
             transport=type(dsa.transport).__name__,
-            simulator={"replay_of": original.run_id, "time_scale": 0.0},
+            simulator={"replay_of": original.run_id, "time_scale": 0.0, "model": model},
             operator=operator,
             note=note or f"replay of {original.run_id}",
             sample=original.sample
@@ -160,33 +168,50 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
     return new
 
 
-def replay_settings(run: Any, from_dict: Any) -> Any:
-    """The analyzer settings that serve ``run``'s records: its stored settings when they
-    fit, else the geometry read off the records. UserError when no 35660A record is
-    shaped like them (the simulator then cannot serve them)."""
-    from drivers.settings import ImpactSettings
-
+def replay_model(run: Any) -> tuple[str, int, float]:
+    """(simulated model, lines, span Hz) that record like ``run``'s hits: 2.56 x lines
+    real samples at 2.56 x span (half as many complex at 1.28 x span in zoom), span
+    one of the model's. UserError naming the records when no model of the family fits."""
     hits = run.hits
     zoom = hits.is_zoom
     per_span = SAMPLE_RATE_PER_SPAN / (2 if zoom else 1)
     span = hits.sample_rate_hz / per_span
-    matching = [s for s in SPANS_HZ if math.isclose(s, span, rel_tol=1e-9)]
-    if hits.n_samples != TIME_POINTS[zoom] or not matching:
-        raise UserError(
-            f"run {run.run_id}: its records ({hits.n_samples} {'complex' if zoom else 'real'} samples "
-            f"at {hits.sample_rate_hz:g} Hz) are not what a 35660A records (1024 real samples at "
-            f"2.56 x span, or 512 complex at 1.28 x span, span = 102.4 kHz / 2^n); replay cannot serve them"
-        )
-    span = matching[0]
+    baseband_samples = hits.n_samples * (2 if zoom else 1)
+    lines = baseband_samples * 100 // 256
+    for model, dialect in REPLAY_MODELS:
+        spans = [s for s in dialect.spans_hz(N_SPANS) if math.isclose(s, span, rel_tol=1e-9)]
+        if lines * 256 == baseband_samples * 100 and lines in dialect.line_choices and spans:
+            return model, lines, spans[0]
+    raise UserError(
+        f"run {run.run_id}: its records ({hits.n_samples} {'complex' if zoom else 'real'} samples "
+        f"at {hits.sample_rate_hz:g} Hz) are not what an analyzer of the family records (2.56 x lines "
+        "real samples at 2.56 x span, or half as many complex at 1.28 x span: 35660A 400 lines, "
+        "spans 102.4 kHz / 2^n; 3562A 800 lines, 100 kHz / 2^n; 35670A 100 to 1600 lines, "
+        "51.2 kHz / 2^n); replay cannot serve them"
+    )
+
+
+def replay_settings(run: Any, from_dict: Any) -> tuple[str, Any]:
+    """The simulated model and the analyzer settings that serve ``run``'s records: its
+    stored settings when they fit, else the geometry read off the records (replay_model)."""
+    from drivers.settings import ImpactSettings
+
+    model, lines, span = replay_model(run)
+    hits = run.hits
     stored = None
     if run.instrument is not None and run.instrument.settings:
         with contextlib.suppress(UserError):
             stored = from_dict(run.instrument.settings)
-    center = hits.center_hz if zoom else None
-    if stored is not None and stored.span_hz == span and stored.center_hz == center:
-        return stored
+    center = hits.center_hz if hits.is_zoom else None
+    if (
+        stored is not None
+        and stored.span_hz == span
+        and stored.center_hz == center
+        and stored.lines in (None, lines)
+    ):
+        return model, stored.with_lines(lines)
     pre_trigger = min(max(0.0, -hits.start_s), hits.n_samples / hits.sample_rate_hz)
-    return ImpactSettings(span_hz=span, center_hz=center, pre_trigger_s=pre_trigger)
+    return model, ImpactSettings(span_hz=span, center_hz=center, pre_trigger_s=pre_trigger, lines=lines)
 
 
 def first_difference(a: Any, b: Any) -> str:

@@ -15,8 +15,10 @@ from typing import Annotated
 import typer
 
 from daq.errors import UserError
+from daq.instrument import SimModel
 from daq.runs_command import StoreOption
 from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+from daq.talk_command import DialectOption, check_dialect
 
 
 def register(app: typer.Typer) -> None:
@@ -29,6 +31,7 @@ def serve(
         typer.Option("--resource", "-r", metavar="<resource>", help="The analyzer's VISA resource."),
     ] = None,
     sim: Annotated[bool, typer.Option("--sim", help="Serve the built-in simulated analyzer.")] = False,
+    dialect: DialectOption = None,
     store: StoreOption = None,
     host: Annotated[
         str,
@@ -55,6 +58,9 @@ def serve(
     time_scale: Annotated[
         float | None,
         typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
+    ] = None,
+    model: Annotated[
+        SimModel | None, typer.Option(help="Simulator only: the model simulated [default: 35660A].")
     ] = None,
 ) -> None:
     """Run the lab service: the analyzer, the store, a live web page and an HTTP API.
@@ -91,17 +97,19 @@ def serve(
             "in the config file), or --sim for the built-in simulator",
             exit_code=2,
         )
-    sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale}
+    sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--model": model}
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
     if time_scale is not None and not time_scale >= 0:
         raise UserError("--time-scale must be >= 0", exit_code=2)
+    forced = check_dialect(dialect)
     address = _scheduler(scheduler)
     store_dir, _ = resolve_store_dir(store)
     run_service(
         store_dir, real, sim, host, port, token, created, path, workers, address,
         scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
         time_scale=0.05 if time_scale is None else time_scale,
+        model=(model or SimModel.hp35660a).value, dialect=forced,
     )  # fmt: skip
 
 
@@ -115,7 +123,7 @@ def _scheduler(option: str | None) -> str | None:
 
 def run_service(
     store_dir, resource, sim, host, port, token, created, token_file, workers, scheduler,
-    scenario: str, seed: int, time_scale: float,
+    scenario: str, seed: int, time_scale: float, model: str = "35660A", dialect: str | None = None,
 ) -> None:  # fmt: skip
     import socket
 
@@ -141,10 +149,10 @@ def run_service(
         sock.listen(2048)  # from now on connections queue until uvicorn accepts them
     except OSError as exc:
         raise UserError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
-    spec = SimSpec(scenario, seed, time_scale) if resource is None else None
+    spec = SimSpec(scenario, seed, time_scale, model=model) if resource is None else None
     config = ServiceConfig(
         store_dir=store_dir, resource=resource, sim=spec, host=host, port=sock.getsockname()[1],
-        token=token, reads_need_token=not loopback, scheduler=scheduler,
+        token=token, reads_need_token=not loopback, scheduler=scheduler, dialect=dialect,
     )  # fmt: skip
     if workers is not None:
         config.workers = workers

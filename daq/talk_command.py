@@ -23,14 +23,38 @@ ResourceOption = Annotated[
         "here or in the environment.",
     ),
 ]
+DialectOption = Annotated[
+    str | None,
+    typer.Option(
+        "--dialect",
+        envvar="DAQ_DIALECT",
+        show_envvar=True,
+        metavar="<35660A|3562A|SCPI>",
+        help="Speak this dialect without asking the analyzer which it is (35665A and 35670A "
+        "mean SCPI) [default: found out on connecting: *IDN?, then ID?].",
+    ),
+]
 TimeoutOption = Annotated[
     float, typer.Option("--timeout", metavar="<seconds>", help="How long to wait for each reply.")
 ]
 
 
-def _open(resource: str | None, timeout: float):
+def check_dialect(dialect: str | None) -> str | None:
+    """The --dialect value as a dialect's name; UserError (exit 2) for an unknown one."""
+    if dialect is None:
+        return None
+    from drivers.dialects import dialect_named
+
+    try:
+        return dialect_named(dialect).name
+    except ValueError as exc:
+        raise UserError(f"--dialect: {exc}", exit_code=2) from None
+
+
+def _open(resource: str | None, timeout: float, dialect: str | None = None):
     from daq.instrument import configured_resource, open_analyzer
 
+    dialect = check_dialect(dialect)
     resource = configured_resource(resource)
     if not resource:
         raise UserError(
@@ -41,7 +65,7 @@ def _open(resource: str | None, timeout: float):
     if not timeout > 0:
         raise UserError("--timeout must be positive", exit_code=2)
     try:
-        return open_analyzer(resource, timeout_s=timeout)
+        return open_analyzer(resource, timeout_s=timeout, dialect=dialect)
     except ValueError as exc:
         raise UserError(str(exc), exit_code=2) from None
 
@@ -69,16 +93,29 @@ def instruments() -> None:
         console.print(f"[dim]note: {note}[/]")
 
 
-def identify(resource: ResourceOption = None, timeout: TimeoutOption = 5.0) -> None:
-    """Ask what answers at a resource (ID?) and print its reply."""
-    with _open(resource, timeout) as dsa:
-        print(f"{dsa.identify()} at {resource}")
+def identify(
+    resource: ResourceOption = None, timeout: TimeoutOption = 5.0, dialect: DialectOption = None
+) -> None:
+    """Ask what answers at a resource and print its reply, the dialect chosen and why.
+
+    Without --dialect the analyzer is asked *IDN? (a SCPI 35665A/35670A answers it),
+    then ID? (HP35660A, HP3562A); with it, only that dialect's identity query.
+    """
+    from daq.instrument import configured_resource
+
+    with _open(resource, timeout, dialect) as dsa:
+        g = dsa.read_settings() if dsa.dialect.family == "scpi" else None
+        lines = g.lines if g is not None else dsa.dialect.default_lines
+        print(f"{dsa.identify()} at {configured_resource(resource)}")
+        print(f"dialect {dsa.dialect.name}: {dsa.detection}")
+        print(f"{lines} lines, {round(2.56 * lines)}-sample records")
 
 
 def send(
     command: Annotated[str, typer.Argument(metavar="COMMAND", help="The command line, e.g. 'FRS 200 HZ'.")],
     resource: ResourceOption = None,
     timeout: TimeoutOption = 5.0,
+    dialect: DialectOption = None,
     check: Annotated[
         bool, typer.Option(help="Then ask the analyzer for errors and fail if it reports one.")
     ] = True,
@@ -88,7 +125,7 @@ def send(
     Several commands may be joined with ';'. A command that answers is refused:
     use `daq query` for it.
     """
-    with _open(resource, timeout) as dsa:
+    with _open(resource, timeout, dialect) as dsa:
         try:
             dsa.send(command)
         except ValueError as exc:
@@ -104,6 +141,7 @@ def query(
     ],
     resource: ResourceOption = None,
     timeout: TimeoutOption = 5.0,
+    dialect: DialectOption = None,
     as_json: Annotated[
         bool, typer.Option("--json", help="For a DDAN dump: print the trace as JSON, not columns.")
     ] = False,
@@ -113,12 +151,12 @@ def query(
     A DDAN dump prints as a header line and tab-separated columns: x and the value
     (real and imaginary parts for a complex trace).
     """
-    with _open(resource, timeout) as dsa:
-        from drivers.commands import replies
+    with _open(resource, timeout, dialect) as dsa:
         from drivers.errors import InstrumentTimeout
 
         try:
-            if replies(command) == ["block"] and command.strip().split(";")[-1].strip().upper() == "DDAN":
+            last = command.strip().split(";")[-1].strip().upper()
+            if dsa.dialect.family == "hp" and dsa.replies(command) == ["block"] and last == "DDAN":
                 _print_trace(dsa.dump_trace(command), as_json)
                 return
             print(dsa.query(command))

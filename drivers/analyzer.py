@@ -1,4 +1,9 @@
-"""The HP 35660A Dynamic Signal Analyzer driver.
+"""The driver of the HP dynamic signal analyzer family: what every dialect shares.
+
+``SignalAnalyzer`` holds the link and the exchanges; a dialect's class (the HP
+mnemonics of the 35660A and 3562A in drivers/hp_mnemonic.py, the SCPI of the
+35665A/35670A in drivers/scpi_analyzer.py) adds its commands. ``SignalAnalyzer.open``
+finds out what answers and returns the right one (drivers/family.py).
 
 Knows the analyzer's commands and replies, nothing of files or beams. Every
 exchange runs under the transport's thread lock. A failed exchange that is safe
@@ -17,8 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
-from drivers.commands import COMMANDS, STATUS_BITS, ascii_message, command, parse_reply, replies
-from drivers.dumps import DumpsMixin
+from drivers.dialects import Dialect
 from drivers.errors import (
     ConnectionLost,
     DriverError,
@@ -27,8 +31,8 @@ from drivers.errors import (
     Interrupted,
     ProtocolError,
 )
-from drivers.record import record_length_s
-from drivers.settings import ChannelSetup, ImpactSettings, Window
+from drivers.settings import ImpactSettings
+from drivers.trace import Trace
 from drivers.transport import Transport
 
 log = logging.getLogger(__name__)
@@ -36,16 +40,27 @@ T = TypeVar("T")
 
 #: How long a technician may take to hit once the analyzer is armed, s (default).
 HIT_ALLOWANCE_S = 60.0
-#: After a timeout, the query that tells a live instrument from a silent one: it
-#: changes nothing, and leaves the error queue to whoever asks ERR?.
-PROBE = "ID?"
 #: How long to wait for the probe's reply before calling the instrument silent, s.
 PROBE_TIMEOUT_S = 0.5
 
 
+#: The state of a measurement as every dialect reports it, by name: the bits of the HP
+#: dialects' STA? (proj), to which the SCPI dialect maps its status registers.
+STATUS_BITS = {
+    "done": 1,
+    "waiting_for_trigger": 2,
+    "overload_ch1": 4,
+    "overload_ch2": 8,
+    "error": 16,
+    "hit_pending": 32,
+    "measuring": 64,
+    "paused": 128,
+}
+
+
 @dataclass(frozen=True)
 class Status:
-    """The analyzer's status bits (STA?)."""
+    """The analyzer's state: named bits (STATUS_BITS)."""
 
     bits: int
 
@@ -59,19 +74,27 @@ class Status:
         return ", ".join(names) or "idle"
 
 
-class HP35660A(DumpsMixin):
-    """Drive an HP 35660A through a ``Transport``.
+class SignalAnalyzer:
+    """Drive an analyzer of the family through a ``Transport``, in ``dialect``.
 
     retries : extra attempts for an exchange that failed but may be repeated.
     hit_allowance_s : how long to wait for the technician's hit before giving up.
+    detection : how the dialect was chosen, one line (``daq identify`` prints it).
     """
 
     def __init__(
-        self, transport: Transport, retries: int = 2, hit_allowance_s: float = HIT_ALLOWANCE_S
+        self,
+        transport: Transport,
+        dialect: Dialect,
+        retries: int = 2,
+        hit_allowance_s: float = HIT_ALLOWANCE_S,
+        detection: str = "",
     ) -> None:
         if retries < 0:
             raise ValueError("retries must be >= 0")
         self.transport = transport
+        self.dialect = dialect
+        self.detection = detection or f"the {dialect.name} dialect was given"
         self.retries = retries
         self.hit_allowance_s = hit_allowance_s
         #: Set from another thread to end the current and every later wait with Interrupted.
@@ -81,21 +104,23 @@ class HP35660A(DumpsMixin):
 
     @classmethod
     def open(
-        cls, resource: str, timeout_s: float = 5.0, lock_file: bool = True, **kwargs: object
-    ) -> HP35660A:
-        from drivers.resources import open_transport
+        cls,
+        resource: str,
+        timeout_s: float = 5.0,
+        lock_file: bool = True,
+        dialect: Dialect | str | None = None,
+        **kwargs: object,
+    ) -> SignalAnalyzer:
+        """Open ``resource`` and find out which dialect answers (``dialect`` forces one):
+        drivers/family.py."""
+        from drivers.family import open_analyzer
 
-        transport = open_transport(resource, timeout_s, lock_file)
-        try:
-            return cls(transport, **kwargs)  # type: ignore[arg-type]
-        except BaseException:
-            transport.close()  # a bad argument must not leave the link (and its lock) held
-            raise
+        return open_analyzer(resource, timeout_s, lock_file, dialect, **kwargs)
 
     def close(self) -> None:
         self.transport.close()
 
-    def __enter__(self) -> HP35660A:
+    def __enter__(self) -> SignalAnalyzer:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -133,25 +158,31 @@ class HP35660A(DumpsMixin):
                 raise self._recovery_error  # "connection refused" says more than "not open"
             if silent:
                 last.instrument_answers = False  # type: ignore[attr-defined]
-                last.args = (f"{last.args[0]} (the instrument answers nothing, not even {PROBE})",)
+                last.args = (f"{last.args[0]} (the instrument answers nothing, not even {self.probe})",)
             elif repeatable and self.retries:
                 # An instrument that answers the probe but not this may have refused it:
                 # the reason is in its error queue, left there for errors().
-                hint = f"; it answers {PROBE}, errors() may say why" if alive else ""
+                hint = f"; it answers {self.probe}, errors() may say why" if alive else ""
                 if isinstance(last, InstrumentTimeout):
                     last.instrument_answers = alive
                 last.args = (f"{last.args[0]} (after {attempt + 1} attempt{'s' if attempt else ''}{hint})",)
             raise last
 
+    @property
+    def probe(self) -> str:
+        """After a timeout, the query that tells a live instrument from a silent one: its
+        identification, which changes nothing and leaves the error queue to errors()."""
+        return self.dialect.identity_query
+
     def _instrument_answers(self) -> bool:
-        """After a timeout: does the instrument answer the probe (ID?) within a short
+        """After a timeout: does the instrument answer the probe within a short
         timeout? Only that: an error it queued for the failed exchange stays queued
         for ``errors()``; popping it here would lose it and blame this exchange."""
         saved = self.transport.timeout_s
         self.transport.timeout_s = min(PROBE_TIMEOUT_S, saved)
         try:
-            self.transport.write(PROBE.encode("ascii"))
-            _decode_line(self.transport.read_line(), PROBE)
+            self.transport.write(self.probe.encode("ascii"))
+            decode_line(self.transport.read_line(), self.probe)
         except DriverError as exc:
             self._recover(exc)
             return False
@@ -172,24 +203,24 @@ class HP35660A(DumpsMixin):
     def send(self, text: str) -> None:
         """Send a command as typed; it must not be one that answers (use ``query``)."""
         data = ascii_message(text)
-        if answering := replies(text):
+        if answering := self.replies(text):
             raise ValueError(f"{text!r} answers ({answering[0]}): use query, or a fetch for a dump")
-        repeatable = _repeatable(text)
+        repeatable = self.repeatable(text)
         self._exchange(text, lambda: self.transport.write(data), repeatable)
 
     def query(self, text: str) -> str:
         """Send a message whose one reply is one line; return it without CR LF."""
         data = ascii_message(text)
-        kinds = replies(text)
+        kinds = self.replies(text)
         if kinds != ["line"]:
             what = "no reply" if not kinds else f"replies {' + '.join(kinds)}"
             raise ValueError(f"{text!r} {what}: query takes a message with one one-line reply")
 
         def ask() -> str:
             self.transport.write(data)
-            return _decode_line(self.transport.read_line(), text)
+            return decode_line(self.transport.read_line(), text)
 
-        return self._exchange(text, ask, _repeatable(text))
+        return self._exchange(text, ask, self.repeatable(text))
 
     def query_values(self, text: str, expected: int | None = None) -> list[float]:
         """A query whose reply is comma-separated numbers."""
@@ -204,52 +235,29 @@ class HP35660A(DumpsMixin):
             raise ProtocolError(text, "non-finite number in the reply", reply.encode())
         return values
 
-    def read(self, mnemonic: str) -> float | int | bool | str:
-        """A setting read back (``read("FRS")`` asks FRS?) or a one-line query
-        (``read("AVMD?")``), typed by the command table: float (SI), int, bool or str."""
-        entry = COMMANDS.get(mnemonic)
-        if entry is None:
-            raise KeyError(f"{mnemonic} is not in the driver's command table")
-        query = entry.readback or mnemonic
-        reply = self.query(query)
-        try:
-            return parse_reply(query, reply)
-        except ValueError as exc:
-            raise ProtocolError(query, str(exc), reply.encode()) from None
+    # ------------------------------------------------------------ the dialect's part
+    def replies(self, text: str) -> list[str]:
+        """The reply kind of each command of a message that answers: ``line`` for a
+        one-line reply, ``block`` for a binary block, ``lines`` for an ASCII dump."""
+        raise NotImplementedError
 
-    def set(self, mnemonic: str, value: object = None) -> None:
-        """Send one table entry with its argument, spelled by the table:
-        ``set("FRS", 200.0)`` sends ``FRS 200 HZ``."""
-        self.send(command(mnemonic, value).decode("ascii"))
+    def repeatable(self, text: str) -> bool:
+        """False if any command of the message would change the outcome when sent twice."""
+        raise NotImplementedError
 
-    # ------------------------------------------------------------ instrument
     def identify(self) -> str:
-        """The instrument's identification (``HP35660A``)."""
-        return self.query("ID?")
+        """The instrument's identification, as it replies to its identity query."""
+        return self.query(self.dialect.identity_query)
 
     def reset(self) -> None:
-        self.send("RST")
-        self._record_length_s = None
+        raise NotImplementedError
 
     def status(self) -> Status:
-        bits = self.read("STA?")
-        if not 0 <= bits <= 255:  # type: ignore[operator]
-            raise ProtocolError("STA?", "expected a status byte", str(bits).encode())
-        return Status(int(bits))
+        raise NotImplementedError
 
     def errors(self) -> list[tuple[int, str]]:
-        """Drain the instrument's error queue, oldest first."""
-        found = []
-        for _ in range(64):
-            reply = self.query("ERR?")
-            code_text, _, message = reply.partition(",")
-            if not code_text.strip().lstrip("+-").isdigit():
-                raise ProtocolError("ERR?", 'expected code,"message"', reply.encode())
-            code = int(code_text)
-            if code == 0:
-                return found
-            found.append((code, message.strip().strip('"')))
-        raise ProtocolError("ERR?", "the error queue does not empty")
+        """Drain the instrument's error queue, oldest first: (code, message)."""
+        raise NotImplementedError
 
     def check_errors(self) -> None:
         """Raise InstrumentError for the oldest queued instrument error, if any."""
@@ -259,97 +267,51 @@ class HP35660A(DumpsMixin):
             more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
             raise InstrumentError(code, message + more)
 
-    # ------------------------------------------------------------ settings
     def configure(self, settings: ImpactSettings) -> ImpactSettings:
-        """Apply ``settings`` and return them as the analyzer holds them (span and
-        ranges rounded up to what it offers)."""
-        self.send("CLER")  # errors left by earlier commands must not be blamed on these settings
-        messages = settings.commands()
-        for message in messages[:3]:  # up to the span
-            self.send(message.decode())
-        self.check_errors()
-        # The analyzer rounds the span up; the baseband center follows the span it chose,
-        # and the pre-trigger must fit the record of that span.
-        actual_span = float(self.read("FRS"))
-        record = record_length_s(actual_span)
-        if settings.pre_trigger_s > record * (1 + 1e-9):
-            raise ValueError(
-                f"pre-trigger {settings.pre_trigger_s:g} s is longer than the {record:g} s record "
-                f"of the {actual_span:g} Hz span the analyzer chose"
-            )
-        for message in settings.commands(actual_span_hz=actual_span)[3:]:
-            self.send(message.decode())
-        self.check_errors()
-        actual = self.read_settings()
-        self._record_length_s = actual.record_length_s
-        return actual
+        """Apply ``settings`` and return them as the analyzer holds them (span, lines and
+        ranges as it made them). Settings naming no lines get the dialect's default."""
+        raise NotImplementedError
 
     def read_settings(self) -> ImpactSettings:
-        """The impact-test settings the analyzer holds now."""
+        raise NotImplementedError
 
-        # The order of the queries is the golden transcripts' (tests/drivers/test_protocol.py).
-        span = float(self.read("FRS"))
-        center = float(self.read("CF"))
-        channels = []
-        for ch in (1, 2):
-            channels.append(
-                ChannelSetup(
-                    window=Window(self.read(f"WIN{ch}")),
-                    sensitivity_v_per_eu=float(self.read(f"SNS{ch}")),
-                    range_v=None if self.read(f"AU{ch}?") else float(self.read(f"RNG{ch}")),
-                    force_width_s=float(self.read(f"FWD{ch}")),
-                    exp_decay_s=float(self.read(f"EXD{ch}")),
-                    ac_coupled=bool(self.read(f"C{ch}AC")),
-                )
-            )
-        source = str(self.read("TSRC"))
-        level_v = float(self.read("TLVL"))
-        trigger_channel = channels[1] if source == "CH2" else channels[0]
-        averaging = self.read("AVMD?")
-        settings = ImpactSettings(
-            span_hz=span,
-            center_hz=None if math.isclose(center, span / 2, rel_tol=1e-9) else center,
-            hammer=channels[0],
-            accelerometer=channels[1],
-            trigger_source=source,
-            trigger_level_eu=level_v / trigger_channel.sensitivity_v_per_eu,
-            trigger_slope=str(self.read("TSLP")),
-            pre_trigger_s=max(0.0, -float(self.read("TDLY"))),
-            averages=1 if averaging == "AVOF" else int(self.read("NAVG")),
-            preview=bool(self.read("PRVW")),
-        )
-        self._record_length_s = settings.record_length_s
-        return settings
+    def start(self) -> None:
+        """Clear the average and arm the trigger; InstrumentError if it refuses."""
+        raise NotImplementedError
+
+    def accept(self) -> None:
+        """Preview: put the pending hit into the average."""
+        raise NotImplementedError
+
+    def reject(self) -> None:
+        """Preview: throw the pending hit away and re-arm."""
+        raise NotImplementedError
+
+    def averages_done(self) -> int:
+        raise NotImplementedError
+
+    def fetch_time_records(self) -> tuple[Trace, Trace]:
+        """(force N, acceleration m/s^2) of the last hit: real records at baseband,
+        complex (half as many points) in zoom."""
+        raise NotImplementedError
+
+    def fetch_frf(self) -> Trace:
+        """The averaged frequency response ch2/ch1 (H1), lines + 1 complex points, (m/s^2)/N."""
+        raise NotImplementedError
+
+    def fetch_coherence(self) -> Trace:
+        """The coherence of the average, lines + 1 real points."""
+        raise NotImplementedError
+
+    def fetch_linear_spectra(self) -> tuple[Trace, Trace]:
+        """Averaged peak linear spectra of both channels, lines + 1 complex points."""
+        raise NotImplementedError
 
     # ------------------------------------------------------------ measuring
     def _record_length(self) -> float:
         if self._record_length_s is None:
-            self._record_length_s = record_length_s(float(self.read("FRS")))
+            self._record_length_s = self.read_settings().record_length_s
         return self._record_length_s
-
-    def start(self) -> None:
-        """Clear the average and arm the trigger (STRT); InstrumentError if it refuses."""
-        self._record_length()
-        self.send("STRT")
-        if self.status().error:
-            self.check_errors()
-
-    def accept(self) -> None:
-        """Preview: put the pending hit into the average."""
-        self._exchange("ACPT", lambda: self.transport.write(b"ACPT"), repeatable=False)
-        self._raise_if_error()
-
-    def reject(self) -> None:
-        """Preview: throw the pending hit away and re-arm."""
-        self._exchange("RJCT", lambda: self.transport.write(b"RJCT"), repeatable=False)
-        self._raise_if_error()
-
-    def _raise_if_error(self) -> None:
-        if self.status().error:
-            self.check_errors()
-
-    def averages_done(self) -> int:
-        return int(self.read("AVG?"))
 
     def wait_for(self, done: Callable[[Status], bool], what: str, timeout_s: float | None = None) -> Status:
         """Poll the status until ``done(status)``; the default timeout is the hit
@@ -385,7 +347,7 @@ class HP35660A(DumpsMixin):
         )
 
     def wait_until_done(self, timeout_s: float | None = None, averages: int | None = None) -> Status:
-        """Wait until every average is in (SMSD-equivalent done bit)."""
+        """Wait until every average is in."""
         n = averages or 1
         timeout = (
             timeout_s
@@ -395,16 +357,19 @@ class HP35660A(DumpsMixin):
         return self.wait_for(lambda s: s.done, "waiting for the measurement to finish", timeout)
 
 
-def _repeatable(text: str) -> bool:
-    """False if any command in the message would change the outcome when sent twice."""
-    for part in text.replace(";", " ; ").split(";"):
-        head = part.strip().split(" ")[0].upper()
-        if head in COMMANDS and not COMMANDS[head].idempotent:
-            return False
-    return True
+def ascii_message(text: str) -> bytes:
+    """``text`` as the bytes of one message: ASCII, one line, not empty."""
+    try:
+        data = text.strip().encode("ascii")
+    except UnicodeEncodeError:
+        raise ValueError(f"commands are ASCII: {text!r}") from None
+    if not data or b"\n" in data or b"\r" in data:
+        raise ValueError("one command line, not empty")
+    return data
 
 
-def _decode_line(raw: bytes, command_text: str) -> str:
+def decode_line(raw: bytes, command_text: str) -> str:
+    """A reply line as text; ProtocolError if it is not printable ASCII."""
     try:
         text = raw.decode("ascii")
     except UnicodeDecodeError:

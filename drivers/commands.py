@@ -177,17 +177,7 @@ _TABLE: tuple[Mnemonic, ...] = (
 
 COMMANDS: dict[str, Mnemonic] = {m.text: m for m in _TABLE}
 
-#: STA? bits (proj).
-STATUS_BITS = {
-    "done": 1,
-    "waiting_for_trigger": 2,
-    "overload_ch1": 4,
-    "overload_ch2": 8,
-    "error": 16,
-    "hit_pending": 32,
-    "measuring": 64,
-    "paused": 128,
-}
+#: STA? bits (proj): drivers/analyzer.py STATUS_BITS, which every dialect reports in.
 
 
 def grammar() -> dict[str, dict]:
@@ -302,17 +292,6 @@ def _reply_entry(query: str) -> Mnemonic:
         if setting is not None and setting.kind == "setting":
             return setting
     raise KeyError(f"{query} is not a query of the driver's command table")
-
-
-def ascii_message(text: str) -> bytes:
-    """``text`` as the bytes of one message: ASCII, one line, not empty."""
-    try:
-        data = text.strip().encode("ascii")
-    except UnicodeEncodeError:
-        raise ValueError(f"commands are ASCII: {text!r}") from None
-    if not data or b"\n" in data or b"\r" in data:
-        raise ValueError("one command line, not empty")
-    return data
 
 
 def replies(text: str) -> list[str]:

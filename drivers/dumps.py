@@ -1,7 +1,8 @@
 """Dumps: traces (DDAN binary, DDAS ASCII) and the instrument state (DSAN, DSAS).
 
-A mixin of the HP35660A driver, which provides ``transport`` and ``_exchange``
-(retries after a device clear); kept apart so each module stays readable.
+A mixin of the HP mnemonic driver (drivers/hp_mnemonic.py), which provides
+``transport``, ``_exchange`` (retries after a device clear) and ``geometry`` (the
+model's lines and record length); kept apart so each module stays readable.
 """
 
 from __future__ import annotations
@@ -9,23 +10,29 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TypeVar
 
+from drivers.analyzer import ascii_message
 from drivers.blocks import decode_values, parse_block_header, read_ascii_dump
-from drivers.commands import DISPLAY_FUNCTIONS, ascii_message, replies
+from drivers.commands import DISPLAY_FUNCTIONS, replies
+from drivers.dialects import Dialect, Geometry
 from drivers.errors import InstrumentTimeout, ProtocolError
-from drivers.record import SPECTRUM_POINTS, TIME_POINTS
 from drivers.state import STATE_LENGTH, InstrumentState
 from drivers.trace import HEADER_LENGTH, Trace
 from drivers.transport import Transport
 
 T = TypeVar("T")
 
-#: Values an ASCII trace dump may announce: the header and 1024 real or 512 complex points.
-MAX_TRACE_VALUES = HEADER_LENGTH + 2 * max(TIME_POINTS.values())
-
 
 class DumpsMixin:
     transport: Transport
     _exchange: Callable[..., object]
+    geometry: Geometry
+    dialect: Dialect
+
+    @property
+    def max_trace_values(self) -> int:
+        """Values an ASCII trace dump may announce: the header and a whole record
+        (real, or complex in zoom), so that a garbled count cannot make us wait long."""
+        return HEADER_LENGTH + self.geometry.record_samples
 
     def fetch_trace(self, function: str, ascii: bool = False) -> Trace:
         """Select ``function`` on trace A and dump it: binary (DDAN) or ASCII (DDAS)."""
@@ -64,41 +71,43 @@ class DumpsMixin:
 
         def dump() -> Trace:
             self.transport.write(ascii_message(message))
-            trace = Trace.from_values(self._read_values(name, ascii, MAX_TRACE_VALUES), name)
+            trace = Trace.from_values(self._read_values(name, ascii, self.max_trace_values), name)
             self._check_shape(trace, function or trace.header.display_function, name)
             return trace
 
         return self._exchange(name, dump)
 
-    @staticmethod
-    def _check_shape(trace: Trace, function: str, name: str) -> None:
-        h = trace.header
+    def _check_shape(self, trace: Trace, function: str, name: str) -> None:
+        h, g = trace.header, self.geometry
         if h.display_function != function:
             raise ProtocolError(name, f"asked for {function}, the dump holds {h.display_function}")
         if function.startswith("TIM"):
-            if not h.time_domain or h.n_points != TIME_POINTS[h.complex_data]:
+            if not h.time_domain or h.n_points != g.time_points(h.complex_data):
                 raise ProtocolError(
                     name,
-                    f"a time record has {TIME_POINTS[False]} real or {TIME_POINTS[True]} complex points, "
-                    f"got {h.n_points}",
+                    f"a {self.dialect.name} time record has {g.time_points(False)} real or "
+                    f"{g.time_points(True)} complex points, got {h.n_points}",
                 )
-        elif h.time_domain or h.n_points != SPECTRUM_POINTS:
-            raise ProtocolError(name, f"a spectrum has {SPECTRUM_POINTS} lines, got {h.n_points}")
+        elif h.time_domain or h.n_points != g.spectrum_points:
+            raise ProtocolError(
+                name, f"a {self.dialect.name} spectrum has {g.spectrum_points} points, got {h.n_points}"
+            )
 
     def fetch_time_records(self) -> tuple[Trace, Trace]:
-        """(force N, acceleration m/s^2) of the last hit: 1024 real points, or 512 complex in zoom."""
+        """(force N, acceleration m/s^2) of the last hit: the model's record, real, or
+        half as many complex points in zoom."""
         return self.fetch_trace("TIM1"), self.fetch_trace("TIM2")
 
     def fetch_linear_spectra(self) -> tuple[Trace, Trace]:
-        """Averaged peak linear spectra of both channels, 401 complex lines."""
+        """Averaged peak linear spectra of both channels, lines + 1 complex points."""
         return self.fetch_trace("LSP1"), self.fetch_trace("LSP2")
 
     def fetch_frf(self) -> Trace:
-        """The averaged frequency response ch2/ch1 (H1), 401 complex lines, (m/s^2)/N."""
+        """The averaged frequency response ch2/ch1 (H1), lines + 1 complex points, (m/s^2)/N."""
         return self.fetch_trace("FRSP")
 
     def fetch_coherence(self) -> Trace:
-        """The coherence of the average, 401 real lines."""
+        """The coherence of the average, lines + 1 real points."""
         return self.fetch_trace("COHR")
 
     def _read_block(self, name: str) -> bytes:

@@ -63,3 +63,8 @@ class ProtocolError(DriverError):
         self.command = command
         self.reason = reason
         self.received = received
+
+
+class UnknownInstrument(DriverError):
+    """What answers is not an analyzer of the family the driver knows; the message
+    names what it replied."""

@@ -1,29 +1,18 @@
-"""The 35660A's record geometry (docs/instrument.md), the one place the driver keeps it.
+"""The 35660A's record geometry, the default where settings name no other analyzer.
 
-A measurement resolves its span into 400 lines (a spectrum holds 401: 0 to 400).
-The time record behind it holds 1024 real samples at 2.56 x span (baseband), or
-512 complex samples at 1.28 x span (zoom: the band mixed down by the center
-frequency); either way it lasts 400 / span seconds.
+The geometry of every model of the family is in drivers/dialects.py (``Geometry``):
+a span resolved into ``lines`` lines (a spectrum holds lines + 1 points), a time
+record of 2.56 x lines real samples at 2.56 x span (baseband) or half as many complex
+samples at 1.28 x span (zoom), lasting lines / span seconds. The 35660A resolves 400.
 """
 
 from __future__ import annotations
 
-#: The widest span; the analyzer offers MAX_SPAN_HZ / 2^n and rounds a request up.
-MAX_SPAN_HZ = 102_400.0
-#: Lines a span is resolved into; a spectrum trace holds one more (both ends).
-RECORD_LINES = 400
-SPECTRUM_POINTS = RECORD_LINES + 1
-#: Points of a time record: real at baseband, complex in zoom.
-TIME_POINTS = {False: 1024, True: 512}
-#: Sample rate of a baseband time record over the span (halved in zoom).
-SAMPLE_RATE_PER_SPAN = 2.56
+from drivers.dialects import HP35660A, SAMPLE_RATE_PER_SPAN
 
+#: The 35660A's widest span; it offers MAX_SPAN_HZ / 2^n and rounds a request up.
+MAX_SPAN_HZ = HP35660A.max_span_hz
+#: Lines a 35660A span is resolved into.
+RECORD_LINES = HP35660A.default_lines
 
-def record_length_s(span_hz: float) -> float:
-    """Length of one time record, s: 400 lines / span (Hz)."""
-    return RECORD_LINES / span_hz
-
-
-def sample_rate_hz(span_hz: float, zoom: bool) -> float:
-    """Sample rate of the time record, Hz: 2.56 x span at baseband, 1.28 x span in zoom."""
-    return SAMPLE_RATE_PER_SPAN * span_hz / (2 if zoom else 1)
+__all__ = ["MAX_SPAN_HZ", "RECORD_LINES", "SAMPLE_RATE_PER_SPAN"]

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 from enum import StrEnum
 
 from drivers.commands import SLOPES, TRIGGER_SOURCES, WINDOWS, command
-from drivers.record import record_length_s
+from drivers.record import RECORD_LINES
 
 
 class Window(StrEnum):
@@ -114,6 +114,8 @@ class ImpactSettings:
     construction, so every field of a constructed ImpactSettings holds a number.
     averages : hits averaged (stable averaging).
     preview : every hit waits to be accepted or rejected.
+    lines : the resolution, lines (None: the analyzer's own; the 35660A offers 400, the
+        3562A 800, the 35665A/35670A 100 to 1600). The record lasts lines / span.
     """
 
     span_hz: float = 200.0
@@ -126,9 +128,26 @@ class ImpactSettings:
     pre_trigger_s: float | None = None
     averages: int = 5
     preview: bool = True
+    lines: int | None = None
+    #: Which of the fields sized to the record were left to their default, so that
+    #: ``with_lines`` can size them again for another record (not part of the settings).
+    defaulted: frozenset[str] = field(default=frozenset(), compare=False, repr=False)
 
     def __post_init__(self) -> None:
         _positive("span_hz", self.span_hz)
+        if self.lines is not None and not (
+            isinstance(self.lines, numbers.Integral) and not isinstance(self.lines, bool) and self.lines > 0
+        ):
+            raise ValueError(f"lines must be a positive integer, got {self.lines!r}")
+        left = {
+            f"{name}.{part}"
+            for name in ("hammer", "accelerometer")
+            for part in ("force_width_s", "exp_decay_s")
+            if getattr(getattr(self, name), part) is None
+        }
+        if self.pre_trigger_s is None:
+            left.add("pre_trigger_s")
+        object.__setattr__(self, "defaulted", frozenset(self.defaulted | left))
         if self.center_hz is not None and not (
             math.isfinite(self.center_hz) and self.center_hz >= self.span_hz / 2 * (1 - 1e-12)
         ):
@@ -154,8 +173,36 @@ class ImpactSettings:
 
     @property
     def record_length_s(self) -> float:
-        """Length of one time record, s (drivers/record.py: 400 lines / span)."""
-        return record_length_s(self.span_hz)
+        """Length of one time record, s: lines / span (400 lines when none is named)."""
+        return (self.lines or RECORD_LINES) / self.span_hz
+
+    def with_lines(self, lines: int) -> ImpactSettings:
+        """These settings at ``lines`` lines (see ``sized_for``)."""
+        return self.sized_for(lines, self.span_hz)
+
+    def sized_for(self, lines: int, span_hz: float) -> ImpactSettings:
+        """These settings at ``lines`` lines and ``span_hz``, the windows and pre-trigger
+        that were left to their defaults sized again to the new record (lines / span):
+        e.g. to the span an analyzer made of the one asked for."""
+        if lines == self.lines and span_hz == self.span_hz:
+            return self
+
+        def again(name: str) -> ChannelSetup:
+            setup = getattr(self, name)
+            return replace(
+                setup,
+                force_width_s=None if f"{name}.force_width_s" in self.defaulted else setup.force_width_s,
+                exp_decay_s=None if f"{name}.exp_decay_s" in self.defaulted else setup.exp_decay_s,
+            )
+
+        return replace(
+            self,
+            span_hz=span_hz,
+            lines=lines,
+            hammer=again("hammer"),
+            accelerometer=again("accelerometer"),
+            pre_trigger_s=None if "pre_trigger_s" in self.defaulted else self.pre_trigger_s,
+        )
 
     @property
     def trigger_level_v(self) -> float:

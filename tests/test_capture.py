@@ -10,7 +10,7 @@ import pytest
 from daq import capture_command
 from daq.capture import Capture, CaptureError, HitArrived
 from daq.store import Store
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
@@ -33,7 +33,7 @@ def test_simulated_capture_seals_a_complete_run(tmp_path, env):
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.splitlines()[0].startswith(
-        "Simulated analyzer (realistic beam) at TCPIP::127.0.0.1::"
+        "Simulated 35660A (realistic beam) at TCPIP::127.0.0.1::"
     )
     (summary,) = Store(store).list()
     run = Store(store).open(summary.run_id)

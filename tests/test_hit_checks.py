@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from analysis.hit_checks import double_impact, force_rolloff, overload, run_checks, too_weak
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource

@@ -14,8 +14,8 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
+from drivers.analyzer import SignalAnalyzer
 from drivers.errors import DriverError
-from drivers.hp35660a import HP35660A
 from drivers.locking import ResourceLock
 from drivers.resources import lock_key_of
 
@@ -33,6 +33,7 @@ class SimSpec:
     seed: int = 1
     time_scale: float = 0.05
     hammer: str = ""
+    model: str = "35660A"
 
     def provenance(self) -> dict[str, Any]:
         return {
@@ -40,13 +41,16 @@ class SimSpec:
             "seed": self.seed,
             "time_scale": self.time_scale,
             "hammer": self.hammer,
+            "model": self.model,
         }
 
 
 class InstrumentLink:
     """Owns the resource; ``open_driver()`` for each capture."""
 
-    def __init__(self, resource: str | None, sim: SimSpec | None, holder: str) -> None:
+    def __init__(
+        self, resource: str | None, sim: SimSpec | None, holder: str, dialect: str | None = None
+    ) -> None:
         if (resource is None) == (sim is None):
             raise ValueError("give a resource or a simulator, not both")
         self.resource = resource or ""
@@ -59,6 +63,9 @@ class InstrumentLink:
         self.identification: str | None = None
         self.last_error: str | None = None
         self.transport_name = ""
+        #: The dialect given (--dialect) or found at the first connection.
+        self.dialect = dialect
+        self.detection = f"the {dialect} dialect was forced (--dialect)" if dialect else ""
 
     def start(self) -> None:
         """Start the simulator if any, take the instrument's lock (ResourceBusy if
@@ -71,7 +78,7 @@ class InstrumentLink:
 
             hammer = adjusted(HammerModel(), self.sim.hammer) if self.sim.hammer else HammerModel()
             source = PhysicsSource(self.sim.scenario, hammer=hammer, seed=self.sim.seed)
-            self.resource = serve_simulator(self._stack, source, self.sim.time_scale)
+            self.resource = serve_simulator(self._stack, source, self.sim.time_scale, self.sim.model)
         lock = ResourceLock(lock_key_of(self.resource), self.resource, holder=self.holder)
         lock.acquire()
         self._lock = lock
@@ -82,13 +89,19 @@ class InstrumentLink:
         except DriverError as exc:
             self.note_error(str(exc))
 
-    def open_driver(self) -> HP35660A:
-        """A new connection (the lock is ours already: the driver does not take it)."""
+    def open_driver(self) -> SignalAnalyzer:
+        """A new connection (the lock is ours already: the driver does not take it). The
+        dialect found at the first connection is kept, so later ones need not ask."""
         try:
-            dsa = HP35660A.open(self.resource, timeout_s=IO_TIMEOUT_S, lock_file=False)
+            dsa = SignalAnalyzer.open(
+                self.resource, timeout_s=IO_TIMEOUT_S, lock_file=False, dialect=self.dialect
+            )
         except DriverError as exc:
             self.note_error(str(exc))
             raise
+        if self.dialect is None:
+            self.dialect = dsa.dialect.name
+            self.detection = dsa.detection
         dsa.hit_allowance_s = SERVICE_HIT_ALLOWANCE_S
         self.transport_name = type(dsa.transport).__name__
         return dsa
@@ -112,6 +125,8 @@ class InstrumentLink:
                 "simulated": self.sim is not None,
                 "connected": self.connected,
                 "identification": self.identification,
+                "dialect": self.dialect,
+                "detection": self.detection or None,
                 "last_error": self.last_error,
             }
 

@@ -24,7 +24,8 @@ from drivers.locking import ResourceLock
 class ServiceConfig:
     """store_dir : the run store. resource / sim : the analyzer (one of them).
     host, port : where HTTP is served. token : the access token.
-    workers : analysis worker processes. scheduler : a Dask scheduler instead."""
+    workers : analysis worker processes. scheduler : a Dask scheduler instead.
+    dialect : the analyzer's dialect, forced (None: found out at the first connection)."""
 
     store_dir: Path
     resource: str | None
@@ -35,6 +36,7 @@ class ServiceConfig:
     reads_need_token: bool
     workers: int = field(default_factory=lambda: max(1, (os.cpu_count() or 2) - 1))
     scheduler: str | None = None
+    dialect: str | None = None
 
     @property
     def url(self) -> str:
@@ -47,7 +49,9 @@ class Service:
         self.config = config
         self.store = Store(config.store_dir)
         self.hub = EventHub()
-        self.link = InstrumentLink(config.resource, config.sim, holder=f"daq serve at {config.url}")
+        self.link = InstrumentLink(
+            config.resource, config.sim, holder=f"daq serve at {config.url}", dialect=config.dialect
+        )
         self.jobs = JobRunner(config.store_dir, self.hub, config.workers, config.scheduler)
         self.capture = CaptureController(self.link, config.store_dir, self.hub, on_sealed=self.jobs.submit)
         self._results = _ResultCache(self.store)

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from drivers.errors import InstrumentError, ResourceBusy
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ChannelSetup, ImpactSettings, Window
 from sims.instrument import Analyzer
 from sims.prologix import PrologixPty

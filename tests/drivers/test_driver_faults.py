@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from drivers.errors import DriverError, InstrumentError, InstrumentTimeout, ProtocolError
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
 from sims.instrument import Analyzer
 from sims.prologix import PrologixPty
@@ -47,6 +47,12 @@ class Bench:
     analyzer: Analyzer
     resource: str
     frontend: TcpServer | PrologixPty
+    model: str = "35660A"
+
+    @property
+    def identity(self) -> str:
+        """What the model answers to ID? (docs/dialects.md)."""
+        return "HP" + self.model
 
     def clear_server_faults(self) -> None:
         """New TCP connections stop getting the server-wide faults (the pty's session
@@ -65,13 +71,15 @@ def _lock_dir(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:
     monkeypatch.setenv("DAQ_LOCK_DIR", str(tmp_path))
 
 
-@pytest.fixture
-def make_bench() -> Iterator:
-    """make_bench(kind, faults=(), measured=True) -> Bench, its front end running."""
+@pytest.fixture(params=["35660A", "3562A"])
+def make_bench(request: pytest.FixtureRequest) -> Iterator:
+    """make_bench(kind, faults=(), measured=True) -> Bench, its front end running; every
+    test runs against both models of the mnemonic dialect (400 and 800 lines)."""
     frontends: list[TcpServer | PrologixPty] = []
+    model = request.param
 
     def make(kind: str, faults: Sequence[str] = (), measured: bool = True) -> Bench:
-        analyzer = Analyzer(PhysicsSource("seed", seed=11), time_scale=0.0)
+        analyzer = Analyzer(PhysicsSource("seed", seed=11), time_scale=0.0, model=model)
         if measured:
             analyzer.execute(MEASUREMENT)
             analyzer.execute("STA?")  # time scale 0: every hit is in
@@ -85,7 +93,7 @@ def make_bench() -> Iterator:
             frontend = PrologixPty(analyzer, 11, faults=list(faults)).start()
             resource = f"PROLOGIX::{frontend.port}::11"
         frontends.append(frontend)
-        return Bench(kind, analyzer, resource, frontend)
+        return Bench(kind, analyzer, resource, frontend, model)
 
     yield make
     for frontend in frontends:
@@ -94,7 +102,7 @@ def make_bench() -> Iterator:
 
 @contextmanager
 def opened(bench: Bench, retries: int = 2, timeout_s: float = TIMEOUT_S) -> Iterator[HP35660A]:
-    with HP35660A.open(bench.resource, timeout_s=timeout_s, retries=retries) as drv:
+    with HP35660A.open(bench.resource, timeout_s=timeout_s, retries=retries, dialect=bench.model) as drv:
         yield drv
 
 
@@ -124,7 +132,7 @@ def assert_frf_exact(drv: HP35660A, analyzer: Analyzer) -> None:
 
 @pytest.fixture(autouse=True)
 def _capture_driver_warnings(caplog: pytest.LogCaptureFixture) -> None:
-    caplog.set_level(logging.WARNING, logger="drivers.hp35660a")
+    caplog.set_level(logging.WARNING, logger="drivers.analyzer")
 
 
 # ================================================================== slow
@@ -134,7 +142,7 @@ def test_slow_reply_within_the_timeout_succeeds(make_bench, kind, caplog) -> Non
     bench = make_bench(kind, faults=["slow,delay=0.25"])
     with opened(bench, timeout_s=1.0) as drv:
         t0 = time.monotonic()
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
         assert time.monotonic() - t0 >= 0.2  # the fault was there
         assert_frf_exact(drv, bench.analyzer)
     assert recoveries(caplog) == []
@@ -149,7 +157,7 @@ def test_one_reply_slower_than_the_timeout_is_retried_and_succeeds(make_bench, k
         assert drv.query("FRS?") == expected_span(bench.analyzer)
         assert len(recoveries(caplog)) == 1
         # The late reply was discarded with the link: each query gets its own reply.
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
         assert drv.query("FRS?") == expected_span(bench.analyzer)
         assert_frf_exact(drv, bench.analyzer)
 
@@ -172,7 +180,7 @@ def test_replies_always_slower_than_the_timeout_end_in_a_timeout_and_the_driver_
         # The fault goes away: the next queries get their own replies, not late ones.
         bench.clear_server_faults()
         drv.send("SIM:FAULT CLEAR")
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
         assert drv.query("FRS?") == expected_span(bench.analyzer)
 
 
@@ -244,7 +252,7 @@ def test_blocks_always_truncated_end_in_a_protocol_error(make_bench, kind) -> No
         assert time.monotonic() - t0 < 4.0
         assert "after 3 attempts" in str(caught.value)
         # Line replies are not blocks: the driver talks on.
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
         assert drv.query("FRS?") == expected_span(bench.analyzer)
 
 
@@ -255,7 +263,7 @@ def test_one_garbled_reply_is_retried_for_a_query_and_a_fetch(make_bench, kind, 
     bench = make_bench(kind)
     with opened(bench) as drv:
         drv.send("SIM:FAULT garbage")
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
         assert len(recoveries(caplog)) == 1
         drv.send("SIM:FAULT garbage,nbytes=3")
         assert_frf_exact(drv, bench.analyzer)
@@ -276,7 +284,7 @@ def test_replies_always_garbled_end_in_a_protocol_error(make_bench, kind) -> Non
         assert time.monotonic() - t0 < 4.0
         bench.clear_server_faults()
         drv.send("SIM:FAULT CLEAR")
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
         assert_frf_exact(drv, bench.analyzer)
 
 
@@ -289,7 +297,7 @@ def test_a_dropped_tcp_connection_is_reconnected_and_the_fetch_succeeds(make_ben
         assert_frf_exact(drv, bench.analyzer)
         assert bench.connections == 2  # the server closed the first one
         assert len(recoveries(caplog)) == 1
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
 
 
 @pytest.mark.timeout(10)
@@ -301,7 +309,7 @@ def test_a_dropped_transfer_over_the_pty_behaves_as_a_truncated_one(make_bench, 
     with opened(bench) as drv:
         drv.send("SIM:FAULT drop")
         assert_frf_exact(drv, bench.analyzer)
-        assert drv.identify() == "HP35660A"
+        assert drv.identify() == bench.identity
 
 
 @pytest.mark.timeout(10)

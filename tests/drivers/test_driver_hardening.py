@@ -136,7 +136,7 @@ def test_something_else_than_a_pyvisa_py_session_fails_loudly():
 def test_driver_warnings_stay_off_stderr_without_a_logging_setup():
     """Python prints records no handler takes on stderr (its last resort); the
     package's NullHandler takes them, so a notebook sees no retry chatter."""
-    code = "import logging, drivers.hp35660a; logging.getLogger('drivers.hp35660a').warning('retrying')"
+    code = "import logging, drivers.analyzer; logging.getLogger('drivers.analyzer').warning('retrying')"
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert done.stderr == ""

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from drivers.errors import ConnectionFailed, InstrumentTimeout, ResourceBusy
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
 from drivers.visa_transport import VisaTransport
 from sims.instrument import Analyzer
@@ -97,7 +97,7 @@ def test_a_silent_instrument_costs_one_timeout_not_one_per_retry(kind):
     with server:
         resource = server.resource if kind == "tcp" else f"PROLOGIX::{server.port}::11"
         # Opening a Prologix asks the adapter (not the instrument): it answers at once.
-        with HP35660A.open(resource, timeout_s=1.0, retries=3) as dsa:
+        with HP35660A.open(resource, timeout_s=1.0, retries=3, dialect="35660A") as dsa:
             t0 = time.monotonic()
             with pytest.raises(InstrumentTimeout):
                 dsa.identify()

@@ -9,7 +9,7 @@ import pytest
 from expected_protocol import ExpectedProtocol, expected
 
 from drivers.errors import ConnectionLost, InstrumentError, InstrumentTimeout, ProtocolError
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ChannelSetup, ImpactSettings, Window
 
 NO_ERROR = b'0,"No error"\r\n'

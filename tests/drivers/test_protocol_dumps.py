@@ -123,7 +123,7 @@ def test_a_garbled_dump_is_retried_after_a_device_clear_then_reported():
 @pytest.mark.parametrize(
     ("header_change", "message"),
     [
-        ({1: 400.0, 2: 400.0}, "401 lines"),
+        ({1: 400.0, 2: 400.0}, "401 points"),
         ({0: LINEAR_CH1}, "holds LSP1"),
         ({9: 42.0}, "unknown code"),
         ({10: SECONDS}, "do not fit the domain"),

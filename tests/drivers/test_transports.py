@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 from drivers.errors import ConnectionFailed, ConnectionLost, DriverError, InstrumentTimeout, ResourceBusy
-from drivers.hp35660a import HP35660A
+from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.locking import ResourceLock
 from drivers.loopback import LoopbackTransport
 from drivers.prologix_transport import PrologixTransport, escape, parse_resource

@@ -193,8 +193,9 @@
       el("span", { class: "link-state" }, i.connected ? "connected" : "not connected")
     );
     if (i.identification) box.append(" · ", el("span", { class: "ident" }, i.identification));
+    if (i.dialect) box.append(" · ", el("span", { class: "dialect" }, i.dialect + " dialect"));
     if (i.last_error) box.append(" · ", el("span", { class: "last-error" }, i.last_error));
-    box.title = [resource, i.connected ? "connected" : "not connected", i.identification, i.last_error]
+    box.title = [resource, i.connected ? "connected" : "not connected", i.identification, i.detection, i.last_error]
       .filter(Boolean)
       .join("\n");
   }

@@ -1,0 +1,124 @@
+"""Which analyzer of the family answers, and the driver for it (docs/dialects.md).
+
+Detection asks in the order that disturbs least: a device clear, then ``*IDN?``
+with a short timeout (a SCPI 35665A/35670A answers it; an HP-mnemonic instrument
+does not know it and stays silent), then a clear and ``ID?`` (``HP35660A``,
+``HP3562A``, ``HP3563A``). The mnemonic instruments queue an error for the
+``*IDN?`` they did not understand; it is cleared (``CLER``), so that it is not
+blamed on the next command. ``dialect`` skips all of this and trusts the caller.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from drivers.analyzer import SignalAnalyzer, decode_line
+from drivers.dialects import HP_IDENTITIES, SCPI, SCPI_MODELS, Dialect, dialect_named
+from drivers.errors import DriverError, InstrumentTimeout, ProtocolError, UnknownInstrument
+from drivers.transport import Transport
+
+#: How long each identity query of the detection may take, s: the instrument answers a
+#: query it knows within milliseconds; the one it does not know costs this much.
+DETECT_TIMEOUT_S = 0.5
+
+
+@dataclass(frozen=True)
+class Detection:
+    """What detection found: the dialect, the instrument's reply and why (one line)."""
+
+    dialect: Dialect
+    identification: str
+    reason: str
+
+
+def _ask(transport: Transport, query: str) -> str | None:
+    """The one-line reply to ``query``, or None if none came in time."""
+    transport.write(query.encode("ascii"))
+    try:
+        raw = transport.read_line()
+    except InstrumentTimeout:
+        return None
+    return decode_line(raw, query).strip()
+
+
+def detect(transport: Transport, timeout_s: float = DETECT_TIMEOUT_S) -> Detection:
+    """Find out which dialect the instrument behind ``transport`` speaks.
+
+    UnknownInstrument, naming what was received, for an instrument the family does
+    not hold; InstrumentTimeout if neither query gets a reply.
+    """
+    saved = transport.timeout_s
+    transport.timeout_s = min(timeout_s, saved)
+    try:
+        with transport.lock:
+            transport.clear()
+            idn = _ask(transport, "*IDN?")
+            if idn is not None:
+                fields = [f.strip() for f in idn.split(",")]
+                if len(fields) >= 2 and fields[1].upper() in SCPI_MODELS:
+                    return Detection(SCPI, idn, f"*IDN? replied {idn!r}: a {fields[1].upper()} speaks SCPI")
+                raise UnknownInstrument(
+                    f"{transport.resource}: *IDN? replied {idn!r}, not an analyzer this driver knows "
+                    f"({', '.join(SCPI_MODELS)}; or HP35660A, HP3562A to ID?); give --dialect to force one"
+                )
+            transport.clear()
+            reply = _ask(transport, "ID?")
+            if reply is None:
+                raise InstrumentTimeout(
+                    f"{transport.resource}: no reply to *IDN? nor to ID? within {transport.timeout_s:g} s "
+                    "each: is the analyzer on, at this address?"
+                )
+            dialect = HP_IDENTITIES.get(reply.upper())
+            if dialect is None:
+                raise UnknownInstrument(
+                    f"{transport.resource}: ID? replied {reply!r} (and *IDN? nothing), not an analyzer "
+                    f"this driver knows ({', '.join(HP_IDENTITIES)}); give --dialect to force one"
+                )
+            transport.write(b"CLER")  # the error our *IDN? left in its queue
+            reason = f"no reply to *IDN? within {transport.timeout_s:g} s; ID? replied {reply!r}"
+            return Detection(dialect, reply, reason)
+    except ProtocolError as exc:
+        raise UnknownInstrument(f"{transport.resource}: {exc}; give --dialect to force one") from None
+    finally:
+        transport.timeout_s = saved
+
+
+def connect(transport: Transport, dialect: Dialect | str | None = None, **kwargs: object) -> SignalAnalyzer:
+    """The driver for the instrument behind the open ``transport``: of the dialect
+    detection finds, or of ``dialect`` (a Dialect or its name) without asking."""
+    if dialect is None:
+        found = detect(transport)
+        chosen, reason = found.dialect, found.reason
+    else:
+        chosen = dialect if isinstance(dialect, Dialect) else dialect_named(dialect)
+        reason = f"the {chosen.name} dialect was forced (--dialect); nothing was asked"
+    if chosen.family == "scpi":
+        from drivers.scpi_analyzer import ScpiAnalyzer
+
+        return ScpiAnalyzer(transport, chosen, detection=reason, **kwargs)  # type: ignore[arg-type]
+    from drivers.hp_mnemonic import HPMnemonicAnalyzer
+
+    return HPMnemonicAnalyzer(transport, chosen, detection=reason, **kwargs)  # type: ignore[arg-type]
+
+
+def open_analyzer(
+    resource: str,
+    timeout_s: float = 5.0,
+    lock_file: bool = True,
+    dialect: Dialect | str | None = None,
+    **kwargs: object,
+) -> SignalAnalyzer:
+    """Open ``resource`` (drivers/resources.py) and ``connect`` to what answers."""
+    from drivers.resources import open_transport
+
+    if isinstance(dialect, str):
+        dialect = dialect_named(dialect)  # a bad name must fail before the link is opened
+    transport = open_transport(resource, timeout_s, lock_file)
+    try:
+        return connect(transport, dialect, **kwargs)
+    except BaseException:
+        transport.close()  # a bad argument or a failed detection must not leave the link held
+        raise
+
+
+__all__ = ["DETECT_TIMEOUT_S", "Detection", "DriverError", "connect", "detect", "open_analyzer"]
