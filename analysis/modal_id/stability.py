@@ -30,8 +30,9 @@ A cluster is rejected when
   * its median damping is <= 0 or > ``max_damping`` (spurious: a structure this
     stiff is not that damped; the paper's damped model peaks at 20 %);
   * its frequency wanders: max - min over the chain exceeds 2 x freq_tol (relative);
-  * its frequency lies in the guard, 2 % of the band width, inside a band edge that
-    is above 0 Hz (there, poles stand in for modes outside the band).
+  * its frequency lies in the guard, 2 % of the band width, inside a band edge
+    (there, poles stand in for modes outside the band); at the low edge the guard is
+    no wider than the band's distance from 0 Hz.
 """
 
 from __future__ import annotations
@@ -204,6 +205,10 @@ def cluster_poles(
     label = [np.array([renumber[target[c]] if c >= 0 else -1 for c in lab], dtype=int) for lab in label]
     f1, f2 = band
     g = guard * (f2 - f1)
+    # The low guard is never wider than the gap below the band: a band starting at the
+    # first line above 0 Hz has nothing below it for edge poles to stand in for, and a
+    # guard of 2 % of a 390 Hz span would throw away a beam's 5.6 Hz first mode.
+    low_guard = min(g, f1)
     for c in final:
         freqs, _ = frequency_damping(np.array([poles[k][i] for k, i in c.members]))
         if c.n_stable_orders < min_stable_orders:
@@ -212,7 +217,7 @@ def cluster_poles(
             c.reason = f"damping {c.damping_ratio:.3g} outside (0, {max_damping}]"
         elif (freqs.max() - freqs.min()) > 2 * freq_tol * c.frequency_hz:
             c.reason = "frequency wanders across orders"
-        elif (f1 > 0 and c.frequency_hz < f1 + g) or c.frequency_hz > f2 - g:
+        elif c.frequency_hz < f1 + low_guard or c.frequency_hz > f2 - g:
             c.reason = "inside the band-edge guard"
         else:
             c.accepted = True
