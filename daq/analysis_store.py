@@ -29,6 +29,14 @@ ANALYSIS_VERSION = 1
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
+#: How the reason a run has no data to analyse ends: a run of spectra alone is not a
+#: failure for `daq analyze --all` and `daq fit --all`, which skip it with that line.
+NOTHING_TO_IDENTIFY = "nothing to identify modes from"
+
+
+def nothing_to_identify(reason: str) -> bool:
+    """``reason`` (a one-line failure) says the run holds nothing to analyse (spectra alone)."""
+    return reason.endswith(NOTHING_TO_IDENTIFY)
 
 
 def window_specs(run: Run) -> tuple[WindowSpec, WindowSpec, str]:
@@ -75,6 +83,10 @@ def analyze(run: Run, options: AnalysisOptions) -> tuple[RunAnalysis, dict[str, 
         decay, origin = _frf_window_decay(run, source)
         result = analyze_frfs(frfs.frequency_hz, frfs.frf, frfs.coherence, source, options, decay)
         notes["windows"] = {"from": origin}
+    elif run.spectra is not None and run.hits is None:
+        # Power, linear and cross spectra carry no phase between force and response:
+        # no FRF can be made of them here (docs/sdf.md), so no modes either.
+        raise ValueError(f"the run holds spectra but no time records or FRF: {NOTHING_TO_IDENTIFY}")
     else:
         raise ValueError("the run has no accepted hit and no FRF to analyse")
     return result, notes

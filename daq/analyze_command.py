@@ -156,7 +156,9 @@ def run_batch(
         raise UserError(f"no runs to {verb} in {store_dir}")
     label = {"analyse": "analysing", "fit": "fitting"}.get(verb, verb)
     quiet = len(ids) == 1
-    results, failures = run_all(store_dir, ids, options, force, jobs, worker, label, quiet, address)
+    results, failures = run_all(
+        store_dir, ids, options, force, jobs, worker, label, quiet, address, skip_empty=all_runs
+    )
     if json_output:
         typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
     else:
@@ -181,6 +183,7 @@ def run_all(
     label: str = "analysing",
     quiet: bool = False,
     scheduler: str | None = None,
+    skip_empty: bool = False,
 ) -> tuple[dict[str, dict], list[tuple[str, str]]]:
     """Run ``worker(store_dir, run_id, options, force)`` (default: analyze_one) on
     ``ids`` in worker processes; (summaries by run id, failed ids). A worker returns a
@@ -189,7 +192,12 @@ def run_all(
 
     scheduler: a Dask scheduler's address (daq/dask_batch.scheduler_address): the
     runs are computed on its cluster instead (the same outcomes and stored results;
-    ``jobs`` unused)."""
+    ``jobs`` unused).
+
+    skip_empty: a run with nothing to analyse (analysis_store.nothing_to_identify) is
+    reported as skipped, even when ``quiet``, and is not among the failures."""
+    from daq.analysis_store import nothing_to_identify
+
     worker = worker or analyze_one
     command = "fit" if worker is not analyze_one else "analyze"
     from rich.console import Console
@@ -204,7 +212,9 @@ def run_all(
         task = progress.add_task("runs", total=len(ids))
 
         def done(run_id: str, outcome: dict | str) -> None:
-            if isinstance(outcome, str):
+            if isinstance(outcome, str) and skip_empty and nothing_to_identify(outcome):
+                sys.stderr.write(f"daq {command}: run {run_id}: skipped: {outcome}\n")
+            elif isinstance(outcome, str):
                 if not quiet:
                     sys.stderr.write(f"daq {command}: run {run_id}: {outcome}\n")
                 failures.append((run_id, outcome))

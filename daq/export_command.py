@@ -1,8 +1,11 @@
-"""`daq export RUN --format csv|uff [-o PATH]`: a stored run written for other tools.
+"""`daq export RUN --format csv|uff|sdf [-o PATH]`: a stored run written for other tools.
 
 CSV holds the time records (every hit, its number in a ``hit`` column); UFF holds
 them as dataset 58 time records plus the FRFs and coherence, in binary 58 so that
-float64 values come back exactly (daq/formats/). An existing file is never
+float64 values come back exactly (daq/formats/); SDF holds the same and the run's
+spectra as an HP Standard Data Format revision 3 file of float64 values
+(daq/formats/sdf/run_export.py). A run's spectra go to SDF only: CSV and UFF say so
+(one line; an error when the run holds nothing else). An existing file is never
 overwritten without --force, and the file appears whole or not at all.
 """
 
@@ -10,6 +13,7 @@ from __future__ import annotations
 
 import enum
 import os
+import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -22,9 +26,10 @@ from daq.runs_command import StoreOption
 class ExportFormat(enum.StrEnum):
     csv = "csv"
     uff = "uff"
+    sdf = "sdf"
 
 
-SUFFIX = {"csv": ".csv", "uff": ".uff"}
+SUFFIX = {"csv": ".csv", "uff": ".uff", "sdf": ".sdf"}
 
 
 def export_target(output: str | None, default_name: str, force: bool) -> Path:
@@ -55,17 +60,19 @@ def register(app: typer.Typer) -> None:
 
 def export(
     run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="Run id or unique prefix.")],
-    format: Annotated[ExportFormat, typer.Option("--format", "-f", help="csv or uff (dataset 58).")],
+    format: Annotated[
+        ExportFormat, typer.Option("--format", "-f", help="csv, uff (dataset 58) or sdf (HP SDF revision 3).")
+    ],
     output: Annotated[
         str | None,
         typer.Option(
-            "--output", "-o", metavar="<path>", help="Where to write [default: ./<run id>.csv|uff]."
+            "--output", "-o", metavar="<path>", help="Where to write [default: ./<run id>.csv|uff|sdf]."
         ),
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite an existing output file.")] = False,
     store: StoreOption = None,
 ) -> None:
-    """Write a stored run as CSV (time records) or UFF 58 (time records, FRFs, coherence)."""
+    """Write a stored run as CSV (time records), UFF 58 (and FRFs, coherence) or SDF (and spectra)."""
     from daq.store import Store, StoreError, resolve_store_dir
 
     store_dir, _ = resolve_store_dir(store)
@@ -73,13 +80,42 @@ def export(
         the_run = Store(store_dir).open(run)
     except StoreError as exc:
         raise UserError(str(exc)) from None
+    _check_holds(the_run, format.value)
     target = export_target(output, f"{the_run.run_id}{SUFFIX[format.value]}", force)
     if format is ExportFormat.csv:
         from daq.formats.csv_text import write_csv
 
         write_csv(the_run, target)
+    elif format is ExportFormat.sdf:
+        from daq.formats.sdf.run_export import write_sdf_run
+
+        write_sdf_run(the_run, target)
     else:
         from daq.formats.uff58_export import write_uff
 
         write_uff(the_run, target)
+    _note_left_out(the_run, format.value)
     typer.echo(f"Run {the_run.run_id} written as {format.value.upper()}: {target}")
+
+
+#: What each format holds of a run, for the line saying why spectra are not written.
+HOLDS = {"csv": "CSV holds time records only", "uff": "UFF export holds time records and FRFs only"}
+
+
+def _check_holds(run, fmt: str) -> None:
+    """UserError when ``fmt`` can hold nothing of the run (spectra only, in CSV or UFF)."""
+    alone = all(part is None for part in (run.hits, run.analyzer, run.measured_frfs))
+    if run.spectra is not None and fmt in HOLDS and alone:
+        raise UserError(
+            f"run {run.run_id} holds only spectra ({run.spectra.n_traces}); {HOLDS[fmt]}: "
+            "export it with --format sdf"
+        )
+
+
+def _note_left_out(run, fmt: str) -> None:
+    """One line on stderr when the written file leaves the run's spectra out."""
+    if run.spectra is not None and fmt in HOLDS:
+        sys.stderr.write(
+            f"daq export: the run's {run.spectra.n_traces} spectra are not written "
+            f"({HOLDS[fmt]}; --format sdf keeps them)\n"
+        )

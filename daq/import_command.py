@@ -1,11 +1,11 @@
-"""`daq import FILE`: time records or FRFs from another system become a run.
+"""`daq import FILE`: time records, FRFs or spectra from another system become a run.
 
 Formats: CSV / whitespace text (daq/formats/csv_text.py), UFF dataset 58
-(daq/formats/uff58.py) and a run file of another store (``run``: checked as every
-stored run is, then sealed here as a new run). The file is read and checked whole
-before anything is written: a file that is not what it claims leaves the store
-untouched. The new run is marked ``imported`` with the source's name, size and
-SHA-256, so it can always be traced back to the bytes it came from.
+(daq/formats/uff58.py), HP's Standard Data Format (daq/formats/sdf/) and a run file of
+another store (``run``: checked as every stored run is, then sealed here as a new run).
+The file is read and checked whole before anything is written: a file that is not what
+it claims leaves the store untouched. The new run is marked ``imported`` with the
+source's name, size and SHA-256, so it can always be traced back to the bytes it came from.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from daq.errors import UserError
 from daq.runs_command import StoreOption
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+SDF_SUFFIXES = (".sdf",)
 TEXT_SUFFIXES = (".csv", ".txt", ".tsv", ".dat", ".asc")
 UFF_SUFFIXES = (".uff", ".unv", ".uf")
 
@@ -29,6 +30,7 @@ class ImportFormat(enum.StrEnum):
     auto = "auto"
     csv = "csv"
     uff = "uff"
+    sdf = "sdf"
     run = "run"
 
 
@@ -43,8 +45,8 @@ def import_file(
         typer.Option(
             "--format",
             "-f",
-            help="csv (or whitespace text), uff (dataset 58), run (a run file of another store); "
-            "auto guesses from the content and the name.",
+            help="csv (or whitespace text), uff (dataset 58), sdf (HP Standard Data Format), "
+            "run (a run file of another store); auto guesses from the content and the name.",
         ),
     ] = ImportFormat.auto,
     columns: Annotated[
@@ -66,11 +68,14 @@ def import_file(
     note: Annotated[str, typer.Option(metavar="<text>", help="Stored with the run.")] = "",
     store: StoreOption = None,
 ) -> None:
-    """Import a CSV, UFF 58 or run file into the store as a new run (kind "imported").
+    """Import a CSV, UFF 58, SDF or run file into the store as a new run (kind "imported").
 
     CSV: columns time (s), force, response; one hit, or several (a `hit` column, or
     time starting over). UFF: dataset 58 time records (force and acceleration) and/or
-    FRFs with coherence. Nothing is written unless the whole file reads cleanly.
+    FRFs with coherence. SDF (HP analyzers, revisions 1-3): time records of a force and a
+    response channel, FRFs with coherence, and spectra (power, linear, cross, coherence
+    alone), kept as the run's spectra, not FRFs. Nothing is written unless the whole file
+    reads cleanly.
     """
     from daq.capture import utc_now
     from daq.formats.imported import show_path
@@ -90,7 +95,12 @@ def import_file(
         parts = _from_run_file(file)
     else:
         data = _read(file, chosen, columns, force_unit, response_unit)
-        parts = {"hits": data.hits, "measured_frfs": data.measured_frfs, "details": data.details}
+        parts = {
+            "hits": data.hits,
+            "measured_frfs": data.measured_frfs,
+            "spectra": data.spectra,
+            "details": data.details,
+        }
     provenance: dict[str, Any] = {
         "imported_from": {
             "file": file.name,
@@ -119,11 +129,16 @@ def import_file(
     for frfs in (run.analyzer, run.measured_frfs):
         if frfs is not None:
             what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} lines")
+    if run.spectra is not None:
+        what.append(f"{run.spectra.n_traces} spectra of {run.spectra.n_lines} lines")
     typer.echo(f"Imported {show_path(file.name)} ({chosen}: {', '.join(what)}) as run {run.run_id}: {path}")
 
 
 def guess_format(path: Path) -> str:
-    """csv, uff or run from the file's first bytes and its name; UserError if unsure."""
+    """csv, uff, sdf or run from the file's first bytes and its name; UserError if unsure.
+
+    The content decides first (HDF5 signature: run; "B\\0" and a plausible SDF FILE_HDR:
+    sdf; a UFF "-1" line: uff), then the name (.sdf, UFF and text suffixes)."""
     from daq.formats.imported import check_regular_file, show_path
 
     check_regular_file(path)
@@ -134,6 +149,8 @@ def guess_format(path: Path) -> str:
         raise UserError(f"{show_path(path)}: cannot read it ({exc.strerror or exc})") from None
     if head.startswith(HDF5_SIGNATURE):
         return "run"
+    if looks_like_sdf(head):
+        return "sdf"
     suffix = path.suffix.lower()
     if (
         suffix in UFF_SUFFIXES
@@ -141,11 +158,25 @@ def guess_format(path: Path) -> str:
         or head.lstrip(b" ").startswith(b"-1\r")
     ):
         return "uff"
+    if suffix in SDF_SUFFIXES:
+        return "sdf"
     if suffix in TEXT_SUFFIXES:
         return "csv"
     raise UserError(
-        f"{show_path(path)}: cannot tell its format from its name or content; give --format csv, uff or run"
+        f"{show_path(path)}: cannot tell its format from its name or content; "
+        "give --format csv, uff, sdf or run"
     )
+
+
+def looks_like_sdf(head: bytes) -> bool:
+    """``head`` (a file's first bytes) starts with SDF's "B\\0" and a FILE_HDR record of
+    revision 1-3 whose size is one a FILE_HDR has (64 or 80 bytes, or more)."""
+    if len(head) < 10 or not head.startswith(b"B\0"):
+        return False
+    kind = int.from_bytes(head[2:4], "big", signed=True)
+    size = int.from_bytes(head[4:8], "big", signed=True)
+    revision = int.from_bytes(head[8:10], "big", signed=True)
+    return kind == 10 and 0 <= revision <= 3 and size >= 64
 
 
 def sha256_of(path: Path) -> tuple[str, int]:
@@ -170,6 +201,10 @@ def _read(file: Path, chosen: str, columns: str | None, force_unit: str, respons
         from daq.formats.csv_text import read_csv
 
         return read_csv(file, columns, force_unit, response_unit)
+    if chosen == "sdf":
+        from daq.formats.sdf.run_import import read_sdf_run
+
+        return read_sdf_run(file)
     from daq.formats.uff58 import read_uff
 
     return read_uff(file)
@@ -191,6 +226,7 @@ def _from_run_file(file: Path) -> dict[str, Any]:
         "hits": other.hits,
         "analyzer": other.analyzer,
         "measured_frfs": other.measured_frfs,
+        "spectra": other.spectra,
         "details": {
             "run_id": other.run_id,
             "kind": other.kind,

@@ -168,7 +168,7 @@ def show(
     store: StoreOption = None,
     as_json: JsonOption = False,
 ) -> None:
-    """Show what one run holds: metadata, hits, analyzer data."""
+    """Show what one run holds: metadata, hits, FRFs, spectra."""
     from daq.store import open_run
 
     the_store, source = _store(store)
@@ -191,6 +191,18 @@ def _frf_dict(frf) -> dict[str, Any] | None:
         "coherence": frf.coherence is not None,
         "labels": list(frf.labels),
     }
+
+
+def _spectra_dict(spectra) -> dict[str, Any] | None:
+    if spectra is None:
+        return None
+    lines = spectra.frequency_hz
+    return {
+        "n_traces": spectra.n_traces, "n_lines": spectra.n_lines,
+        "f_min_hz": float(lines[0]), "f_max_hz": float(lines[-1]),
+        "complex": bool(spectra.values.dtype.kind == "c"),
+        "kinds": list(spectra.kinds), "units": list(spectra.units), "labels": list(spectra.labels),
+    }  # fmt: skip
 
 
 def run_dict(run, path: Path) -> dict[str, Any]:
@@ -240,6 +252,7 @@ def run_dict(run, path: Path) -> dict[str, Any]:
         "hits": hits_data,
         "analyzer": _frf_dict(run.analyzer),
         "measured_frf": _frf_dict(run.measured_frfs),
+        "spectra": _spectra_dict(run.spectra),
     }
 
 
@@ -312,6 +325,19 @@ def _print_run(d: dict[str, Any], store: str) -> None:
             f"{frf['n_frf']} FRF(s) x {frf['n_lines']} lines, {frf['f_min_hz']:g}-{frf['f_max_hz']:g} Hz, "
             f"{coherence}; labels: {', '.join(_one_line(x) for x in frf['labels'])}",
         )
+    spectra = d["spectra"]
+    if spectra is None:
+        field("spectra", "none")
+        return
+    traces = [
+        f"{_one_line(label)} ({kind}, {_one_line(unit) or 'dimensionless'})"
+        for label, kind, unit in zip(spectra["labels"], spectra["kinds"], spectra["units"], strict=True)
+    ]
+    field(
+        "spectra",
+        f"{spectra['n_traces']} x {spectra['n_lines']} lines, "
+        f"{spectra['f_min_hz']:g}-{spectra['f_max_hz']:g} Hz: {', '.join(traces)}",
+    )
 
 
 # --------------------------------------------------------------------- verify

@@ -20,7 +20,7 @@ from typing import IO, Any
 import numpy as np
 
 from daq.errors import UserError
-from daq.store.model import Hits, MeasuredFrf
+from daq.store.model import Hits, MeasuredFrf, Spectra
 
 # 512 MiB: far above any real impact test (100 hits x 65536 samples as text is ~20 MiB),
 # low enough that reading the whole file into memory cannot exhaust a lab PC.
@@ -29,19 +29,22 @@ MAX_IMPORT_BYTES = 512 * 2**20
 
 @dataclass
 class ImportedData:
-    """Time records and/or FRFs read from a foreign file, in SI units.
+    """Time records, FRFs and/or spectra read from a foreign file, in SI units.
 
     hits: the time records (all accepted, no overloads, peak_force_n = max |force| per
         hit, timestamp_utc = the file's modification time), or None.
     measured_frfs: FRFs in (m/s^2)/N with coherence when the file has it, or None.
-    format: "csv" or "uff".
+    format: "csv", "uff" or "sdf".
     details: JSON-able notes for the run's provenance (columns, units, counts...).
+    spectra: spectra that are not FRFs (power, linear, cross, coherence alone), in SI
+        units where known, or None.
     """
 
     hits: Hits | None
     measured_frfs: MeasuredFrf | None
     format: str
     details: dict[str, Any] = field(default_factory=dict)
+    spectra: Spectra | None = None
 
 
 def show_path(path: Path | str) -> str:

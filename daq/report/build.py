@@ -18,7 +18,10 @@ def build_report(store_dir: Path, run_id: str) -> tuple[str, dict[str, bytes]]:
     from daq.store import Store
 
     the_store = Store(store_dir)
-    analyze_stored(store_dir, run_id, AnalysisOptions())
+    try:
+        analyze_stored(store_dir, run_id, AnalysisOptions())
+    except ValueError as exc:  # e.g. a run of spectra alone: say which run has nothing to show
+        raise ValueError(f"run {run_id}: {exc}") from None
     the_run = the_store.open(run_id)
     result = the_store.read_result(run_id, RESULT_NAME)
     pngs = {

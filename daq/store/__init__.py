@@ -15,7 +15,7 @@ docs/run-format.md documents the file layout.
 from daq.store.errors import ConfigError, StoreError
 from daq.store.ids import new_run_id, validate_run_id
 from daq.store.layout import SCHEMA_NAME, SCHEMA_VERSION
-from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample
+from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample, Spectra
 from daq.store.reader import RunSummary, open_run, read_summary
 from daq.store.results import read_result, write_result
 from daq.store.store import Store, resolve_store_dir
@@ -32,6 +32,7 @@ __all__ = [
     "Run",
     "RunSummary",
     "Sample",
+    "Spectra",
     "Store",
     "StoreError",
     "new_run_id",

@@ -19,7 +19,7 @@ from daq.store.h5io import (
     get_text,
     get_text_array,
 )
-from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample
+from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample, Spectra
 
 
 def check_schema(f: h5py.File) -> int:
@@ -62,6 +62,9 @@ def decode_run(f: h5py.File) -> Run:
     analyzer = _decode_frf(group) if group is not None else None
     group = get_group(f, layout.MEASURED_FRF, required=False)
     measured = _decode_frf(group) if group is not None else None
+    # Optional, and absent from runs written before spectra had a place: None then.
+    group = get_group(f, layout.SPECTRA, required=False)
+    spectra = _decode_spectra(group) if group is not None else None
     return _build(
         Run,
         **{n: get_text(entry, n) for n in ("run_id", "kind", "start_time", "end_time", "operator", "note")},
@@ -73,6 +76,7 @@ def decode_run(f: h5py.File) -> Run:
         hits=hits,
         analyzer=analyzer,
         measured_frfs=measured,
+        spectra=spectra,
     )
 
 
@@ -116,6 +120,17 @@ def _decode_frf(group: h5py.Group) -> MeasuredFrf:
         frequency_hz=get_array(group, layout.D_FREQUENCY, "f", 1),
         frf=get_array(group, layout.D_FRF, "c", 2),
         coherence=get_array(group, layout.D_COHERENCE, "f", 2, required=False),
+        labels=get_text_array(group, layout.D_LABEL),
+    )
+
+
+def _decode_spectra(group: h5py.Group) -> Spectra:
+    return _build(
+        Spectra,
+        frequency_hz=get_array(group, layout.D_FREQUENCY, "f", 1),
+        values=get_array(group, layout.D_SPECTRUM, "fc", 2),
+        kinds=get_text_array(group, layout.D_KIND),
+        units=get_text_array(group, layout.D_UNIT),
         labels=get_text_array(group, layout.D_LABEL),
     )
 

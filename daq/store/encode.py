@@ -7,7 +7,7 @@ import numpy as np
 
 from daq.store import layout
 from daq.store.h5io import add_dataset, compact_json, nx_group, set_json, set_number, set_text, text_array
-from daq.store.model import SOFTWARE, Hits, MeasuredFrf, Run
+from daq.store.model import SOFTWARE, Hits, MeasuredFrf, Run, Spectra
 
 FRF_UNITS = "(m/s^2)/N"
 
@@ -25,8 +25,18 @@ def encode_run(f: h5py.File, run: Run) -> None:
     set_number(entry, "complete", run.complete)
     set_text(entry, layout.ATTR_SOFTWARE, run.software)
     set_json(entry, layout.ATTR_PROVENANCE, run.provenance)
-    # What a viewer plots when the file is opened: the hits if there are any, else the FRFs.
-    default = "hits" if run.hits else "analyzer" if run.analyzer else "measured_frf"
+    # What a viewer plots when the file is opened: the hits if there are any, else the
+    # FRFs, else the spectra.
+    default = next(
+        name
+        for name, part in (
+            ("hits", run.hits),
+            ("analyzer", run.analyzer),
+            ("measured_frf", run.measured_frfs),
+            ("spectra", run.spectra),
+        )
+        if part is not None
+    )
     set_text(entry, layout.ATTR_DEFAULT, default)
 
     if run.instrument is not None:
@@ -46,6 +56,8 @@ def encode_run(f: h5py.File, run: Run) -> None:
         _encode_frf(entry, "analyzer", run.analyzer, "FRF averaged by the analyzer")
     if run.measured_frfs is not None:
         _encode_frf(entry, "measured_frf", run.measured_frfs, "imported FRF")
+    if run.spectra is not None:
+        _encode_spectra(entry, run.spectra)
 
 
 def _encode_hits(entry: h5py.Group, hits: Hits) -> None:
@@ -85,3 +97,21 @@ def _encode_frf(entry: h5py.Group, name: str, frf: MeasuredFrf, what: str) -> No
     if frf.coherence is not None:
         add_dataset(group, layout.D_COHERENCE, frf.coherence, "", "coherence")
     add_dataset(group, layout.D_LABEL, text_array(frf.labels), None, "FRF label")
+
+
+def _encode_spectra(entry: h5py.Group, spectra: Spectra) -> None:
+    group = nx_group(entry, "spectra", "NXdata")
+    set_text(group, layout.ATTR_SIGNAL, layout.D_SPECTRUM)
+    group.attrs.create(layout.ATTR_AXES, text_array([layout.D_SPECTRUM_INDEX, layout.D_FREQUENCY]))
+    add_dataset(group, layout.D_FREQUENCY, spectra.frequency_hz, "Hz", "frequency")
+    # One dataset for every trace, so no single `units` attribute fits when the traces
+    # differ: the per-trace units are the `unit` dataset; `units` is set when they agree.
+    units = set(spectra.units)
+    add_dataset(
+        group, layout.D_SPECTRUM, spectra.values, units.pop() if len(units) == 1 else None, "spectrum"
+    )
+    index = np.arange(spectra.n_traces, dtype=np.int64)
+    add_dataset(group, layout.D_SPECTRUM_INDEX, index, None, "spectrum number")
+    add_dataset(group, layout.D_KIND, text_array(spectra.kinds), None, "kind of spectrum")
+    add_dataset(group, layout.D_UNIT, text_array(spectra.units), None, "unit of each spectrum")
+    add_dataset(group, layout.D_LABEL, text_array(spectra.labels), None, "spectrum label")

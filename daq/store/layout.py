@@ -48,6 +48,7 @@ SAMPLE = "entry/sample"
 HITS = "entry/hits"
 ANALYZER = "entry/analyzer"
 MEASURED_FRF = "entry/measured_frf"
+SPECTRA = "entry/spectra"
 
 # --- /entry attributes ------------------------------------------------------
 ENTRY_ATTRS = ("run_id", "kind", "complete", "start_time", "end_time", "operator", "note")
@@ -89,6 +90,13 @@ D_FRF = "frf"  # (n_frf, n_lines) complex128, (m/s^2)/N
 D_COHERENCE = "coherence"  # (n_frf, n_lines) dimensionless
 D_LABEL = "label"  # (n_frf,) UTF-8 text
 D_FRF_INDEX = "frf_index"  # (n_frf,) 0..n-1, the first axis for viewers
+
+# --- /entry/spectra (optional; spectra that are not FRFs) --------------------------
+# D_FREQUENCY and D_LABEL as in the FRF groups, and:
+D_SPECTRUM = "spectrum"  # (n_traces, n_lines) float64 or complex128, in each trace's unit
+D_SPECTRUM_INDEX = "spectrum_index"  # (n_traces,) 0..n-1, the first axis for viewers
+D_KIND = "kind"  # (n_traces,) UTF-8 text: power, linear, cross, coherence, other
+D_UNIT = "unit"  # (n_traces,) UTF-8 text: each trace's unit ("" for coherence)
 
 # --- result files ---------------------------------------------------------------
 RESULT_GROUP = "result"

@@ -118,12 +118,7 @@ class MeasuredFrf:
     labels: list[str]
 
     def __post_init__(self) -> None:
-        freq = _array(self.frequency_hz, "frf.frequency_hz", "fiu", None, np.float64)
-        if freq.ndim != 1 or freq.size == 0:
-            raise ValueError(f"frf.frequency_hz must be a non-empty 1-D array, got shape {freq.shape}")
-        if not np.all(np.isfinite(freq)) or np.any(np.diff(freq) <= 0):
-            raise ValueError("frf.frequency_hz must be finite and strictly increasing")
-        self.frequency_hz = freq
+        self.frequency_hz = freq = _frequency_axis(self.frequency_hz, "frf.frequency_hz")
         frf = _array(self.frf, "frf.frf", "fiuc", None, np.complex128)
         if frf.ndim != 2 or frf.shape[0] == 0 or frf.shape[1] != freq.size:
             raise ValueError(f"frf.frf must have shape (n_frf >= 1, {freq.size}), got {frf.shape}")
@@ -139,6 +134,54 @@ class MeasuredFrf:
     @property
     def n_lines(self) -> int:
         return int(self.frf.shape[1])
+
+
+SPECTRUM_KINDS = ("power", "linear", "cross", "coherence", "other")
+
+
+@dataclass(eq=False)
+class Spectra:
+    """Spectra that are not FRFs: auto-power, linear and cross spectra, coherence alone.
+
+    frequency_hz: (n_lines,) Hz, strictly increasing.
+    values: (n_traces, n_lines) float64, or complex128 (e.g. when a cross spectrum is
+        among them; every trace then has the same dtype).
+    kinds: n_traces of SPECTRUM_KINDS ("power", "linear", "cross", "coherence", "other").
+    units: n_traces unit texts: SI where the source's unit is known ("V^2", "N^2",
+        "(m/s^2)^2", "V", "N", "m/s^2"; "" for coherence), else the source's label verbatim.
+    labels: n_traces names, e.g. the SDF trace title "Pwr Spec".
+    """
+
+    frequency_hz: np.ndarray
+    values: np.ndarray
+    kinds: list[str]
+    units: list[str]
+    labels: list[str]
+
+    def __post_init__(self) -> None:
+        self.frequency_hz = _frequency_axis(self.frequency_hz, "spectra.frequency_hz")
+        values = np.asarray(self.values)
+        if values.dtype not in (np.float64, np.complex128):
+            raise ValueError(f"spectra.values must be float64 or complex128, got {values.dtype}")
+        if values.ndim != 2 or values.shape[0] == 0 or values.shape[1] != self.frequency_hz.size:
+            n_lines = self.frequency_hz.size
+            raise ValueError(f"spectra.values must have shape (n_traces >= 1, {n_lines}), got {values.shape}")
+        self.values = np.ascontiguousarray(values)
+        n = values.shape[0]
+        self.kinds = [str(k) for k in _text_array(self.kinds, "spectra.kinds", n)]
+        for kind in self.kinds:
+            if kind not in SPECTRUM_KINDS:
+                raise ValueError(f"spectra.kinds: {kind!r} is not one of {', '.join(SPECTRUM_KINDS)}")
+        self.units = [str(u) for u in _text_array(self.units, "spectra.units", n)]
+        self.labels = [str(x) for x in _text_array(self.labels, "spectra.labels", n)]
+
+    @property
+    def n_traces(self) -> int:
+        return int(self.values.shape[0])
+
+    @property
+    def n_lines(self) -> int:
+        return int(self.values.shape[1])
 
 
 @dataclass(eq=False)
@@ -194,7 +237,7 @@ class Sample:
 
 @dataclass(eq=False)
 class Run:
-    """One impact test (or one imported FRF set) as stored on disk.
+    """One impact test (or one imported FRF or spectrum set) as stored on disk.
 
     complete: False when the run was sealed after an interruption (listed as incomplete).
     start_time, end_time: ISO 8601 UTC, e.g. "2026-11-23T10:15:03.123Z".
@@ -202,7 +245,9 @@ class Run:
         simulator scenario and seed...
     hits: None for a run without time records (e.g. imported FRFs).
     analyzer: the averaged FRF/coherence the analyzer itself computed, if read.
-    measured_frfs: FRFs imported from elsewhere (UFF 58), if any.
+    measured_frfs: FRFs imported from elsewhere (UFF 58, SDF), if any.
+    spectra: spectra that are not FRFs (power, linear, cross, coherence alone), if any;
+        kept, shown and exported, but nothing to identify modes from.
     """
 
     run_id: str
@@ -219,6 +264,7 @@ class Run:
     hits: Hits | None = None
     analyzer: MeasuredFrf | None = None
     measured_frfs: MeasuredFrf | None = None
+    spectra: Spectra | None = None
 
     def __post_init__(self) -> None:
         if not is_run_id(self.run_id):
@@ -241,12 +287,13 @@ class Run:
             ("hits", Hits),
             ("analyzer", MeasuredFrf),
             ("measured_frfs", MeasuredFrf),
+            ("spectra", Spectra),
         ):
             value = getattr(self, name)
             if value is not None and not isinstance(value, cls):
                 raise ValueError(f"run.{name} must be a {cls.__name__} or None, got {type(value).__name__}")
-        if self.hits is None and self.analyzer is None and self.measured_frfs is None:
-            raise ValueError("a run needs hits, an analyzer FRF or measured FRFs: it has none")
+        if all(getattr(self, n) is None for n in ("hits", "analyzer", "measured_frfs", "spectra")):
+            raise ValueError("a run needs hits, an analyzer FRF, measured FRFs or spectra: it has none")
 
 
 def check_iso_utc(text: object, what: str) -> str:
@@ -278,6 +325,16 @@ def _text_array(values: object, what: str, n: int) -> np.ndarray:
     for i, item in enumerate(items):
         _text(item, f"{what}[{i}]")  # np.str_ is a str too
     return np.array([str(item) for item in items], dtype=str) if n else np.array([], dtype=str)
+
+
+def _frequency_axis(value: object, what: str) -> np.ndarray:
+    """(n_lines,) float64 Hz, non-empty, finite and strictly increasing, else ValueError."""
+    freq = _array(value, what, "fiu", None, np.float64)
+    if freq.ndim != 1 or freq.size == 0:
+        raise ValueError(f"{what} must be a non-empty 1-D array, got shape {freq.shape}")
+    if not np.all(np.isfinite(freq)) or np.any(np.diff(freq) <= 0):
+        raise ValueError(f"{what} must be finite and strictly increasing")
+    return freq
 
 
 def _finite_float(value: object, what: str, positive: bool = False) -> float:
