@@ -14,6 +14,7 @@ lost link); what cannot be repeated, or keeps failing, ends in a clear error.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import threading
@@ -22,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
-from drivers.dialects import Dialect
+from drivers.dialects import Dialect, Geometry
 from drivers.errors import (
     ConnectionLost,
     DriverError,
@@ -274,6 +275,22 @@ class SignalAnalyzer:
 
     def read_settings(self) -> ImpactSettings:
         raise NotImplementedError
+
+    @staticmethod
+    def fit_to_span(settings: ImpactSettings, geometry: Geometry, span_hz: float) -> ImpactSettings:
+        """``settings`` for the span the analyzer made of the one asked: windows and
+        pre-trigger left to their defaults follow its record (a zoom center that does not
+        fit it is left for the analyzer to refuse); ValueError if the pre-trigger is longer
+        than that record."""
+        with contextlib.suppress(ValueError):
+            settings = settings.sized_for(geometry.lines, span_hz)
+        record = geometry.record_length_s(span_hz)
+        if settings.pre_trigger_s > record * (1 + 1e-9):
+            raise ValueError(
+                f"pre-trigger {settings.pre_trigger_s:g} s is longer than the {record:g} s record "
+                f"of the {span_hz:g} Hz span the analyzer chose"
+            )
+        return settings
 
     def start(self) -> None:
         """Clear the average and arm the trigger; InstrumentError if it refuses."""

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from drivers.record import MAX_SPAN_HZ
+from drivers.reply_values import typed_value
 
 Kind = Literal["action", "setting", "query"]
 ArgumentKind = Literal["quantity", "integer", "flag", "choice"]
@@ -254,31 +255,7 @@ def parse_reply(query: str, reply: str) -> float | int | bool | str:
     (``FRS?`` -> float, SI) or a query (``AVMD?`` -> "STBL"). ValueError with the
     reason when the reply does not fit; the driver turns it into a ProtocolError."""
     entry = _reply_entry(query)
-    kind, choices = entry.reply, entry.reply_choices
-    text = reply.strip()
-    if kind == "text":
-        return text
-    if kind == "choice":
-        if text not in choices:
-            raise ValueError(f"expected one of {', '.join(choices)}")
-        return text
-    if kind == "flag":
-        if text not in ("0", "1"):
-            raise ValueError("expected 0 or 1")
-        return text == "1"
-    try:
-        x = float(text)
-    except ValueError:
-        raise ValueError("expected a number") from None
-    if not math.isfinite(x):
-        raise ValueError("expected a finite number")
-    if kind == "integer":
-        if x != int(x):
-            raise ValueError("expected an integer")
-        return int(x)
-    if kind == "number":
-        return x
-    raise ValueError(f"{query} does not answer one line")
+    return typed_value(reply.strip(), entry.reply, entry.reply_choices, query)
 
 
 def _reply_entry(query: str) -> Mnemonic:

@@ -9,7 +9,6 @@ identification (``HP35660A``, ``HP3562A``) and the record geometry (400 lines an
 
 from __future__ import annotations
 
-import contextlib
 import math
 
 from drivers.analyzer import SignalAnalyzer, Status
@@ -99,16 +98,7 @@ class HPMnemonicAnalyzer(DumpsMixin, SignalAnalyzer):
         # The analyzer rounds the span up; the baseband center follows the span it chose,
         # and the pre-trigger must fit the record of that span.
         actual_span = float(self.read("FRS"))
-        # Windows and pre-trigger left to their defaults follow the record of that span
-        # (a zoom center that does not fit it is left for the analyzer to refuse).
-        with contextlib.suppress(ValueError):
-            settings = settings.sized_for(geometry.lines, actual_span)
-        record = geometry.record_length_s(actual_span)
-        if settings.pre_trigger_s > record * (1 + 1e-9):
-            raise ValueError(
-                f"pre-trigger {settings.pre_trigger_s:g} s is longer than the {record:g} s record "
-                f"of the {actual_span:g} Hz span the analyzer chose"
-            )
+        settings = self.fit_to_span(settings, geometry, actual_span)
         for message in settings.commands(actual_span_hz=actual_span)[3:]:
             self.send(message.decode())
         self.check_errors()

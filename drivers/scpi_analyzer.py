@@ -17,7 +17,6 @@ one asks the analyzer's state and the trace's x values, and builds the header:
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import math
 
@@ -138,16 +137,7 @@ class ScpiAnalyzer(SignalAnalyzer):
         # The analyzer rounds the span up; a baseband center follows the span it chose,
         # and the pre-trigger must fit the record of that span.
         span = float(self.read("SENS:FREQ:SPAN"))
-        # Windows and pre-trigger left to their defaults follow the record of that span
-        # (a zoom center that does not fit it is left for the analyzer to refuse).
-        with contextlib.suppress(ValueError):
-            settings = settings.sized_for(geometry.lines, span)
-        record = geometry.record_length_s(span)
-        if settings.pre_trigger_s > record * (1 + 1e-9):
-            raise ValueError(
-                f"pre-trigger {settings.pre_trigger_s:g} s is longer than the {record:g} s record "
-                f"of the {span:g} Hz span the analyzer chose"
-            )
+        settings = self.fit_to_span(settings, geometry, span)
         self.set("SENS:FREQ:CENT", settings.center_hz if settings.center_hz is not None else span / 2)
         self.set("SENS:FREQ:RES", geometry.lines)
         for ch, setup in ((1, settings.hammer), (2, settings.accelerometer)):

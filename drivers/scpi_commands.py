@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 from typing import Literal
 
 from drivers.commands import number
+from drivers.reply_values import typed_value
 
 Kind = Literal["action", "setting", "query"]
 ArgumentKind = Literal["quantity", "number", "integer", "flag", "choice", "string"]
@@ -379,30 +380,8 @@ def parse_reply(header: str, reply: str) -> float | int | bool | str:
     word or a string's contents. ValueError with the reason when it does not fit."""
     entry = _table_entry(header)
     kind, text = entry.reply, reply.strip()
-    if kind == "text":
-        return text
-    if kind == "choice":
-        if text not in entry.reply_choices:
-            raise ValueError(f"expected one of {', '.join(entry.reply_choices)}")
-        return text
     if kind == "string":
         if len(text) < 2 or text[0] != '"' or text[-1] != '"':
             raise ValueError("expected a string in double quotes")
         return text[1:-1].replace('""', '"')
-    if kind == "flag":
-        if text not in ("0", "1"):
-            raise ValueError("expected 0 or 1")
-        return text == "1"
-    try:
-        x = float(text)
-    except ValueError:
-        raise ValueError("expected a number") from None
-    if not math.isfinite(x):
-        raise ValueError("expected a finite number")
-    if kind == "integer":
-        if x != int(x) or not re.fullmatch(r"[+-]?\d+", text):
-            raise ValueError("expected an integer (NR1)")
-        return int(x)
-    if kind == "number":
-        return x
-    raise ValueError(f"{header} does not answer one line")
+    return typed_value(text, kind, entry.reply_choices, header, whole_integers=True)

@@ -32,9 +32,7 @@ def test_simulated_capture_seals_a_complete_run(tmp_path, env):
         "capture", "--sim", "--yes", "--hits", "3", "--time-scale", "0", "--store", str(store), env=env
     )
     assert result.returncode == 0, result.stderr
-    assert result.stdout.splitlines()[0].startswith(
-        "Simulated 35660A (realistic beam) at TCPIP::127.0.0.1::"
-    )
+    assert result.stdout.splitlines()[0].startswith("Simulated 35660A (realistic beam) at TCPIP::127.0.0.1::")
     (summary,) = Store(store).list()
     run = Store(store).open(summary.run_id)
     assert summary.run_id in result.stdout
