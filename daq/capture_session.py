@@ -6,6 +6,8 @@ sealing what was taken, however the capture ends. Shared by ``daq capture`` and
 from __future__ import annotations
 
 import contextlib
+import signal
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -57,9 +59,7 @@ def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
     return it. With ``ask`` the operator decides each hit at the keyboard, else the
     job's policy does. Ctrl-C, a dropped link, an instrument error or no answer seal
     the hits so far as an incomplete run and raise UserError saying where it is."""
-    from daq.capture import CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
     from daq.store import Store, StoreError
-    from drivers.errors import DriverError
 
     def seal_partial(why: str, exit_code: int) -> UserError:
         run = job.partial_run()
@@ -74,6 +74,41 @@ def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
         )
 
     hits_wanted = job.hits_wanted
+    with _one_interrupt():
+        return _follow(console, job, store_dir, ask, hits_wanted, seal_partial)
+
+
+@contextlib.contextmanager
+def _one_interrupt():
+    """The first Ctrl-C interrupts the capture; later ones, while the hits so far are
+    sealed, are ignored: a technician pressing twice must not lose the run. Outside the
+    main thread (no signal handlers there) this does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pressed = False
+
+    def on_sigint(signum: int, frame: Any) -> None:
+        nonlocal pressed
+        if pressed:
+            return
+        pressed = True
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield
+    finally:
+        # Once interrupted the command is on its way out with the run sealed: another
+        # Ctrl-C now would only turn its exit status 130 into a death by signal.
+        signal.signal(signal.SIGINT, signal.SIG_IGN if pressed else previous)
+
+
+def _follow(console: Any, job: Any, store_dir: Path, ask: bool, hits_wanted: int, seal_partial: Any) -> Run:
+    from daq.capture import CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
+    from daq.store import Store, StoreError
+    from drivers.errors import DriverError
+
     try:
         for event in job:
             if isinstance(event, Connected):

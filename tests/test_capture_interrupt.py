@@ -17,7 +17,12 @@ from daq.store import Store
 
 
 @pytest.mark.timeout(60)
-def test_ctrl_c_keeps_the_hits_so_far_as_an_incomplete_run(tmp_path):
+@pytest.mark.parametrize(
+    "second_press_s", [None, 0.0, 0.01, 0.2], ids=["once", "twice-0ms", "twice-10ms", "twice-200ms"]
+)
+def test_ctrl_c_keeps_the_hits_so_far_as_an_incomplete_run(tmp_path, second_press_s):
+    """Once, or twice in quick succession (a second Ctrl-C while the hits are sealed
+    must not lose them, nor print a traceback)."""
     store = tmp_path / "runs"
     env = {**os.environ, **ENV, "DAQ_LOCK_DIR": str(tmp_path / "locks"), "DAQ_CONFIG": str(tmp_path / "none")}
     env.pop("DAQ_DEBUG", None)
@@ -38,6 +43,10 @@ def test_ctrl_c_keeps_the_hits_so_far_as_an_incomplete_run(tmp_path):
             decided += line.lstrip().startswith("-> ")
     assert decided == 2, "two hits should have been decided"
     proc.send_signal(signal.SIGINT)
+    if second_press_s is not None:
+        time.sleep(second_press_s)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=20)
     assert proc.returncode == 130, err
     lines = err.splitlines()
