@@ -43,6 +43,7 @@ def open_analyzer(
     seed: int = 0,
     time_scale: float = 0.0,
     dialect: str | None = None,
+    retries: int = 2,
 ) -> SignalAnalyzer:
     """An open driver, of the dialect detection finds (``dialect`` forces one). ``sim``
     runs the simulated analyzer in this process (scenario after the colon, ``seed`` by
@@ -60,8 +61,8 @@ def open_analyzer(
         transport = LoopbackTransport(lambda: InProcessConnection(analyzer), resource, timeout_s)
         transport.open()
         try:
-            return connect(transport, dialect)
+            return connect(transport, dialect, retries=retries)
         except BaseException:
             transport.close()
             raise
-    return open_resource(resource, timeout_s=timeout_s, dialect=dialect)
+    return open_resource(resource, timeout_s=timeout_s, dialect=dialect, retries=retries)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 from typing import Annotated
 
@@ -51,7 +52,7 @@ def check_dialect(dialect: str | None) -> str | None:
         raise UserError(f"--dialect: {exc}", exit_code=2) from None
 
 
-def _open(resource: str | None, timeout: float, dialect: str | None = None):
+def _open(resource: str | None, timeout: float, dialect: str | None = None, retries: int = 2):
     from daq.instrument import configured_resource, open_analyzer
 
     dialect = check_dialect(dialect)
@@ -65,7 +66,7 @@ def _open(resource: str | None, timeout: float, dialect: str | None = None):
     if not timeout > 0:
         raise UserError("--timeout must be positive", exit_code=2)
     try:
-        return open_analyzer(resource, timeout_s=timeout, dialect=dialect)
+        return open_analyzer(resource, timeout_s=timeout, dialect=dialect, retries=retries)
     except ValueError as exc:
         raise UserError(str(exc), exit_code=2) from None
 
@@ -104,9 +105,10 @@ def identify(
     from daq.instrument import configured_resource
 
     with _open(resource, timeout, dialect) as dsa:
+        identification = dsa.identify()  # first: with a forced dialect it checks the reply
         g = dsa.read_settings() if dsa.dialect.family == "scpi" else None
         lines = g.lines if g is not None else dsa.dialect.default_lines
-        print(f"{dsa.identify()} at {configured_resource(resource)}")
+        print(f"{identification} at {configured_resource(resource)}")
         print(f"dialect {dsa.dialect.name}: {dsa.detection}")
         print(f"{lines} lines, {round(2.56 * lines)}-sample records")
 
@@ -151,7 +153,9 @@ def query(
     A DDAN dump prints as a header line and tab-separated columns: x and the value
     (real and imaginary parts for a complex trace).
     """
-    with _open(resource, timeout, dialect) as dsa:
+    # No retries: a query typed by hand that times out was most often refused (its reason
+    # is in the error queue, asked below), and three attempts would triple the wait.
+    with _open(resource, timeout, dialect, retries=0) as dsa:
         from drivers.errors import InstrumentTimeout
 
         try:
@@ -159,13 +163,17 @@ def query(
             if dsa.dialect.family == "hp" and dsa.replies(command) == ["block"] and last == "DDAN":
                 _print_trace(dsa.dump_trace(command), as_json)
                 return
+            if dsa.dialect.family == "scpi" and dsa.replies(command) == ["block"]:
+                values = dsa.query_block(command)
+                print(json.dumps(values.tolist()) if as_json else "\n".join(f"{v:.17g}" for v in values))
+                return
             print(dsa.query(command))
         except ValueError as exc:
             raise UserError(str(exc), exit_code=2) from None
-        except InstrumentTimeout as exc:
+        except InstrumentTimeout:
             # An analyzer that refuses a query stays silent and says why in its error
             # queue; the driver leaves the queue alone, so ask it here.
-            if getattr(exc, "instrument_answers", False):
+            with contextlib.suppress(InstrumentTimeout):
                 dsa.check_errors()
             raise
 

@@ -31,6 +31,7 @@ from drivers.errors import (
     InstrumentTimeout,
     Interrupted,
     ProtocolError,
+    UnknownInstrument,
 )
 from drivers.settings import ImpactSettings
 from drivers.trace import Trace
@@ -81,6 +82,8 @@ class SignalAnalyzer:
     retries : extra attempts for an exchange that failed but may be repeated.
     hit_allowance_s : how long to wait for the technician's hit before giving up.
     detection : how the dialect was chosen, one line (``daq identify`` prints it).
+    forced : the dialect was given, not detected: ``identify`` then checks that the
+        instrument's reply belongs to it.
     """
 
     def __init__(
@@ -90,12 +93,16 @@ class SignalAnalyzer:
         retries: int = 2,
         hit_allowance_s: float = HIT_ALLOWANCE_S,
         detection: str = "",
+        forced: bool = False,
     ) -> None:
         if retries < 0:
             raise ValueError("retries must be >= 0")
         self.transport = transport
         self.dialect = dialect
         self.detection = detection or f"the {dialect.name} dialect was given"
+        self.forced = forced
+        #: The instrument's reply to its identity query, once ``identify`` has asked.
+        self.identification: str | None = None
         self.retries = retries
         self.hit_allowance_s = hit_allowance_s
         #: Set from another thread to end the current and every later wait with Interrupted.
@@ -247,8 +254,29 @@ class SignalAnalyzer:
         raise NotImplementedError
 
     def identify(self) -> str:
-        """The instrument's identification, as it replies to its identity query."""
-        return self.query(self.dialect.identity_query)
+        """The instrument's identification, as it replies to its identity query.
+
+        With a forced dialect, UnknownInstrument if the reply is not one of that
+        dialect's instruments, and a hint in a timeout: the dialect may be wrong."""
+        if not self.forced:
+            self.identification = self.query(self.dialect.identity_query)
+            return self.identification
+        from drivers.dialects import identity_mismatch
+
+        hint = (
+            f"; the {self.dialect.name} dialect was forced (--dialect or $DAQ_DIALECT): "
+            "is it this analyzer's?"
+        )
+        try:
+            reply = self.query(self.dialect.identity_query)
+        except InstrumentTimeout as exc:
+            exc.args = (f"{exc.args[0]}{hint}",)
+            raise
+        mismatch = identity_mismatch(self.dialect, reply)
+        if mismatch:
+            raise UnknownInstrument(f"{self.transport.resource}: {mismatch}{hint}")
+        self.identification = reply
+        return reply
 
     def reset(self) -> None:
         raise NotImplementedError

@@ -90,7 +90,7 @@ class Dialect:
         chosen = self.default_lines if lines is None else lines
         if chosen not in self.line_choices:
             offered = ", ".join(str(n) for n in self.line_choices)
-            raise ValueError(f"the {self.name} dialect resolves {offered} lines, not {lines!r}")
+            raise ValueError(f"the {self.name} dialect offers {offered} lines, not {lines!r}")
         return Geometry(chosen)
 
     def spans_hz(self, count: int = 24) -> tuple[float, ...]:
@@ -112,20 +112,42 @@ DIALECTS: dict[str, Dialect] = {d.name: d for d in (HP35660A, HP3562A, SCPI)}
 
 #: ``ID?`` replies of the HP-mnemonic models, and the dialect each speaks.
 HP_IDENTITIES = {"HP35660A": HP35660A, "HP3562A": HP3562A, "HP3563A": HP3562A}
-#: Models in a SCPI ``*IDN?`` reply (its second field) that speak the SCPI dialect.
-SCPI_MODELS = ("35665A", "35670A")
+#: Models in a SCPI ``*IDN?`` reply (its second field) that speak the SCPI dialect, and
+#: the resolutions each offers (docs/instrument-scpi.md, proj).
+SCPI_MODEL_LINES = {"35665A": (100, 200, 400, 800), "35670A": (100, 200, 400, 800, 1600)}
+SCPI_MODELS = tuple(SCPI_MODEL_LINES)
 
 
 def dialect_named(name: str) -> Dialect:
-    """The dialect ``name`` (case-insensitive; a model name such as 35670A gives its
-    dialect); ValueError naming the choices otherwise."""
+    """The dialect ``name`` (case-insensitive; a model name such as 35670A or 3563A
+    gives its dialect); ValueError naming the choices otherwise."""
     key = name.strip().upper()
     if key in (m.upper() for m in SCPI_MODELS):
         return SCPI
+    if "HP" + key in HP_IDENTITIES:
+        return HP_IDENTITIES["HP" + key]
     for dialect in DIALECTS.values():
         if dialect.name.upper() == key:
             return dialect
-    raise ValueError(f"unknown dialect {name!r}: one of {', '.join(DIALECTS)} (or a model: 35665A, 35670A)")
+    raise ValueError(
+        f"unknown dialect {name!r}: one of {', '.join(DIALECTS)} (or a model: 3563A, 35665A, 35670A)"
+    )
+
+
+def identity_mismatch(dialect: Dialect, reply: str) -> str | None:
+    """None if ``reply`` (to the dialect's identity query) names an instrument that
+    speaks ``dialect``, else why not, one phrase."""
+    if dialect.family == "scpi":
+        fields = [f.strip() for f in reply.split(",")]
+        if len(fields) >= 2 and fields[1].upper() in SCPI_MODELS:
+            return None
+        return f"*IDN? replied {reply!r}, not a {' or '.join(SCPI_MODELS)}"
+    found = HP_IDENTITIES.get(reply.strip().upper())
+    if found is dialect:
+        return None
+    if found is not None:
+        return f"ID? replied {reply!r}, an analyzer of the {found.name} dialect, not the {dialect.name}"
+    return f"ID? replied {reply!r}, not an analyzer of the family ({', '.join(HP_IDENTITIES)})"
 
 
 def model_of(dialect: Dialect, identification: str) -> str:

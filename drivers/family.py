@@ -86,19 +86,20 @@ def detect(transport: Transport, timeout_s: float = DETECT_TIMEOUT_S) -> Detecti
 def connect(transport: Transport, dialect: Dialect | str | None = None, **kwargs: object) -> SignalAnalyzer:
     """The driver for the instrument behind the open ``transport``: of the dialect
     detection finds, or of ``dialect`` (a Dialect or its name) without asking."""
+    forced = dialect is not None
     if dialect is None:
         found = detect(transport)
         chosen, reason = found.dialect, found.reason
     else:
         chosen = dialect if isinstance(dialect, Dialect) else dialect_named(dialect)
-        reason = f"the {chosen.name} dialect was forced (--dialect); nothing was asked"
+        reason = f"the {chosen.name} dialect was forced (--dialect or $DAQ_DIALECT); no detection"
     if chosen.family == "scpi":
         from drivers.scpi_analyzer import ScpiAnalyzer
 
-        return ScpiAnalyzer(transport, chosen, detection=reason, **kwargs)  # type: ignore[arg-type]
+        return ScpiAnalyzer(transport, chosen, detection=reason, forced=forced, **kwargs)  # type: ignore[arg-type]
     from drivers.hp_mnemonic import HPMnemonicAnalyzer
 
-    return HPMnemonicAnalyzer(transport, chosen, detection=reason, **kwargs)  # type: ignore[arg-type]
+    return HPMnemonicAnalyzer(transport, chosen, detection=reason, forced=forced, **kwargs)  # type: ignore[arg-type]
 
 
 def open_analyzer(

@@ -22,9 +22,9 @@ import math
 
 import numpy as np
 
-from drivers.analyzer import STATUS_BITS, SignalAnalyzer, Status, decode_line
+from drivers.analyzer import STATUS_BITS, SignalAnalyzer, Status, ascii_message, decode_line
 from drivers.blocks import decode_values, parse_block_header
-from drivers.dialects import SCPI, Dialect, Geometry
+from drivers.dialects import SCPI, SCPI_MODEL_LINES, Dialect, Geometry
 from drivers.errors import DriverError, InstrumentTimeout, ProtocolError
 from drivers.scpi_commands import (
     EU_LABELS,
@@ -65,6 +65,12 @@ class ScpiAnalyzer(SignalAnalyzer):
         if self._lines is None:
             self._lines = self._read_lines()
         return self.dialect.geometry(self._lines)
+
+    @property
+    def model(self) -> str | None:
+        """The model named by the identification (``35670A``), once ``identify`` asked."""
+        fields = (self.identification or "").split(",")
+        return fields[1].strip().upper() if len(fields) > 1 else None
 
     def replies(self, text: str) -> list[str]:
         return replies(text)
@@ -128,6 +134,10 @@ class ScpiAnalyzer(SignalAnalyzer):
         holds them (span and ranges rounded up). Lines: the settings', or the dialect's
         default; a count the dialect does not offer is refused (ValueError)."""
         geometry = self.dialect.geometry(settings.lines)
+        model = self.model
+        if model in SCPI_MODEL_LINES and geometry.lines not in SCPI_MODEL_LINES[model]:
+            offered = ", ".join(str(n) for n in SCPI_MODEL_LINES[model])
+            raise ValueError(f"the {model} offers {offered} lines, not {geometry.lines}")
         settings = settings.with_lines(geometry.lines)
         self.send("*CLS")  # errors left by earlier commands must not be blamed on these settings
         self.set("INST:SEL", "FFT")
@@ -355,7 +365,18 @@ class ScpiAnalyzer(SignalAnalyzer):
             raise DriverError("engineering units are on for one channel only: configure() sets both")
         return eu_unit if eu else volt_unit
 
-    def _read_block(self, name: str, values: int) -> np.ndarray:
+    def query_block(self, text: str) -> np.ndarray:
+        """Send a query that answers one IEEE 488.2 block (``CALC1:DATA?``) with the
+        data format set to REAL,64 first; its values, float64 (n,)."""
+        message = f"FORM:DATA REAL,64;:{ascii_message(text).decode()}"
+
+        def ask() -> np.ndarray:
+            self.transport.write(message.encode("ascii"))
+            return self._read_block(text, None)
+
+        return self._exchange(text, ask, self.repeatable(text))
+
+    def _read_block(self, name: str, values: int | None) -> np.ndarray:
         """A definite block of ``values`` big-endian float64, read by count, then its LF."""
         head = self.transport.read_exact(2)
         if head[:1] != b"#" or not head[1:2].isdigit() or head[1:2] == b"0":
@@ -363,6 +384,8 @@ class ScpiAnalyzer(SignalAnalyzer):
         try:  # once a block has begun, whatever does not come is a truncated block
             head += self.transport.read_exact(int(head[1:2]))
             header = parse_block_header(head, name)
+            if values is None:  # any whole number of values: the block says how many
+                values = (header.payload_bytes or 0) // 8
             if header.payload_bytes != 8 * values:  # checked before waiting for a payload of that size
                 raise ProtocolError(name, f"expected {values} float64 ({8 * values} bytes)", head)
             payload = self.transport.read_exact(header.payload_bytes)

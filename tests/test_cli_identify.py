@@ -61,7 +61,7 @@ def test_a_forced_dialect_asks_nothing_else(lock_dir):
         # Nothing but ID? reached the instrument: no *IDN?, so no error in its queue.
         errors = invoke_daq("query", "-r", server.resource, "--dialect", "3562A", "ERR?")
     assert result.returncode == 0, result.stderr
-    forced = "dialect 3562A: the 3562A dialect was forced (--dialect); nothing was asked"
+    forced = "dialect 3562A: the 3562A dialect was forced (--dialect or $DAQ_DIALECT); no detection"
     assert result.stdout.splitlines()[1] == forced
     assert errors.stdout.strip().startswith("0,"), errors.stdout
 
@@ -150,3 +150,51 @@ def test_a_silent_instrument_is_one_line(lock_dir):
         result = invoke_daq("identify", "-r", f"TCPIP::127.0.0.1::{stranger.port}::SOCKET", "--timeout", "2")
     assert_one_line_error(result, "no reply to *IDN? nor to ID?")
     assert result.returncode == 1
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(
+    ("model", "forced", "named"),
+    [
+        ("35660A", "3562A", "ID? replied 'HP35660A', an analyzer of the 35660A dialect, not the 3562A"),
+        ("3562A", "35660A", "ID? replied 'HP3562A', an analyzer of the 3562A dialect, not the 35660A"),
+    ],
+)
+def test_a_forced_dialect_the_analyzer_does_not_speak_is_one_line_before_any_hit(
+    lock_dir, model, forced, named
+):
+    with _served(model) as server:
+        identified = invoke_daq("identify", "-r", server.resource, "--dialect", forced)
+        captured = invoke_daq(
+            "capture", "-r", server.resource, "--dialect", forced, "--hits", "2", "--yes",
+            "--store", str(lock_dir / "store"),
+        )  # fmt: skip
+    for result in (identified, captured):
+        assert_one_line_error(result, named, "was forced (--dialect or $DAQ_DIALECT)")
+    assert "Hammer away" not in captured.stdout
+
+
+@pytest.mark.timeout(60)
+def test_a_forced_dialect_on_something_else_entirely_is_refused(lock_dir):
+    with _Stranger(b"ID?", b"<!DOCTYPE HTML>") as stranger:
+        result = invoke_daq(
+            "identify", "-r", f"TCPIP::127.0.0.1::{stranger.port}::SOCKET", "--dialect", "35660A"
+        )
+    assert_one_line_error(result, "ID? replied '<!DOCTYPE HTML>', not an analyzer of the family")
+
+
+@pytest.mark.timeout(60)
+def test_a_forced_scpi_dialect_on_a_mnemonic_analyzer_says_the_dialect_may_be_wrong(lock_dir):
+    with _served("35660A") as server:
+        result = invoke_daq("identify", "-r", server.resource, "--timeout", "1", env={"DAQ_DIALECT": "SCPI"})
+    assert_one_line_error(
+        result, "the SCPI dialect was forced (--dialect or $DAQ_DIALECT): is it this analyzer's?"
+    )
+
+
+@pytest.mark.timeout(30)
+def test_the_3563a_is_a_name_of_the_3562a_dialect(lock_dir):
+    with _served("3562A") as server:
+        result = invoke_daq("identify", "-r", server.resource, "--dialect", "3563A")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[1].startswith("dialect 3562A: ")

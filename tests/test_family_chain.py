@@ -135,4 +135,16 @@ def test_lines_a_model_does_not_offer_are_one_line_before_any_hit(tmp_path):
         "capture", "--sim", "--setup", str(setup), "--hits", "2", "--yes", "--time-scale", "0",
         "--store", str(tmp_path / "store"), env=env,
     )  # fmt: skip
-    assert_one_line_error(result, "the 35660A dialect resolves 400 lines, not 800")
+    assert_one_line_error(result, "the 35660A dialect offers 400 lines, not 800")
+
+
+@pytest.mark.timeout(60)
+def test_a_35665a_refuses_1600_lines_in_one_line_before_any_hit(tmp_path):
+    env = {"DAQ_LOCK_DIR": str(tmp_path)}
+    setup = tmp_path / "setup.toml"
+    setup.write_text("lines = 1600\n", encoding="utf-8")
+    result = invoke_daq(
+        "capture", "--sim", "--model", "35665A", "--setup", str(setup), "--hits", "2", "--yes",
+        "--time-scale", "0", "--store", str(tmp_path / "store"), env=env,
+    )  # fmt: skip
+    assert_one_line_error(result, "the 35665A offers 100, 200, 400, 800 lines, not 1600")

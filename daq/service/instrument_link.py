@@ -65,7 +65,7 @@ class InstrumentLink:
         self.transport_name = ""
         #: The dialect given (--dialect) or found at the first connection.
         self.dialect = dialect
-        self.detection = f"the {dialect} dialect was forced (--dialect)" if dialect else ""
+        self.detection = f"the {dialect} dialect was forced (--dialect or $DAQ_DIALECT)" if dialect else ""
 
     def start(self) -> None:
         """Start the simulator if any, take the instrument's lock (ResourceBusy if

@@ -202,7 +202,7 @@ def test_configure_sizes_the_windows_to_the_4_s_record_of_800_lines():
 
 
 def test_configure_refuses_lines_the_3562a_does_not_offer():
-    with hp3562a([]) as dsa, pytest.raises(ValueError, match="the 3562A dialect resolves 800 lines, not 400"):
+    with hp3562a([]) as dsa, pytest.raises(ValueError, match="the 3562A dialect offers 800 lines, not 400"):
         dsa.configure(ImpactSettings(lines=400))
 
 
