@@ -41,8 +41,12 @@ def nothing_to_identify(reason: str) -> bool:
 
 def window_specs(run: Run) -> tuple[WindowSpec, WindowSpec, str]:
     """(force window, response window, where they came from) for a run's hits: the
-    analyzer's settings as stored, else uniform (an imported record is taken as is)."""
+    analyzer's settings as stored, else the windows an importer read from the file
+    (SDF channel headers), else uniform (an imported record is taken as is)."""
     settings = run.instrument.settings if run.instrument is not None else {}
+    imported = (run.provenance or {}).get("imported_from", {})
+    if not settings and isinstance(imported, dict) and isinstance(imported.get("windows"), dict):
+        settings = imported["windows"]
     specs = []
     for channel in ("hammer", "accelerometer"):
         setup = settings.get(channel) if isinstance(settings, dict) else None
@@ -55,7 +59,8 @@ def window_specs(run: Run) -> tuple[WindowSpec, WindowSpec, str]:
             specs.append(WindowSpec("exponential", exp_decay_s=float(setup["exp_decay_s"])))
         else:
             specs.append(WindowSpec(kind))
-    origin = "analyzer settings" if any(s.kind != "uniform" for s in specs) else "uniform (none recorded)"
+    recorded = "analyzer settings" if run.instrument is not None else "the imported file's channel headers"
+    origin = recorded if any(s.kind != "uniform" for s in specs) else "uniform (none recorded)"
     return specs[0], specs[1], origin
 
 

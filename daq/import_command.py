@@ -94,7 +94,14 @@ def import_file(
     if chosen == "run":
         parts = _from_run_file(file)
     else:
-        data = _read(file, chosen, columns, force_unit, response_unit)
+        try:
+            data = _read(file, chosen, columns, force_unit, response_unit)
+        except MemoryError:
+            # A well-formed file can still decode to more than this machine holds (int16
+            # samples become float64 records four times their size).
+            raise UserError(
+                f"{file}: its data do not fit in this machine's memory once decoded; nothing imported"
+            ) from None
         parts = {
             "hits": data.hits,
             "measured_frfs": data.measured_frfs,
@@ -128,10 +135,21 @@ def import_file(
         )
     for frfs in (run.analyzer, run.measured_frfs):
         if frfs is not None:
-            what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} lines")
+            what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} points")
     if run.spectra is not None:
-        what.append(f"{run.spectra.n_traces} spectra of {run.spectra.n_lines} lines")
+        what.append(f"{run.spectra.n_traces} spectra of {run.spectra.n_lines} points")
     typer.echo(f"Imported {show_path(file.name)} ({chosen}: {', '.join(what)}) as run {run.run_id}: {path}")
+    for warning in unit_warnings(provenance["imported_from"]):
+        typer.echo(f"warning: {warning}", err=True)
+
+
+def unit_warnings(details: dict[str, Any]) -> list[str]:
+    """What an importer kept in units it could not convert to SI (e.g. an SDF channel in
+    volts, the analyzer's engineering units being off), so that the technician hears of it
+    and not only the provenance: the run's datasets are labelled N, m/s^2, (m/s^2)/N."""
+    notes = [v for v in (details.get("time_units") or {}).values() if isinstance(v, str)]
+    notes += [v for v in details.get("frf_units") or [] if isinstance(v, str)]
+    return [f"{note} (stored under the SI label)" for note in notes if "values kept" in note]
 
 
 def guess_format(path: Path) -> str:
@@ -159,6 +177,10 @@ def guess_format(path: Path) -> str:
     ):
         return "uff"
     if suffix in SDF_SUFFIXES:
+        return "sdf"
+    if head.startswith(b"B\0"):
+        # A NUL in the first two bytes is no text file: a damaged SDF file (HP analyzers
+        # name theirs .DAT) gets the SDF reader's reason, not a CSV parse error.
         return "sdf"
     if suffix in TEXT_SUFFIXES:
         return "csv"

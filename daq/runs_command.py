@@ -322,7 +322,7 @@ def _print_run(d: dict[str, Any], store: str) -> None:
         coherence = "with coherence" if frf["coherence"] else "no coherence"
         field(
             name,
-            f"{frf['n_frf']} FRF(s) x {frf['n_lines']} lines, {frf['f_min_hz']:g}-{frf['f_max_hz']:g} Hz, "
+            f"{frf['n_frf']} FRF(s) x {frf['n_lines']} points, {frf['f_min_hz']:g}-{frf['f_max_hz']:g} Hz, "
             f"{coherence}; labels: {', '.join(_one_line(x) for x in frf['labels'])}",
         )
     spectra = d["spectra"]
@@ -335,7 +335,7 @@ def _print_run(d: dict[str, Any], store: str) -> None:
     ]
     field(
         "spectra",
-        f"{spectra['n_traces']} x {spectra['n_lines']} lines, "
+        f"{spectra['n_traces']} x {spectra['n_lines']} points, "
         f"{spectra['f_min_hz']:g}-{spectra['f_max_hz']:g} Hz: {', '.join(traces)}",
     )
 

@@ -251,7 +251,7 @@ def test_show_text(store, env):
     assert NOTE in text
     assert "5: 4 accepted, 1 rejected" in text
     assert "rejected: double hit" in text
-    assert "analyzer      1 FRF(s) x 33 lines" in text
+    assert "analyzer      1 FRF(s) x 33 points" in text
 
 
 @pytest.mark.parametrize(

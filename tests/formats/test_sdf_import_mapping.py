@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_helpers import invoke_daq
 
 from daq.errors import UserError
 from daq.formats.sdf import read_sdf_run
@@ -151,3 +152,12 @@ def test_one_channel_of_time_records_is_refused(tmp_path):
     )
     with pytest.raises(UserError, match="time records are of 1 channel"):
         read_sdf_run(path)
+
+
+def test_time_records_in_volts_are_said_on_stderr_when_imported(tmp_path):
+    path = write(tmp_path, _time_file(VOLT, VOLT, reference=1))
+    result = invoke_daq("import", str(path), "--format", "sdf", "--store", str(tmp_path / "store"))
+    assert result.returncode == 0, result.stderr
+    warnings = result.stderr.splitlines()
+    assert len(warnings) == 2, result.stderr  # force and response, each in volts
+    assert all(w.startswith("warning: channel ") and "(stored under the SI label)" in w for w in warnings)

@@ -108,7 +108,7 @@ def test_importing_it_makes_a_run_of_its_one_power_spectrum(tmp_path):
     shutil.copyfile(REAL, copy)
     result = invoke_daq("import", str(copy), "--store", str(store))
     assert result.returncode == 0, result.stderr
-    assert "(sdf: 1 spectra of 1601 lines)" in result.stdout
+    assert "(sdf: 1 spectra of 1601 points)" in result.stdout
     (run,) = [Store(store).open(s.run_id) for s in Store(store).list()]
     assert (run.hits, run.analyzer, run.measured_frfs) == (None, None, None)
     assert run.spectra.kinds == ["power"]

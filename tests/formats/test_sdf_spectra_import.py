@@ -35,7 +35,7 @@ def imported(tmp_path_factory):
 
 def test_the_import_line_names_the_spectrum(imported):
     _store, run_id, stdout = imported
-    assert stdout.startswith(f"Imported SDF3KHZ.DAT (sdf: 1 spectra of 1601 lines) as run {run_id}: ")
+    assert stdout.startswith(f"Imported SDF3KHZ.DAT (sdf: 1 spectra of 1601 points) as run {run_id}: ")
     assert stdout.count("\n") == 1
 
 
@@ -81,7 +81,7 @@ def test_export_as_sdf_then_import_gives_the_same_spectrum(imported, tmp_path):
     other = tmp_path / "other-store"
     result = invoke_daq("import", str(out), "--store", str(other))
     assert result.returncode == 0, result.stderr
-    assert "(sdf: 1 spectra of 1601 lines)" in result.stdout
+    assert "(sdf: 1 spectra of 1601 points)" in result.stdout
     first = Store(store).open(run_id).spectra
     (summary,) = Store(other).list()
     again = Store(other).open(summary.run_id).spectra
@@ -156,7 +156,7 @@ def test_runs_show_and_list(imported):
     assert (shown["hits"], shown["measured_frf"], shown["n_hits"]) == (None, None, 0)
     text = invoke_daq("runs", "show", run_id, "--store", str(store))
     assert text.returncode == 0, text.stderr
-    assert "spectra       1 x 1601 lines, 0-12800 Hz: Pwr Spec (power, V^2)" in text.stdout
+    assert "spectra       1 x 1601 points, 0-12800 Hz: Pwr Spec (power, V^2)" in text.stdout
     listed = invoke_daq("runs", "list", "--store", str(store))
     assert listed.returncode == 0
     assert run_id in listed.stdout

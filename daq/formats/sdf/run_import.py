@@ -177,8 +177,39 @@ def _hits(path, name, sdf, notes: Notes, stamp, details) -> tuple[Any, str]:
         zoom=force_y.dtype.kind == "c",
         force_channel=sdf.channels[force].label,
         response_channel=sdf.channels[response].label,
+        windows={
+            "hammer": _window_setting(sdf.channels[force].window, notes, "force"),
+            "accelerometer": _window_setting(sdf.channels[response].window, notes, "response"),
+        },
     )
     return make_hits(path, force_y, response_y, rate, start, center, stamp, notes.rejected), ""
+
+
+#: SDF window types as the analyzer's window mnemonics (the analysis knows these five).
+_WINDOW_MNEMONICS = {
+    codes.UNIFORM_WINDOW: "UNIF", 1: "HANN", 2: "FLAT", codes.FORCE_WINDOW: "FORC",
+    codes.EXPONENTIAL_WINDOW: "EXPO",
+}  # fmt: skip
+
+
+def _window_setting(window: Any, notes: Notes, role: str) -> dict[str, Any]:
+    """A channel's window as the run's analysis reads an analyzer's settings: mnemonic,
+    force width (the SDF truncation) and exponential time constant, s. Our own export's
+    exact time constant (its comment) beats the header's float32. Unknown types: {}."""
+    mnemonic = _WINDOW_MNEMONICS.get(window.type)
+    if mnemonic is None:
+        return {}
+    out: dict[str, Any] = {"window": mnemonic}
+    if mnemonic == "FORC" and math.isfinite(window.trunc) and window.trunc > 0:
+        out["force_width_s"] = float(window.trunc)
+    elif mnemonic == "EXPO":
+        exact = _number(notes.keys.get("exp_decay_s")) if role == "response" else math.nan
+        decay = exact if math.isfinite(exact) and exact > 0 else float(window.time_const)
+        if math.isfinite(decay) and decay > 0:
+            out["exp_decay_s"] = decay
+    if mnemonic in ("FORC", "EXPO") and len(out) == 1:
+        return {}  # a force or exponential window without its parameter cannot be undone
+    return out
 
 
 def _exact_axis(notes: Notes, start: float, step: float, details: dict) -> tuple[float, float]:
