@@ -44,7 +44,7 @@ def window_specs(run: Run) -> tuple[WindowSpec, WindowSpec, str]:
     analyzer's settings as stored, else the windows an importer read from the file
     (SDF channel headers), else uniform (an imported record is taken as is)."""
     settings = run.instrument.settings if run.instrument is not None else {}
-    imported = (run.provenance or {}).get("imported_from", {})
+    imported = (getattr(run, "provenance", None) or {}).get("imported_from", {})
     if not settings and isinstance(imported, dict) and isinstance(imported.get("windows"), dict):
         settings = imported["windows"]
     specs = []
