@@ -1,4 +1,5 @@
-"""Transports (pyvisa / pyvisa-py, pyserial Prologix) and the HP 35660A driver.
+"""Transports (pyvisa / pyvisa-py, pyserial Prologix) and the driver of the HP dynamic
+signal analyzer family (35660A, 3562A, 35665A/35670A: drivers/family.py).
 
 Knows bytes and commands, nothing about HDF5 or beams."""
 
