@@ -16,54 +16,27 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from fault_bench import TRANSPORTS, Bench, bench_factory, outcome_of, recoveries
 
 from drivers.errors import DriverError, InstrumentError, InstrumentTimeout, ProtocolError
 from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
 from sims.instrument import Analyzer
-from sims.prologix import PrologixPty
-from sims.sources import PhysicsSource
-from sims.tcp_server import TcpServer
 from sims.units import format_number
 
-TRANSPORTS = ("tcp", "prologix")
+#: What each model answers to ID? (docs/dialects.md).
+IDENTITY = {"35660A": "HP35660A", "3562A": "HP3562A"}
 #: A short driver timeout keeps the failing paths quick; the simulator answers at once.
 TIMEOUT_S = 0.4
 #: A measurement the analyzer runs at once (time scale 0): 200 Hz span, 2 averages.
 MEASUREMENT = (
     "FRS 200 HZ;TSRC CH1;TLVL 2.25 MV;TDLY -20 MS;WIN1 FORC;WIN2 EXPO;RNG1 20 MV;RNG2 0.5 V;NAVG 2;STBL;STRT"
 )
-
-
-@dataclass
-class Bench:
-    kind: str
-    analyzer: Analyzer
-    resource: str
-    frontend: TcpServer | PrologixPty
-    model: str = "35660A"
-
-    @property
-    def identity(self) -> str:
-        """What the model answers to ID? (docs/dialects.md)."""
-        return "HP" + self.model
-
-    def clear_server_faults(self) -> None:
-        """New TCP connections stop getting the server-wide faults (the pty's session
-        is cleared in-band, ``SIM:FAULT CLEAR``)."""
-        if isinstance(self.frontend, TcpServer):
-            self.frontend.faults = ()
-
-    @property
-    def connections(self) -> int:
-        """TCP connections the server accepted (1 for the pty: it has one session)."""
-        return self.frontend.connections_served if isinstance(self.frontend, TcpServer) else 1
 
 
 @pytest.fixture(autouse=True)
@@ -73,31 +46,10 @@ def _lock_dir(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:
 
 @pytest.fixture(params=["35660A", "3562A"])
 def make_bench(request: pytest.FixtureRequest) -> Iterator:
-    """make_bench(kind, faults=(), measured=True) -> Bench, its front end running; every
-    test runs against both models of the mnemonic dialect (400 and 800 lines)."""
-    frontends: list[TcpServer | PrologixPty] = []
-    model = request.param
-
-    def make(kind: str, faults: Sequence[str] = (), measured: bool = True) -> Bench:
-        analyzer = Analyzer(PhysicsSource("seed", seed=11), time_scale=0.0, model=model)
-        if measured:
-            analyzer.execute(MEASUREMENT)
-            analyzer.execute("STA?")  # time scale 0: every hit is in
-            assert analyzer.state == "done"
-            assert analyzer.average.count == 2
-            assert not analyzer.errors
-        if kind == "tcp":
-            frontend: TcpServer | PrologixPty = TcpServer(analyzer, port=0, faults=list(faults)).start()
-            resource = frontend.resource
-        else:
-            frontend = PrologixPty(analyzer, 11, faults=list(faults)).start()
-            resource = f"PROLOGIX::{frontend.port}::11"
-        frontends.append(frontend)
-        return Bench(kind, analyzer, resource, frontend, model)
-
-    yield make
-    for frontend in frontends:
-        frontend.close()
+    """make_bench(kind, faults=(), measured=True) -> Bench (fault_bench.py); every test
+    runs against both models of the mnemonic dialect (400 and 800 lines)."""
+    with bench_factory(request.param, MEASUREMENT, "STA?") as make:
+        yield make
 
 
 @contextmanager
@@ -106,22 +58,9 @@ def opened(bench: Bench, retries: int = 2, timeout_s: float = TIMEOUT_S) -> Iter
         yield drv
 
 
-def recoveries(caplog: pytest.LogCaptureFixture) -> list[str]:
-    """The driver's 'recovering' warnings: one per retried exchange."""
-    return [r.getMessage() for r in caplog.records if "recovering" in r.getMessage()]
-
-
 def expected_span(analyzer: Analyzer) -> str:
     """FRS? as the analyzer formats its span (computed from its settings, not asked)."""
     return format_number(analyzer.settings.span_hz)
-
-
-def outcome_of(action: Callable[[], object]) -> object:
-    """What ``action()`` returned, or the DriverError it raised (to show a wrong reply)."""
-    try:
-        return action()
-    except DriverError as exc:
-        return exc
 
 
 def assert_frf_exact(drv: HP35660A, analyzer: Analyzer) -> None:
@@ -142,7 +81,7 @@ def test_slow_reply_within_the_timeout_succeeds(make_bench, kind, caplog) -> Non
     bench = make_bench(kind, faults=["slow,delay=0.25"])
     with opened(bench, timeout_s=1.0) as drv:
         t0 = time.monotonic()
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
         assert time.monotonic() - t0 >= 0.2  # the fault was there
         assert_frf_exact(drv, bench.analyzer)
     assert recoveries(caplog) == []
@@ -157,7 +96,7 @@ def test_one_reply_slower_than_the_timeout_is_retried_and_succeeds(make_bench, k
         assert drv.query("FRS?") == expected_span(bench.analyzer)
         assert len(recoveries(caplog)) == 1
         # The late reply was discarded with the link: each query gets its own reply.
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
         assert drv.query("FRS?") == expected_span(bench.analyzer)
         assert_frf_exact(drv, bench.analyzer)
 
@@ -180,7 +119,7 @@ def test_replies_always_slower_than_the_timeout_end_in_a_timeout_and_the_driver_
         # The fault goes away: the next queries get their own replies, not late ones.
         bench.clear_server_faults()
         drv.send("SIM:FAULT CLEAR")
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
         assert drv.query("FRS?") == expected_span(bench.analyzer)
 
 
@@ -252,7 +191,7 @@ def test_blocks_always_truncated_end_in_a_protocol_error(make_bench, kind) -> No
         assert time.monotonic() - t0 < 4.0
         assert "after 3 attempts" in str(caught.value)
         # Line replies are not blocks: the driver talks on.
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
         assert drv.query("FRS?") == expected_span(bench.analyzer)
 
 
@@ -263,7 +202,7 @@ def test_one_garbled_reply_is_retried_for_a_query_and_a_fetch(make_bench, kind, 
     bench = make_bench(kind)
     with opened(bench) as drv:
         drv.send("SIM:FAULT garbage")
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
         assert len(recoveries(caplog)) == 1
         drv.send("SIM:FAULT garbage,nbytes=3")
         assert_frf_exact(drv, bench.analyzer)
@@ -284,7 +223,7 @@ def test_replies_always_garbled_end_in_a_protocol_error(make_bench, kind) -> Non
         assert time.monotonic() - t0 < 4.0
         bench.clear_server_faults()
         drv.send("SIM:FAULT CLEAR")
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
         assert_frf_exact(drv, bench.analyzer)
 
 
@@ -297,7 +236,7 @@ def test_a_dropped_tcp_connection_is_reconnected_and_the_fetch_succeeds(make_ben
         assert_frf_exact(drv, bench.analyzer)
         assert bench.connections == 2  # the server closed the first one
         assert len(recoveries(caplog)) == 1
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
 
 
 @pytest.mark.timeout(10)
@@ -309,7 +248,7 @@ def test_a_dropped_transfer_over_the_pty_behaves_as_a_truncated_one(make_bench, 
     with opened(bench) as drv:
         drv.send("SIM:FAULT drop")
         assert_frf_exact(drv, bench.analyzer)
-        assert drv.identify() == bench.identity
+        assert drv.identify() == IDENTITY[bench.model]
 
 
 @pytest.mark.timeout(10)

@@ -4,35 +4,26 @@ Prologix pty, with the 35670A simulated: each ends in a bounded retry that succe
 with the right data (bit for bit what the simulated analyzer holds) or in a clear
 DriverError, never in a hang and never in wrong data.
 
-As in test_driver_faults.py: a TcpServer arms its ``faults=[...]`` on every new
-connection and the TCP driver reconnects to recover, so a one-shot fault is armed
-in-band (``SIM:FAULT ...``) on the current connection and a lasting one on the
-server; the pty has one session for its life. The measurement behind the fetched
-traces is made on the analyzer directly, so that a fault armed for every reply
-cannot stop the set-up; the driver only fetches.
+The bench, and where faults live, are test_driver_faults.py's (fault_bench.py).
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from fault_bench import TRANSPORTS, Bench, bench_factory, outcome_of, recoveries
 
 from drivers.errors import DriverError, InstrumentError, InstrumentTimeout, ProtocolError
 from drivers.family import open_analyzer
 from drivers.scpi_analyzer import ScpiAnalyzer
 from drivers.settings import ImpactSettings
 from sims.instrument import Analyzer
-from sims.prologix import PrologixPty
-from sims.sources import PhysicsSource
-from sims.tcp_server import TcpServer
 
-TRANSPORTS = ("tcp", "prologix")
 #: A short driver timeout keeps the failing paths quick; the simulator answers at once.
 TIMEOUT_S = 0.4
 IDN = "HEWLETT-PACKARD,35670A,0000A00000,A.00.00"
@@ -44,24 +35,6 @@ MEASUREMENT = (
 )
 
 
-@dataclass
-class Bench:
-    kind: str
-    analyzer: Analyzer
-    resource: str
-    frontend: TcpServer | PrologixPty
-
-    def clear_server_faults(self) -> None:
-        """New TCP connections stop getting the server-wide faults (the pty's session
-        is cleared in-band, ``SIM:FAULT CLEAR``)."""
-        if isinstance(self.frontend, TcpServer):
-            self.frontend.faults = ()
-
-    @property
-    def connections(self) -> int:
-        return self.frontend.connections_served if isinstance(self.frontend, TcpServer) else 1
-
-
 @pytest.fixture(autouse=True)
 def _lock_dir(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:
     monkeypatch.setenv("DAQ_LOCK_DIR", str(tmp_path))
@@ -69,29 +42,9 @@ def _lock_dir(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:
 
 @pytest.fixture
 def make_bench() -> Iterator:
-    """make_bench(kind, faults=(), measured=True) -> Bench, its front end running."""
-    frontends: list[TcpServer | PrologixPty] = []
-
-    def make(kind: str, faults: Sequence[str] = (), measured: bool = True) -> Bench:
-        analyzer = Analyzer(PhysicsSource("seed", seed=11), time_scale=0.0, model="35670A")
-        if measured:
-            analyzer.execute(MEASUREMENT)
-            analyzer.execute("STAT:OPER:COND?")  # time scale 0: every hit is in
-            assert analyzer.state == "done"
-            assert analyzer.average.count == 2
-            assert not analyzer.errors
-        if kind == "tcp":
-            frontend: TcpServer | PrologixPty = TcpServer(analyzer, port=0, faults=list(faults)).start()
-            resource = frontend.resource
-        else:
-            frontend = PrologixPty(analyzer, 11, faults=list(faults)).start()
-            resource = f"PROLOGIX::{frontend.port}::11"
-        frontends.append(frontend)
-        return Bench(kind, analyzer, resource, frontend)
-
-    yield make
-    for frontend in frontends:
-        frontend.close()
+    """make_bench(kind, faults=(), measured=True) -> Bench (fault_bench.py), the 35670A."""
+    with bench_factory("35670A", MEASUREMENT, "STAT:OPER:COND?") as make:
+        yield make
 
 
 @contextmanager
@@ -102,20 +55,9 @@ def opened(bench: Bench, retries: int = 2, timeout_s: float = TIMEOUT_S) -> Iter
         yield drv
 
 
-def recoveries(caplog: pytest.LogCaptureFixture) -> list[str]:
-    return [r.getMessage() for r in caplog.records if "recovering" in r.getMessage()]
-
-
 def expected_span(analyzer: Analyzer) -> str:
     """SENS:FREQ:SPAN? as the page formats it: NR3, 10 significant digits."""
     return f"{analyzer.settings.span_hz:+.9E}"
-
-
-def outcome_of(action: Callable[[], object]) -> object:
-    try:
-        return action()
-    except DriverError as exc:
-        return exc
 
 
 def assert_frf_exact(drv: ScpiAnalyzer, analyzer: Analyzer) -> None:
