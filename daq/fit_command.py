@@ -39,10 +39,26 @@ def fit(
         ),
     ] = "ls",
     seed: Annotated[int, typer.Option(metavar="<int>", help="Random seed of ga and de.")] = 0,
-    psd: Annotated[bool, typer.Option("--psd", help="Keep R positive semi-definite (R = L L^T).")] = False,
+    unconstrained: Annotated[
+        bool,
+        typer.Option(
+            "--unconstrained",
+            help="Fit R's terms freely (the raw fit; R may come out not dissipative). "
+            "By default R = L L^T, positive semi-definite.",
+        ),
+    ] = False,
+    psd: Annotated[
+        bool,
+        typer.Option("--psd", help="R = L L^T: the default now; kept for scripts (no-op)."),
+    ] = False,
     stiffness: Annotated[
-        str, typer.Option(metavar="<scale|none>", help="Scale E to the identified frequencies first.")
-    ] = "scale",
+        str,
+        typer.Option(
+            metavar="<modes|scale|none>",
+            help="Fit the model to the identified frequencies first: modes = one factor on E, then each "
+            "mode at its identified frequency (light damping only); scale = the factor alone.",
+        ),
+    ] = "modes",
     domain: Annotated[
         str,
         typer.Option(
@@ -55,8 +71,14 @@ def fit(
         typer.Option(metavar="<0-100>", help="Also fit from this many random starts: is the optimum global?"),
     ] = 0,
     functions: Annotated[
-        int, typer.Option(metavar="<1-10>", help="Ritz functions of the model: R is N x N.")
-    ] = 3,
+        int | None,
+        typer.Option(
+            metavar="<1-10>",
+            show_default=False,
+            help="Ritz functions of the model: R is N x N [default: one per mode the run's analysis "
+            "identified in the fitted band].",
+        ),
+    ] = None,
     jobs: Annotated[
         int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
     ] = None,
@@ -76,11 +98,13 @@ def fit(
 
     if bool(runs) == all_runs:
         raise UserError("name the runs to fit, or give --all", exit_code=2)
+    if psd and unconstrained:
+        raise UserError("--psd and --unconstrained contradict each other: give one", exit_code=2)
     try:
         options = FitOptions(
             method=method.lower(),
             seed=seed,
-            psd=psd,
+            psd=not unconstrained,
             stiffness=stiffness.lower(),
             n_functions=functions,
             domain=domain.lower(),
@@ -109,59 +133,47 @@ def fit_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | s
         return f"numerical failure ({type(exc).__name__}: {' '.join(str(exc).split())})"
 
 
-def cautions(info: dict) -> list[str]:
-    """What a reader of the fit must not miss: a fit far above the noise, a matrix
-    that is not dissipative, modes it makes unstable or overdamped."""
-    out = []
-    floor = info.get("psi_noise_floor")
-    if floor and info["psi"] > 3 * floor:
-        out.append(
-            f"Psi is {info['psi'] / floor:.0f}x the noise floor: the model does not explain the data "
-            "(missing modes, wrong beam, or a local optimum; try --starts or --method de)"
-        )
-    box = info.get("search_box")
-    needed = info.get("start", {}).get("coded_scale")
-    if box is not None and needed is not None and needed > box:
-        out.append(
-            f"the modal estimate needs terms up to {needed:.4g}, outside the search range "
-            f"[-{box:g}, {box:g}]{' (the seed paper’s GA range)' if info['method'] == 'ga' else ''}: "
-            "this method cannot reach it (use --method ls or de)"
-        )
-    diag = [info["damping_matrix"][i][i] for i in range(len(info["damping_matrix"]))]
-    if any(d < 0 for d in diag):
-        out.append("R has a negative diagonal term: not dissipative (--psd keeps R = L L^T)")
-    zetas = [m["damping_ratio"] for m in info["modes"]]
-    if any(z is None or z <= 0 for z in zetas):
-        out.append("with this R some mode is unstable, undamped or overdamped")
-    return out
-
-
 def print_fit(info: dict) -> None:
     cached = " (cached)" if info.get("cached") else ""
     floor = info.get("psi_noise_floor")
-    floor_text = f" (noise floor {floor:.3g})" if floor is not None else ""
+    floor_text = f" (noise floor {floor:.3g}, {info['psi'] / floor:.3g}x)" if floor else ""
     domain = "time records" if info.get("domain") == "time" else "FRF"
-    psd = " (R = L L^T)" if info["psd"] else ""
+    constraint = info.get("constraint") or ("R = L L^T" if info["psd"] else "unconstrained")
     typer.echo(
-        f"Run {info['run_id']}: {info['method']} on the {domain}{psd}{cached}, "
+        f"Run {info['run_id']}: {info['method']} on the {domain} ({constraint}){cached}, "
         f"Psi = {info['psi']:.4g}{floor_text}, {info['n_evaluations']} evaluations"
     )
-    for caution in cautions(info):
-        typer.echo(f"  caution: {caution}")
+    for caution in info.get("cautions", []):
+        typer.echo(f"caution: {caution}")
+    model = info["model"]
+    if model.get("functions_reason"):
+        typer.echo(f"  {model['functions_reason']}")
     stiffness = info.get("stiffness") or {}
-    if stiffness.get("update") == "scale on E":
+    n_functions = model["ritz_functions"]
+    if stiffness.get("update", "none") != "none":
+        modes = stiffness.get("mode_frequencies") or {}
+        then = ", then each mode at its identified frequency" if modes.get("applied") else ""
+        why = "" if modes.get("applied") or not modes.get("reason") else f" (modes kept: {modes['reason']})"
         typer.echo(
-            f"  model: {info['model']['ritz_functions']} Ritz functions, stiffness scaled by "
-            f"{stiffness['scale']:.5f} to the run's frequencies first (--stiffness scale)"
+            f"  model: {n_functions} Ritz functions, stiffness scaled by "
+            f"{stiffness['scale']:.5f} to the run's frequencies first{then} (--stiffness "
+            f"{info['options'].get('stiffness', 'scale')}){why}"
         )
     else:
-        n_functions = info["model"]["ritz_functions"]
         typer.echo(f"  model: {n_functions} Ritz functions, stiffness as built (--stiffness none)")
     unc = info["uncertainty"]
     by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
     r = info["damping_matrix"]
     n = len(r)
-    typer.echo("  R (N s/m), ± one standard deviation; ? = not determined by the data:")
+    sources = unc.get("std_source") or ["fisher"] * len(unc["names"])
+    from_hits = [name for name, src in zip(unc["names"], sources, strict=True) if src == "hits"]
+    label = (
+        "the Fisher (Cramér-Rao) std"
+        if not from_hits
+        else "the larger of the Fisher std and the per-hit refits' spread / sqrt(n) "
+        f"(per-hit for {', '.join(from_hits)})"
+    )
+    typer.echo(f"  R (N s/m), ± {label}; ? = not determined by the data:")
     for i in range(n):
         cells = []
         for j in range(n):
@@ -177,11 +189,12 @@ def print_fit(info: dict) -> None:
             f"  {check['starts']} random starts: {check['reached_same_psi']} reach the same Psi, {verdict} "
             f"(best {check['best_psi']:.4g})"
         )
-    from_hits = unc.get("std_from_hits")
-    if from_hits:
+    per_hit = unc.get("std_from_hits")
+    if per_hit:
+        fisher = unc.get("std_fisher") or unc["std"]
         ratios = [
             f"{name} {h / f:.2g}" if h is not None and f else f"{name} -"
-            for name, h, f in zip(unc["names"], from_hits, unc["std"], strict=True)
+            for name, h, f in zip(unc["names"], per_hit, fisher, strict=True)
         ]
         typer.echo("  spread of per-hit refits / sqrt(n) over the Fisher std: " + ", ".join(ratios))
     for k, mode in enumerate(info["modes"], 1):

@@ -26,41 +26,50 @@ from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
 
 METHODS = ("modal", "ls", "ga", "de", "pilkey-inman")
-FIT_VERSION = 2
+STIFFNESS = ("modes", "scale", "none")
+FIT_VERSION = 3
+#: The most Ritz functions the default picks (the largest R a fit supports).
+MAX_FUNCTIONS = 10
 
 
 @dataclass(frozen=True)
 class FitOptions:
-    """method : one of METHODS. seed : for ga and de. psd : R = L L^T (dissipative).
-    n_functions : Ritz functions (the size of R). stiffness : "scale" (one factor on E
-    fitted to the identified frequencies) or "none". domain : "time" (eq 17 on the
-    hits) or "frequency" (on the run's FRF); zoom records and FRF-only runs use
-    "frequency" whatever is asked."""
+    """method : one of METHODS. seed : for ga and de. psd : R = L L^T (dissipative;
+    the default; False is ``--unconstrained``). n_functions : Ritz functions (the size
+    of R); None (the default) takes the number of modes the run's analysis identified
+    in the fitted band (``resolve_functions``). stiffness : "modes" (one factor on E,
+    then each paired mode at its identified frequency, under light damping), "scale"
+    (the factor alone) or "none". domain : "time" (eq 17 on the hits) or "frequency"
+    (on the run's FRF); zoom records and FRF-only runs use "frequency" whatever is
+    asked."""
 
     method: str = "ls"
     seed: int = 0
-    psd: bool = False
-    n_functions: int = 3
-    stiffness: str = "scale"
+    psd: bool = True
+    n_functions: int | None = None
+    stiffness: str = "modes"
     domain: str = "time"
     starts: int = 0
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
-        if self.stiffness not in ("scale", "none"):
-            raise ValueError(f"stiffness must be scale or none, got {self.stiffness!r}")
+        if self.stiffness not in STIFFNESS:
+            raise ValueError(f"stiffness must be modes, scale or none, got {self.stiffness!r}")
         if self.domain not in ("time", "frequency"):
             raise ValueError(f"domain must be time or frequency, got {self.domain!r}")
-        if not 1 <= self.n_functions <= 10:
-            raise ValueError(f"n_functions must be 1..10, got {self.n_functions}")
+        if self.n_functions is not None and not 1 <= self.n_functions <= MAX_FUNCTIONS:
+            raise ValueError(f"n_functions must be 1..{MAX_FUNCTIONS}, got {self.n_functions}")
         if not 0 <= self.starts <= 100:
             raise ValueError(f"starts must be 0..100, got {self.starts}")
 
     @property
     def result_name(self) -> str:
-        size = "" if self.n_functions == 3 else f"-n{self.n_functions}"
-        return f"fit-{self.method}{'-psd' if self.psd else ''}{size}"
+        """``fit-<method>`` for the defaults (R = L L^T, the functions the run's modes
+        ask for: the number is in the result), ``-unconstrained`` for a raw R, ``-n<N>``
+        for an explicit number of functions."""
+        size = "" if self.n_functions is None else f"-n{self.n_functions}"
+        return f"fit-{self.method}{'' if self.psd else '-unconstrained'}{size}"
 
 
 def model_of(run: Run, n_functions: int) -> tuple[Any, str]:
@@ -80,36 +89,42 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     """(summary, arrays) of fitting ``run``'s damping matrix with ``options``.
 
     analysis : the run's stored analysis summary (identified modes).
+    The summary records what the defaults resolved to (``model.ritz_functions`` and
+    why, ``options.n_functions``) and the fit's ``cautions`` (``fit_cautions``).
     """
     from analysis import damping
+    from analysis.damping.checks import combined_std
+    from analysis.damping.identifiability import parameter_scale
 
     started = time.perf_counter()
-    model, beam_origin = model_of(run, options.n_functions)
     modes = analysis["modes"]
     ident_f = np.array([m["frequency_hz"] for m in modes], dtype=float)
     ident_z = np.array([np.nan if m["damping_ratio"] is None else m["damping_ratio"] for m in modes])
-    usable = np.isfinite(ident_z)
+    usable = np.isfinite(ident_z) & np.isfinite(ident_f)
     if not usable.any():
         raise ValueError("the run's analysis found no mode with a damping ratio to start from")
-    stiffness_info: dict[str, Any] = {"update": "none"}
-    if options.stiffness == "scale":
+    low, high = _band(run, analysis, options)
+    in_band = usable & (ident_f >= low) & (ident_f <= high)
+    n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions)
+    while True:
+        model, beam_origin, stiffness_info, start, matching, data, domain = _prepare(
+            run, analysis, options, n, ident_f[usable], ident_z[usable]
+        )
         try:
-            model, scale, info = damping.update_stiffness(model, ident_f[usable])
-        except ValueError as exc:
-            raise ValueError(
-                f"{exc}: the run's modes do not look like this beam's ({beam_origin}); "
-                "check its test article, or give --stiffness none"
-            ) from None
-        stiffness_info = {"update": "scale on E", "scale": float(scale), **_jsonable(info)}
-    start, matching = damping.proportional_estimate(model, ident_f[usable], ident_z[usable])
-    data, domain = _data(run, analysis, model, options)
-    _check_band(run, data, domain, model)
+            _check_band(run, data, domain, model)
+            break
+        except ValueError:
+            if options.n_functions is not None or n == 1:
+                raise
+            n -= 1  # the default: the largest model whose modes all lie in the band
+            reason = f"{reason}; {n + 1} would put a model mode outside the band, so {n}"
     objective, residual_fn, batched = _objective(data, domain)
-    n = options.n_functions
+    constraint = "R = L L^T" if options.psd else "unconstrained"
     if options.method == "modal":
         result = _fixed(
             damping, "modal", start, objective, 1, True, "proportional estimate from the identified modes"
         )
+        constraint = "proportional: dissipative by construction"
     elif options.method == "ls":
         result = damping.fit_least_squares(residual_fn, start, psd=options.psd, batched_residuals=batched)
     elif options.method == "ga":
@@ -118,37 +133,39 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
         bounds = _de_bounds(start, options.psd)
         result = damping.fit_de(objective, n, seed=options.seed, psd=options.psd, bounds=bounds)
         result = replace(result, message=f"{result.message} (box ±{bounds[1]:.4g} per term)")
-    else:
-        poles = _identified_poles(ident_f[usable], ident_z[usable])
-        # Not from the proportional estimate: there the poles do not move to first order
-        # with the off-diagonal modal terms, and the iteration cannot leave it.
-        r, info = damping.pilkey_inman(model, poles)
-        message = f"Pilkey-Inman from the identified poles: {_jsonable(info)}"
-        iterations = int(info.get("iterations", 0))
-        result = _fixed(
-            damping, "pilkey-inman", r, objective, iterations, bool(info.get("converged")), message
-        )
+    pole_fit = None
+    if options.method == "pilkey-inman":
+        poles_at = (ident_f[in_band], ident_z[in_band])
+        result, pole_fit = _pilkey_inman(damping, model, *poles_at, objective, options.psd)
     r = np.asarray(result.damping_matrix, dtype=float)
+    r = 0.5 * (r + r.T)
     jac, res = central_jacobian(batched, r)
-    ident = damping.identifiability(jac, res, damping.matrix_to_theta(r), n)
-    per_hit = per_hit_std(data, r) if options.method in ("ls", "de") and domain == "time" else None
+    theta = damping.matrix_to_theta(r)
+    ident = damping.identifiability(jac, res, theta, n)
+    per_hit = per_hit_std(data, r, psd=options.psd) if domain == "time" else None
+    std, std_source = combined_std(ident.std, per_hit)
+    relative_std = std / parameter_scale(theta, n)
     global_check = (
         multi_start_check(residual_fn, batched, r, result.psi, options.starts, options.seed)
         if options.starts
         else None
     )
     implied = damped_modes(model, r)
+    eigenvalues = np.linalg.eigvalsh(r)
     summary = {
         "run_id": run.run_id,
         "method": options.method,
         "engine": result.method,
         "psd": options.psd,
+        "constraint": constraint,
         "domain": domain,
         "success": bool(result.success),
         "message": result.message,
         "damping_matrix": _matrix_json(r),
+        "damping_eigenvalues": [float(v) for v in eigenvalues],
         "psi": float(result.psi),
         "psi_noise_floor": _noise_floor(run, domain, model, start),
+        "relative_residual": _relative_residual(data, domain, res),
         "n_evaluations": int(result.n_evaluations),
         "seconds": time.perf_counter() - started,
         "modes": [
@@ -160,22 +177,29 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
                   "coded_scale": _coded_scale(start, options.psd)},
         "search_box": {"ga": GA_BOUNDS[1], "de": _de_bounds(start, options.psd)[1]}.get(options.method),
         "multi_start": global_check,
+        "pole_fit": pole_fit,
         "stiffness": stiffness_info,
-        "model": {"ritz_functions": n, "beam": beam_origin},
+        "model": {"ritz_functions": n, "beam": beam_origin, "functions_reason": reason,
+                  "functions_requested": options.n_functions, "modes_identified_in_band": int(in_band.sum()),
+                  "band_hz": [float(low), float(high)]},
         "uncertainty": {
             "names": list(ident.names),
-            "std": [_num(v) for v in ident.std],
-            "relative_std": [_num(v) for v in ident.relative_std],
-            "determined": [bool(v) for v in ident.determined],
+            # The larger of the two figures below, term by term (std_source says which).
+            "std": [_num(v) for v in std],
+            "std_source": std_source,
+            "relative_std": [_num(v) for v in relative_std],
+            "determined": [bool(v) for v in relative_std < IDENTIFIED_REL_STD],
+            "std_fisher": [_num(v) for v in ident.std],
             "null_directions": _jsonable(ident.null_directions),
             "noise_std": _num(ident.noise_std),
-            # The Fisher figures checked another way: R refitted to each hit alone; the
-            # spread of those fits over sqrt(n_hits) is the uncertainty of the mean.
+            # R refitted to each hit alone; the spread of those fits over sqrt(n_hits)
+            # is the uncertainty of the mean (None: frequency domain, or < 3 hits).
             "std_from_hits": None if per_hit is None else [_num(v) for v in per_hit],
         },
         "options": {"method": options.method, "seed": options.seed, "psd": options.psd,
                     "n_functions": n, "stiffness": options.stiffness, "domain": options.domain},
     }  # fmt: skip
+    summary["cautions"] = fit_cautions(summary)
     arrays = {"damping_matrix": r, "history": np.asarray(result.history, dtype=float)}
     if domain == "time":
         first = int(np.flatnonzero(run.hits.accepted)[0])
@@ -186,6 +210,182 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     if not arrays["history"].size:
         arrays.pop("history")
     return summary, arrays
+
+
+#: A term whose standard deviation exceeds this fraction of sqrt(|R_ii R_jj|) is not
+#: determined by the data (as analysis.damping.identifiability).
+IDENTIFIED_REL_STD = 0.3
+#: Psi above this multiple of the noise floor: the model does not explain the data.
+PSI_CAUTION = 3.0
+#: Without a noise floor (the FRF), a residual above this fraction of the data is a poor fit.
+RESIDUAL_CAUTION = 0.1
+
+
+def resolve_functions(
+    identified_in_band: int, low_hz: float, high_hz: float, requested: int | None
+) -> tuple[int, str]:
+    """(N, why): the Ritz functions of the fit. An explicit ``requested`` wins;
+    otherwise one per mode the analysis identified in the fitted band, 1..MAX_FUNCTIONS."""
+    band = f"{low_hz:.4g}-{high_hz:.4g} Hz"
+    found = f"{identified_in_band} mode{'' if identified_in_band == 1 else 's'} identified in {band}"
+    if requested is not None:
+        return requested, f"{requested} Ritz function{'' if requested == 1 else 's'} (--functions); {found}"
+    n = min(max(identified_in_band, 1), MAX_FUNCTIONS)
+    note = "" if n == identified_in_band else f" (at least 1, at most {MAX_FUNCTIONS})"
+    return n, f"{n} Ritz function{'' if n == 1 else 's'}: {found}{note}"
+
+
+def _band(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[float, float]:
+    """(low, high) Hz of the data the fit compares with (as ``_data`` picks it)."""
+    hits = run.hits
+    time_ok = hits is not None and not hits.is_zoom and hits.accepted.any()
+    if options.domain == "time" and time_ok:
+        return 0.0, hits.sample_rate_hz / 2.56
+    f = np.asarray(analysis["arrays"]["frequency_hz"], dtype=float)
+    return float(f.min()), float(f.max())
+
+
+def _prepare(
+    run: Run, analysis: dict[str, Any], options: FitOptions, n: int, f_hz: np.ndarray, zeta: np.ndarray
+) -> tuple[Any, ...]:
+    """The model of ``n`` functions with its stiffness updated, the modal start and the data."""
+    from analysis import damping
+
+    model, beam_origin = model_of(run, n)
+    stiffness_info: dict[str, Any] = {"update": "none"}
+    if options.stiffness in ("scale", "modes"):
+        try:
+            model, scale, info = damping.update_stiffness(model, f_hz)
+        except ValueError as exc:
+            raise ValueError(
+                f"{exc}: the run's modes do not look like this beam's ({beam_origin}); "
+                "check its test article, or give --stiffness none"
+            ) from None
+        stiffness_info = {"update": "scale on E", "scale": float(scale), **_jsonable(info)}
+        if options.stiffness == "modes":
+            model, modes_info = damping.update_mode_frequencies(model, f_hz, zeta)
+            stiffness_info["mode_frequencies"] = _jsonable(modes_info)
+            if modes_info["applied"]:
+                stiffness_info["update"] = "scale on E, then each mode's frequency"
+    start, matching = damping.proportional_estimate(model, f_hz, zeta)
+    data, domain = _data(run, analysis, model, options)
+    return model, beam_origin, stiffness_info, start, matching, data, domain
+
+
+def _pilkey_inman(damping: Any, model: Any, f_hz: np.ndarray, zeta: np.ndarray, objective: Any, psd: bool):
+    """The pole iteration from the identified poles in the band, each paired with a model
+    mode (more identified modes than functions: the unpaired ones are left out)."""
+    from analysis.damping.modal_estimate import match_modes
+
+    if not f_hz.size:
+        raise ValueError("no identified mode in the fitted band to take a pole from")
+    model_hz = damping.undamped_modes(model)[0] / (2 * np.pi)
+    paired = match_modes(f_hz, model_hz) >= 0
+    poles = _identified_poles(f_hz[paired], np.clip(zeta[paired], 0.0, 0.999))
+    # Not from the proportional estimate: there the poles do not move to first order
+    # with the off-diagonal modal terms, and the iteration cannot leave it.
+    r, info = damping.pilkey_inman(model, poles, psd=psd)
+    left_out = int((~paired).sum())
+    info = {**_jsonable(info), "poles_used": int(paired.sum()), "poles_left_out": left_out}
+    message = f"Pilkey-Inman from {int(paired.sum())} identified poles" + (
+        f" ({left_out} more identified modes than model modes left out)" if left_out else ""
+    )
+    return replace(
+        _fixed(damping, "pilkey-inman", r, objective, int(info.get("iterations", 0)),
+               bool(info.get("converged")), message),
+        psd=psd,
+    ), info  # fmt: skip
+
+
+def _relative_residual(data: Any, domain: str, residual: np.ndarray) -> float | None:
+    """||measured - model|| / ||measured|| over what the fit compares (weighted FRF lines,
+    or the compared samples)."""
+    if domain == "time":
+        measured = data.response_m_s2.reshape(-1)
+        if data.keep is not None:
+            measured = measured[data.keep]
+    else:
+        weighted = data.frf * data.weights
+        measured = np.concatenate([weighted.real, weighted.imag])
+    norm = float(np.linalg.norm(measured))
+    return _num(np.linalg.norm(residual) / norm) if norm > 0 else None
+
+
+def fit_cautions(summary: dict[str, Any]) -> list[str]:
+    """What a reader of the fit must not miss, each a sentence saying what it means and
+    what to try: a fit far above the noise floor (or leaving much of the data
+    unexplained), fewer functions than identified modes, R not dissipative (a negative
+    diagonal term, a negative eigenvalue), modes it makes unstable or overdamped, a
+    search range that cannot hold the answer, poles the iteration did not match."""
+    out = []
+    n = summary["model"]["ritz_functions"]
+    found = summary["model"].get("modes_identified_in_band", 0)
+    low, high = summary["model"].get("band_hz", (0.0, 0.0))
+    more_modes = (
+        f"{found} modes were identified in {low:.4g}-{high:.4g} Hz but the model has {n} Ritz functions: "
+        f"try --functions {min(found, MAX_FUNCTIONS)}"
+        if found > n
+        else ""
+    )
+    tries = []
+    if more_modes:
+        tries.append(f"--functions {min(found, MAX_FUNCTIONS)} (one function per identified mode)")
+    if summary["options"].get("stiffness") != "modes" and summary["stiffness"].get("update") != "none":
+        tries.append("--stiffness modes (each mode at its identified frequency)")
+    tries.append("--starts 8 or --method de (is the optimum global?)")
+    floor = summary.get("psi_noise_floor")
+    if floor and summary["psi"] > PSI_CAUTION * floor:
+        out.append(
+            f"Psi is {summary['psi'] / floor:.3g}x the noise floor: the model does not explain the data "
+            "(missing modes, frequencies it cannot reach, a wrong beam or a local optimum); "
+            f"try {'; '.join(tries)}"
+        )
+    rel = summary.get("relative_residual")
+    if not floor and rel is not None and rel > RESIDUAL_CAUTION:
+        out.append(
+            f"a poor fit: the model leaves {100 * rel:.3g} % of the data unexplained; try {'; '.join(tries)}"
+        )
+    elif more_modes and not (floor and summary["psi"] > PSI_CAUTION * floor):
+        out.append(f"{more_modes} (the modes beyond the model are left to the residual)")
+    if not summary.get("success", True):
+        out.append(f"the {summary['method']} fit did not converge ({summary.get('message', '')}): "
+                   "its R is where it stopped; try --starts 8 or another --method")  # fmt: skip
+    box = summary.get("search_box")
+    needed = summary.get("start", {}).get("coded_scale")
+    if box is not None and needed is not None and needed > box:
+        out.append(
+            f"the modal estimate needs terms up to {needed:.4g}, outside the search range "
+            f"[-{box:g}, {box:g}]{' (the seed paper’s GA range)' if summary['method'] == 'ga' else ''}: "
+            "this method cannot reach it (use --method ls or de)"
+        )
+    r = np.asarray(summary["damping_matrix"], dtype=float)
+    negative = [f"R{i + 1}{i + 1} = {r[i, i]:.4g}" for i in range(r.shape[0]) if r[i, i] < 0]
+    unconstrained = not summary.get("psd", True) and summary["method"] != "modal"
+    fix = "drop --unconstrained to keep R = L L^T" if unconstrained else "try --unconstrained to compare"
+    if negative:
+        out.append(
+            f"R has a negative diagonal term ({', '.join(negative)}): a motion of that coordinate alone "
+            f"would gain energy, so R is not a physical damping matrix; {fix}"
+        )
+    eigenvalues = np.linalg.eigvalsh(r)
+    if eigenvalues[0] < -1e-9 * max(abs(eigenvalues[-1]), 1e-300):
+        out.append(
+            f"R is not positive semi-definite (smallest eigenvalue {eigenvalues[0]:.4g} N s/m): some motion "
+            f"gains energy, so R fits the data without being a damping matrix (often it bends to absorb "
+            f"the model's frequency errors); {fix}"
+        )
+    zetas = [m["damping_ratio"] for m in summary["modes"]]
+    if any(z is None or z <= 0 or z >= 1 for z in zetas):
+        out.append("with this R some mode is unstable, undamped or overdamped: R does not describe the beam")
+    poles = summary.get("pole_fit") or {}
+    if poles and (poles.get("residual") is None or poles["residual"] > 1e-3):
+        miss = poles.get("residual")
+        out.append(
+            "the pole iteration did not match the identified poles"
+            + (f" (largest relative miss {miss:.2g})" if miss is not None else "")
+            + ": no R of this model has them (noise or a stiffness error); prefer --method ls"
+        )
+    return out
 
 
 def _check_band(run: Run, data: Any, domain: str, model: Any) -> None:

@@ -48,22 +48,47 @@ def test_the_seed_ga_is_reproducible_and_reported_as_it_comes_out(seed_run):
     assert first["n_evaluations"] >= 1500  # the seed's budget: 50 x 30 (+ the first generation)
 
 
-def test_realistic_run_gives_the_first_three_modal_dampings(tmp_path):
+def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(tmp_path):
+    """The defaults (one Ritz function per identified mode, R = L L^T, each mode at its
+    identified frequency) on the realistic beam: all four modes in the 200 Hz band, Psi
+    at the noise floor, R positive semi-definite, no caution."""
     run_id = capture_sim(tmp_path, "realistic", seed=6)
     (info,) = fit_json(tmp_path, run_id)
+    assert info["model"]["ritz_functions"] == 4
+    assert info["model"]["functions_reason"] == "4 Ritz functions: 4 modes identified in 0-200 Hz"
+    assert info["options"]["n_functions"] == 4  # stored as resolved
+    zetas = [m["damping_ratio"] for m in info["modes"]]
+    assert zetas == pytest.approx(REALISTIC_DAMPING_RATIOS, rel=0.15)
+    assert info["psi"] < 1.5 * info["psi_noise_floor"]
+    assert info["psd"] and min(info["damping_eigenvalues"]) >= -1e-9 * max(info["damping_eigenvalues"])
+    assert all(row[i] > 0 for i, row in enumerate(info["damping_matrix"]))
+    assert info["cautions"] == []
+    assert info["stiffness"]["mode_frequencies"]["applied"]
+
+
+def test_realistic_run_old_defaults_stay_reachable_and_say_what_is_wrong(tmp_path):
+    """The former defaults, given explicitly (3 functions, unconstrained, one factor on E):
+    the first three dampings, Psi far above the floor, and cautions that name the fix."""
+    run_id = capture_sim(tmp_path, "realistic", seed=6)
+    old = ("--functions", "3", "--unconstrained", "--stiffness", "scale")
+    (info,) = fit_json(tmp_path, run_id, *old)
     zetas = [m["damping_ratio"] for m in info["modes"]]
     assert zetas == pytest.approx(REALISTIC_DAMPING_RATIOS[:3], rel=0.15)
     assert info["stiffness"]["update"] == "scale on E"
+    assert info["psi"] > 3 * info["psi_noise_floor"]
+    assert any("noise floor" in c and "--functions 4" in c for c in info["cautions"])
+    printed = invoke_daq("fit", run_id, *old, "--store", str(tmp_path)).stdout
+    assert any(line.startswith("caution: Psi is") for line in printed.splitlines())
     # This beam's R has terms far beyond the seed's GA coding range [-10, 10]: the GA
     # is run as the paper has it and says it cannot reach the optimum; DE's box is
     # sized from the modal estimate, so it holds the least-squares optimum.
     fitted = np.abs(np.array(info["damping_matrix"])).max()
     assert fitted > 10
     assert fitted < _de_bounds(np.array(info["start"]["damping_matrix"]), psd=False)[1]
-    result = invoke_daq("fit", run_id, "--method", "ga", "--store", str(tmp_path))
+    result = invoke_daq("fit", run_id, "--method", "ga", *old, "--store", str(tmp_path))
     assert result.returncode == 0, result.stderr
     assert "outside the search range [-10, 10] (the seed paper’s GA range)" in result.stdout
-    ga = fit_json(tmp_path, run_id, "--method", "ga")[0]
+    ga = fit_json(tmp_path, run_id, "--method", "ga", *old)[0]
     assert ga["psi_noise_floor"] == info["psi_noise_floor"]  # one floor per run, whatever the method
 
 

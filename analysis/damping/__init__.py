@@ -20,7 +20,7 @@ from analysis.damping.objective import (
 from analysis.damping.params import matrix_to_theta, n_params, parameter_names, theta_to_matrix
 from analysis.damping.pilkey_inman import pilkey_inman
 from analysis.damping.result import FitResult
-from analysis.damping.stiffness import frequency_errors, update_stiffness
+from analysis.damping.stiffness import frequency_errors, update_mode_frequencies, update_stiffness
 
 __all__ = [
     "FitResult",
@@ -49,5 +49,6 @@ __all__ = [
     "residuals_frf",
     "theta_to_matrix",
     "undamped_modes",
+    "update_mode_frequencies",
     "update_stiffness",
 ]

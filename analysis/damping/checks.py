@@ -37,21 +37,57 @@ def multi_start_check(
     }
 
 
-def per_hit_std(data: BandLimitedData, r: np.ndarray) -> np.ndarray | None:
-    """(P,) standard deviation of each parameter of R over least-squares fits to each
-    accepted hit alone (started from the joint fit), divided by sqrt(n_hits); None
-    with fewer than 3 hits."""
+def per_hit_std(data: BandLimitedData, r: np.ndarray, psd: bool = False) -> np.ndarray | None:
+    """(P,) standard deviation of each term of R (upper triangle, row-major) over
+    least-squares fits to each accepted hit alone (started from the joint fit ``r``,
+    R = L L^T with ``psd``), divided by sqrt(n_hits): the spread of the mean of the
+    refits, the figure comparable with the joint fit's. None with fewer than 3 hits."""
     n_hits = data.force_n.shape[0]
     if n_hits < 3:
         return None
+    start = np.asarray(r, dtype=float)
+    if psd:
+        start = _nearest_psd(start)
     thetas = []
     for k in range(n_hits):
         one = replace(data, force_n=data.force_n[k : k + 1], response_m_s2=data.response_m_s2[k : k + 1])
         fit = fit_least_squares(
-            lambda m, d=one: residuals(d, m), r, batched_residuals=lambda m, d=one: batched_residuals(d, m)
+            lambda m, d=one: residuals(d, m),
+            start,
+            psd=psd,
+            batched_residuals=lambda m, d=one: batched_residuals(d, m),
+            max_nfev=PER_HIT_MAX_NFEV,
         )
         thetas.append(matrix_to_theta(np.asarray(fit.damping_matrix)))
     return np.std(np.array(thetas), axis=0, ddof=1) / np.sqrt(n_hits)
+
+
+#: Iterations (scipy's count) each per-hit refit may take: they start at the joint
+#: optimum, and a flat direction must not make one wander for minutes.
+PER_HIT_MAX_NFEV = 50
+
+
+def _nearest_psd(r: np.ndarray) -> np.ndarray:
+    """``r`` with negative eigenvalues set to zero (a start for R = L L^T)."""
+    w, v = np.linalg.eigh(0.5 * (r + r.T))
+    return (v * np.clip(w, 0.0, None)) @ v.T
+
+
+def combined_std(fisher: np.ndarray, from_hits: np.ndarray | None) -> tuple[np.ndarray, list[str]]:
+    """(P,) the larger of the Fisher (Cramer-Rao) standard deviation and the per-hit
+    refits' figure for each term, and which one it is ("fisher" or "hits").
+
+    The Fisher figure takes the residual as white noise; coloured residuals (the
+    analyzer's band-limited samples, the force's noise seen through H) make the refits
+    spread wider, and the Fisher figure is then too small. Neither is taken alone: the
+    printed uncertainty is never smaller than what refits show. A non-finite figure
+    (an undetermined term) wins over a finite one."""
+    f = np.asarray(fisher, dtype=float)
+    if from_hits is None:
+        return f.copy(), ["fisher"] * f.size
+    h = np.asarray(from_hits, dtype=float)
+    use_hits = np.isfinite(h) & (h > np.where(np.isnan(f), -np.inf, f)) & ~np.isinf(f)
+    return np.where(use_hits, h, f), ["hits" if u else "fisher" for u in use_hits]
 
 
 def central_jacobian(batched: Callable, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -71,6 +71,7 @@ from typing import Any, Literal
 import numpy as np
 
 from analysis.damping.modal_estimate import match_modes, proportional_estimate, undamped_modes
+from analysis.damping.params import matrix_to_theta, theta_to_matrix
 from analysis.modal import damped_modes
 from analysis.structure import StructuralModel
 
@@ -109,15 +110,25 @@ def _cost(poles: np.ndarray, target: np.ndarray) -> float:
 
 
 def _newton_step(
-    model: StructuralModel, damping: np.ndarray, idx: np.ndarray, target: np.ndarray
+    model: StructuralModel,
+    damping: np.ndarray,
+    idx: np.ndarray,
+    target: np.ndarray,
+    low: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Least-squares (minimum-norm) change of the upper triangle of R towards the target poles."""
+    """Least-squares (minimum-norm) change of the parameters (the upper triangle of R,
+    or the lower triangle of ``low`` = L when given, R = L L^T) towards the target poles."""
     n = model.n_dof
     poles, shapes = _model_poles(model, damping)
     lam, phi = poles[idx], shapes[idx]  # (m,), (m, N)
     denom = np.einsum("ri,rij,rj->r", phi, 2.0 * lam[:, None, None] * model.mass + damping, phi)
-    rows, cols = _upper(n)
-    quad = phi[:, rows] * phi[:, cols] * np.where(rows == cols, 1.0, 2.0)  # phi^T dR phi per parameter
+    if low is not None:
+        # dR = dL L^T + L dL^T, so phi^T dR phi = 2 phi_i (L^T phi)_j for the term L_ij.
+        rows, cols = np.tril_indices(n)
+        quad = 2.0 * phi[:, rows] * (phi @ low)[:, cols]
+    else:
+        rows, cols = _upper(n)
+        quad = phi[:, rows] * phi[:, cols] * np.where(rows == cols, 1.0, 2.0)  # phi^T dR phi per parameter
     jac = -(lam / denom)[:, None] * quad  # (m, P) complex
     # Relative pole errors so that every mode weighs alike, whatever its frequency.
     weight = 1.0 / np.abs(target)
@@ -190,6 +201,7 @@ def pilkey_inman(
     max_iter: int = 200,
     tol: float = 1e-10,
     update: Update = "newton",
+    psd: bool = False,
 ) -> tuple[np.ndarray, dict[str, Any]]:
     """Symmetric R whose damped poles equal (or best fit) the identified ones (M, K known).
 
@@ -208,6 +220,11 @@ def pilkey_inman(
         when the relative change of R falls below it (a least-squares solution
         when no R matches, e.g. noisy poles: see ``product_mismatch``).
     update : "newton" (default) or "lancaster"; see the module docstring.
+    psd : Newton steps on the Cholesky factor L of R = L L^T, so that every iterate
+        is positive semi-definite (dissipative); the start must be (``default_start``
+        is). Only with the Newton update. The poles leave R underdetermined (2N - 1
+        numbers for N (N + 1) / 2 terms), so a dissipative R matching them usually
+        exists; where none does, the iteration stops at the best dissipative one.
 
     Returns
     -------
@@ -224,6 +241,8 @@ def pilkey_inman(
         raise ValueError("poles must be finite with positive imaginary parts")
     if update not in ("newton", "lancaster"):
         raise ValueError(f"unknown update {update!r}; use 'newton' or 'lancaster'")
+    if psd and update != "newton":
+        raise ValueError("psd needs the Newton update (Lancaster's substitution has no factor to keep)")
     if start is None:
         start = default_start(model, target)
     damping = model.check_damping(start)
@@ -235,17 +254,22 @@ def pilkey_inman(
     if not np.all(np.isfinite(start_poles)):
         raise ValueError("the start damping matrix has overdamped modes")
     idx = match_modes(np.abs(target), np.abs(start_poles))
-    rows, cols = _upper(n)
-    theta = damping[rows, cols]
+    theta = matrix_to_theta(damping, psd)  # ValueError for an indefinite start with psd
+    to_matrix = (lambda t: theta_to_matrix(t, n, psd=True)) if psd else (lambda t: _to_matrix(t, n))
+    damping = to_matrix(theta)
     cost = _cost(start_poles[idx], target)
     converged = False
     iterations = 0
     for iterations in range(1, max_iter + 1):  # noqa: B007 - reported after the loop
         if update == "newton":
-            step = _newton_step(model, damping, idx, target)
+            low = None
+            if psd:
+                low = np.zeros((n, n))
+                low[np.tril_indices(n)] = theta
+            step = _newton_step(model, damping, idx, target, low)
             # Halve the step until the summed squared pole error does not grow.
             for _ in range(40):
-                trial_cost = _cost(_model_poles(model, _to_matrix(theta + step, n))[0][idx], target)
+                trial_cost = _cost(_model_poles(model, to_matrix(theta + step))[0][idx], target)
                 if trial_cost <= cost:
                     break
                 step = 0.5 * step
@@ -255,7 +279,7 @@ def pilkey_inman(
         else:
             step = _lancaster_step(model, damping, idx, target)
         theta = theta + step
-        damping = _to_matrix(theta, n)
+        damping = to_matrix(theta)
         residual = _pole_error(_model_poles(model, damping)[0][idx], target)
         stationary = np.linalg.norm(step) <= tol * np.linalg.norm(theta)
         if (update == "newton" and residual < tol) or stationary or not np.isfinite(residual):
