@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analysis.band_choice import BandChoice, choose_band
 from analysis.modal_id import ModalResult, identify_modes
 from analysis.modal_id.lscf import lscf_poles
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
@@ -31,15 +32,17 @@ SCATTER_ORDERS = 11
 class AnalysisOptions:
     """What the user may choose.
 
-    band_hz : (low, high) Hz to identify in; None = every line but DC.
-    max_order : highest LSCF model order of the stability diagram.
+    band_hz : (low, high) Hz to identify in; None = chosen from the data
+        (analysis.band_choice: the force spectrum and the coherence).
+    max_order : the LSCF order of every frequency zone; None = each zone's own, from
+        the peaks it holds (analysis.modal_id.zones).
     frequencies_hz : frequencies of interest; None = let the stability diagram decide.
     estimator : "h1", "h2" or "hv" (hits only; FRFs read from a file are used as they are).
     per_hit : also identify every accepted hit alone, for the scatter of each mode.
     """
 
     band_hz: tuple[float, float] | None = None
-    max_order: int = 40
+    max_order: int | None = None
     frequencies_hz: tuple[float, ...] | None = None
     estimator: str = "h1"
     per_hit: bool = True
@@ -47,7 +50,7 @@ class AnalysisOptions:
     def __post_init__(self) -> None:
         if self.estimator not in ESTIMATORS:
             raise ValueError(f"estimator must be one of {', '.join(ESTIMATORS)}, got {self.estimator!r}")
-        if not 2 <= int(self.max_order) <= 200:
+        if self.max_order is not None and not 2 <= int(self.max_order) <= 200:
             raise ValueError(f"max_order must be 2..200, got {self.max_order}")
         if self.band_hz is not None:
             low, high = (float(v) for v in self.band_hz)
@@ -63,8 +66,12 @@ class ModeEstimate:
         with the exponential window's added decay removed.
     damping_ratio_windowed : the ratio as seen through the windows (before correction).
     modal_constant : (n_frf,) complex residue of the run's FRF, (m/s^2)/N x rad/s.
+    frequency_u_hz, damping_u : standard uncertainty of frequency_hz and damping_ratio
+        (see uncertainty_from and docs/analysis.md); NaN when it could not be estimated.
+    uncertainty_from : how: "N hits" (the spread over the accepted hits / sqrt(N),
+        with the spread over model orders) or "bootstrap over lines" (one averaged FRF).
     frequency_std_hz, damping_std : sample standard deviation over the accepted hits
-        identified one by one (NaN with fewer than 2 hits matched).
+        identified one by one (NaN with fewer than 2 hits matched): the spread of ONE hit.
     n_hits_matched : hits in which this mode was found again.
     quality : from the stability diagram (orders stable, scatter, synthesis share).
     """
@@ -73,6 +80,9 @@ class ModeEstimate:
     damping_ratio: float
     damping_ratio_windowed: float
     modal_constant: np.ndarray
+    frequency_u_hz: float = float("nan")
+    damping_u: float = float("nan")
+    uncertainty_from: str = ""
     frequency_std_hz: float = float("nan")
     damping_std: float = float("nan")
     n_hits_matched: int = 0
@@ -84,6 +94,8 @@ class RunAnalysis:
     """frequency_hz : (n_lines,). frf : (n_frf, n_lines) complex accelerance, (m/s^2)/N.
     coherence : (n_frf, n_lines) or None. source : "hits", "measured_frf" or "analyzer".
     added_decay_1_s : the exponential window's decay rate removed from every pole, 1/s.
+    band : the band analysed and why (given by the user, or chosen from the data).
+    cautions : one sentence each: what in the result may mislead, and what to try.
     """
 
     frequency_hz: np.ndarray
@@ -95,6 +107,8 @@ class RunAnalysis:
     added_decay_1_s: float
     modal: ModalResult
     modes: list[ModeEstimate]
+    band: BandChoice | None = None
+    cautions: list[str] = field(default_factory=list)
 
 
 def analyze_hits(
@@ -120,10 +134,18 @@ def analyze_hits(
     # The force window multiplies a pulse it does not touch; only the response's
     # exponential window adds decay to the poles.
     decay = added_decay_rate(response_window) - added_decay_rate(force_window)
-    result = _identify(estimate.frequency_hz, frf, estimate.coherence[np.newaxis, :], "hits", options, decay)
+    coherence = estimate.coherence[np.newaxis, :]
+    band = _band(
+        estimate.frequency_hz, options, estimate.g_ff, coherence if estimate.n_averages >= 2 else None
+    )
+    result = _identify(estimate.frequency_hz, frf, coherence, "hits", options, decay, band)
     result.n_averages = estimate.n_averages
-    if options.per_hit and estimate.n_averages >= 2 and result.modes:
-        _scatter(result, per_hit_frf(spectra), options, decay)
+    if result.modes:
+        if options.per_hit and estimate.n_averages >= 2:
+            _scatter(result, per_hit_frf(spectra), options, decay)
+        else:
+            _bootstrap(result, decay)
+    result.cautions += _cautions(result)
     return result
 
 
@@ -135,24 +157,38 @@ def analyze_frfs(
     options: AnalysisOptions | None = None,
     added_decay_1_s: float = 0.0,
 ) -> RunAnalysis:
-    """Analyse FRFs (n_frf, n_lines) read from a file or the analyzer (no FFT step)."""
+    """Analyse FRFs (n_frf, n_lines) read from a file or the analyzer (no FFT step),
+    in the form of analysis.modal_id.lsfd.FORMS given by ``form`` (accelerance unless
+    the source says otherwise)."""
     options = options or AnalysisOptions()
     frf = np.atleast_2d(np.asarray(frf, dtype=complex))
     coherence = None if coherence is None else np.atleast_2d(np.asarray(coherence, dtype=float))
-    return _identify(np.asarray(frequency_hz, float), frf, coherence, source, options, added_decay_1_s)
+    f = np.asarray(frequency_hz, float)
+    band = _band(f, options, None, coherence)
+    result = _identify(f, frf, coherence, source, options, added_decay_1_s, band)
+    if result.modes:
+        _bootstrap(result, added_decay_1_s)
+    result.cautions += _cautions(result)
+    return result
 
 
-def _lines(frequency_hz: np.ndarray, options: AnalysisOptions) -> np.ndarray:
-    keep = np.isfinite(frequency_hz) & (frequency_hz > 0)
+def _band(frequency_hz, options: AnalysisOptions, g_ff, coherence) -> BandChoice:
     if options.band_hz is not None:
-        keep &= (frequency_hz >= options.band_hz[0]) & (frequency_hz <= options.band_hz[1])
+        low, high = options.band_hz
+        return BandChoice(float(low), float(high), "given with --band")
+    return choose_band(frequency_hz, g_ff, coherence)
+
+
+def _lines(frequency_hz: np.ndarray, band: BandChoice) -> np.ndarray:
+    keep = np.isfinite(frequency_hz) & (frequency_hz > 0)
+    keep &= (frequency_hz >= band.low_hz) & (frequency_hz <= band.high_hz)
     if keep.sum() < 8:
         raise ValueError(f"only {int(keep.sum())} spectral lines in the band: widen it")
     return keep
 
 
-def _identify(frequency_hz, frf, coherence, source, options, decay) -> RunAnalysis:
-    keep = _lines(frequency_hz, options) & np.all(np.isfinite(frf), axis=0)
+def _identify(frequency_hz, frf, coherence, source, options, decay, band) -> RunAnalysis:
+    keep = _lines(frequency_hz, band) & np.all(np.isfinite(frf), axis=0)
     if options.frequencies_hz is not None:
         low, high = float(frequency_hz[keep].min()), float(frequency_hz[keep].max())
         outside = [f for f in options.frequencies_hz if not low <= f <= high]
@@ -168,6 +204,7 @@ def _identify(frequency_hz, frf, coherence, source, options, decay) -> RunAnalys
         frequencies_hz=options.frequencies_hz,
     )
     modes = []
+    cautions = []
     for mode in modal.modes:
         if options.frequencies_hz is not None and not any(
             abs(mode.frequency_hz - f) <= FREQUENCY_OF_INTEREST_TOLERANCE * f for f in options.frequencies_hz
@@ -185,64 +222,191 @@ def _identify(frequency_hz, frf, coherence, source, options, decay) -> RunAnalys
                     "frequency_scatter_rel": float(mode.quality.frequency_scatter_rel),
                     "damping_scatter_rel": float(mode.quality.damping_scatter_rel),
                     "synthesis_share": float(mode.quality.synthesis_share),
+                    "accepted": bool(mode.quality.accepted),
                 },
             )
         )
+    if options.frequencies_hz is not None:
+        for f_asked in options.frequencies_hz:
+            near = [
+                m for m in modes if abs(m.frequency_hz - f_asked) <= FREQUENCY_OF_INTEREST_TOLERANCE * f_asked
+            ]
+            if not near:
+                cautions.append(
+                    f"no mode found within {100 * FREQUENCY_OF_INTEREST_TOLERANCE:g} % of {f_asked:g} Hz: "
+                    "look at the stability diagram (daq report), or give a --band around it"
+                )
     return RunAnalysis(
         frequency_hz=frequency_hz, frf=frf, coherence=coherence, source=source, estimator=options.estimator,
-        n_averages=1, added_decay_1_s=float(decay), modal=modal, modes=modes,
+        n_averages=1, added_decay_1_s=float(decay), modal=modal, modes=modes, band=band, cautions=cautions,
     )  # fmt: skip
 
 
-def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions, decay: float) -> None:
-    """The spread of each mode over the accepted hits, each hit's FRF fitted alone.
+#: The synthesis error above which the result is flagged.
+POOR_SYNTHESIS = 0.2
+#: A mode this close to a band edge (fraction of the band width) is flagged.
+EDGE_FRACTION = 0.02
 
-    Each hit is fitted by LSCF at SCATTER_ORDERS consecutive orders from the lowest one
-    at which every selected mode of the run was stable; each mode takes, at each
-    order, the hit's pole nearest to it, and the median over the orders. One order
-    alone makes the spread depend on which order was picked (a low order fits a weak
-    mode poorly, a high one adds spurious poles); the median over a window does not.
-    """
-    keep = _lines(result.frequency_hz, options)
+
+def _cautions(result: RunAnalysis) -> list[str]:
+    """What in the result may mislead, and what to try: one sentence each."""
+    out = []
+    band = result.band
+    span = f"{band.low_hz:.6g}-{band.high_hz:.6g} Hz" if band else "the band"
+    if not result.modes:
+        out.append(
+            f"no mode found in {span}: the stability diagram holds no pole that stays stable; try "
+            "--band around a peak of the FRF, --max-order higher, or --frequencies with the peaks you expect"
+        )
+    error = result.modal.synthesis_error
+    if np.isfinite(error) and error > POOR_SYNTHESIS:
+        out.append(
+            f"the modes reproduce the FRF poorly (synthesis error {100 * error:.0f} % > "
+            f"{100 * POOR_SYNTHESIS:.0f} %): modes are missing or the data are noisy; look at synthesis.png "
+            "of daq report and try --band or --max-order"
+        )
+    if band is not None and not band.coherence_ok:
+        out.append(
+            "the coherence is below 0.5 over the whole band: the FRF is mostly noise (too weak a hit, "
+            "a loose sensor, or the wrong channels)"
+        )
+    if band is not None:
+        margin = EDGE_FRACTION * (band.high_hz - band.low_hz)
+        for m in result.modes:
+            if m.frequency_hz < band.low_hz + margin or m.frequency_hz > band.high_hz - margin:
+                out.append(
+                    f"the mode at {m.frequency_hz:.6g} Hz lies at an edge of the band {span}: it may stand "
+                    "for modes outside; widen the band to check it"
+                )
+    return out
+
+
+def _match(poles: np.ndarray, wanted: np.ndarray, tolerance_hz: np.ndarray, decay: float) -> np.ndarray:
+    """(n_wanted, 2) (frequency Hz, damping) of the pole nearest each wanted frequency,
+    window decay removed; NaN where none lies within its tolerance."""
+    out = np.full((wanted.size, 2), np.nan)
+    if poles.size == 0:
+        return out
+    w_n = np.abs(poles)
+    f, z = correct_pole(w_n / (2 * np.pi), -poles.real / w_n, decay)
+    j = np.argmin(np.abs(f[None, :] - wanted[:, None]), axis=1)
+    ok = np.abs(f[j] - wanted) <= tolerance_hz
+    out[ok, 0], out[ok, 1] = f[j[ok]], z[j[ok]]
+    return out
+
+
+def _tolerances(result: RunAnalysis) -> np.ndarray:
+    """How far (Hz) a pole may lie from each mode and still be it: HIT_MATCH_TOLERANCE,
+    at most half the gap to the nearest other mode, at least one line."""
     wanted = np.array([m.frequency_hz for m in result.modes])
-    first = _common_stable_order(result)
-    top = min(first + SCATTER_ORDERS - 1, options.max_order)
-    orders = tuple(range(max(1, top - SCATTER_ORDERS + 1), top + 1))
-    found = np.full((hit_frfs.shape[0], wanted.size, 2), np.nan)
-    for i, h in enumerate(hit_frfs):
-        ok = keep & np.isfinite(h)
+    gap = np.full(wanted.size, np.inf)
+    if wanted.size > 1:
+        d = np.abs(wanted[:, None] - wanted[None, :])
+        np.fill_diagonal(d, np.inf)
+        gap = d.min(axis=1)
+    line = float(np.median(np.diff(result.modal.frequency_hz)))
+    return np.maximum(np.minimum(HIT_MATCH_TOLERANCE * wanted, 0.5 * gap), line)
+
+
+def _zone_fits(result: RunAnalysis, frf: np.ndarray, weights: np.ndarray | None = None):
+    """Per zone holding a mode: the LSCF poles of ``frf`` (n_lines_used,) at the top
+    SCATTER_ORDERS orders of the zone."""
+    f = result.modal.frequency_hz
+    wanted = np.array([m.frequency_hz for m in result.modes])
+    for zone in result.modal.zones:
+        if not np.any((wanted >= zone.low_hz) & (wanted <= zone.high_hz)):
+            continue
+        use = (f >= zone.low_hz) & (f <= zone.high_hz) & np.isfinite(frf)
+        top = min(zone.max_order, (int(use.sum()) - 2) // (2 if zone.basis == "real" else 1))
+        orders = tuple(range(max(1, top - SCATTER_ORDERS + 1), top + 1))
+        w = None if weights is None else weights[use]
         try:
-            fitted = lscf_poles(result.frequency_hz[ok], h[ok][np.newaxis, :], top, orders=orders)
+            fit = lscf_poles(f[use], frf[use][np.newaxis, :], top, orders=orders, basis=zone.basis, weights=w)
         except (ValueError, np.linalg.LinAlgError):
             continue  # a hit too poor to fit alone adds nothing to the scatter
-        per_order = np.full((len(orders), wanted.size, 2), np.nan)
-        for o, order in enumerate(orders):
-            poles = fitted.poles[order - 1]
-            if poles.size == 0:
-                continue
-            w_n = np.abs(poles)
-            f, z = correct_pole(w_n / (2 * np.pi), -poles.real / w_n, decay)
-            for k, target in enumerate(wanted):
-                j = int(np.argmin(np.abs(f - target)))
-                if abs(f[j] - target) <= HIT_MATCH_TOLERANCE * target:
-                    per_order[o, k] = f[j], z[j]
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: that mode not found
-            found[i] = np.nanmedian(per_order, axis=0)
+        yield [fit.poles[o - 1] for o in orders]
+
+
+def _estimates(result: RunAnalysis, frf: np.ndarray, decay: float, weights=None) -> np.ndarray:
+    """(n_modes, 2): each mode's (frequency, damping) in ``frf`` alone, the median over
+    the top orders of its zone of the pole nearest it (NaN: not found)."""
+    wanted = np.array([m.frequency_hz for m in result.modes])
+    tol = _tolerances(result)
+    found = []
+    for per_order in _zone_fits(result, frf, weights):
+        found += [_match(p, wanted, tol, decay) for p in per_order]
+    if not found:
+        return np.full((wanted.size, 2), np.nan)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN: that mode not found
+        return np.nanmedian(np.array(found), axis=0)
+
+
+def _order_spread(result: RunAnalysis, k: int) -> tuple[float, float]:
+    """Standard deviation of mode k's frequency (Hz) and damping over the orders of its
+    cluster: the part of the uncertainty the choice of model order makes."""
+    m = result.modes[k]
+    q = m.quality
+    return (
+        q["frequency_scatter_rel"] * m.frequency_hz,
+        q["damping_scatter_rel"] * abs(m.damping_ratio_windowed),
+    )
+
+
+def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions, decay: float) -> None:
+    """Each mode's spread over the accepted hits, each hit's FRF fitted alone, and its
+    standard uncertainty.
+
+    Each hit is fitted by LSCF at the top SCATTER_ORDERS orders of each zone holding a
+    mode; each mode takes, at each order, the hit's pole nearest to it, and the median
+    over the orders (one order alone makes the spread depend on which order was picked).
+    The standard uncertainty of the averaged result combines the spread over the hits
+    divided by sqrt(hits matched) with the spread of the mode's cluster over the orders.
+    """
+    keep = np.isin(result.frequency_hz, result.modal.frequency_hz)
+    found = np.array([_estimates(result, h[keep], decay) for h in hit_frfs])  # (n_hits, n_modes, 2)
     for k, mode in enumerate(result.modes):
         ok = np.isfinite(found[:, k, 0]) & np.isfinite(found[:, k, 1])
         mode.n_hits_matched = int(ok.sum())
         if ok.sum() >= 2:
             mode.frequency_std_hz = float(np.std(found[ok, k, 0], ddof=1))
             mode.damping_std = float(np.std(found[ok, k, 1], ddof=1))
+            f_order, z_order = _order_spread(result, k)
+            n = ok.sum()
+            mode.frequency_u_hz = float(np.hypot(mode.frequency_std_hz / np.sqrt(n), f_order))
+            mode.damping_u = float(np.hypot(mode.damping_std / np.sqrt(n), z_order))
+            mode.uncertainty_from = f"{n} hits"
+    if any(m.uncertainty_from == "" for m in result.modes):
+        _bootstrap(result, decay, only_missing=True)
 
 
-def _common_stable_order(result: RunAnalysis) -> int:
-    """The lowest model order of the stability diagram holding a pole of every selected
-    mode (the highest order if there is none)."""
-    stab = result.modal.stability
-    everyone = set(range(len(result.modes)))
-    for order, cluster in zip(stab.orders, stab.selected_cluster, strict=True):
-        if everyone <= {int(c) for c in np.asarray(cluster)}:
-            return int(order)
-    return int(stab.orders[-1])
+#: Replicates of the bootstrap over lines.
+BOOTSTRAP_REPLICATES = 20
+
+
+def _bootstrap(result: RunAnalysis, decay: float, only_missing: bool = False) -> None:
+    """Standard uncertainty of each mode from one averaged FRF: the FRFs' lines are
+    resampled (each line counted a Poisson(1) number of times, a bootstrap over the lines)
+    and each replicate fitted as the hits are in _scatter; the spread over the replicates,
+    with the spread over model orders. Seeded: the same run gives the same figures."""
+    rng = np.random.default_rng(20261124)
+    keep = np.isin(result.frequency_hz, result.modal.frequency_hz)
+    frf = result.frf[:, keep]
+    n_lines = frf.shape[1]
+    found = []
+    for _ in range(BOOTSTRAP_REPLICATES):
+        weights = rng.poisson(1.0, n_lines).astype(float)
+        per_frf = np.array([_estimates(result, h, decay, weights) for h in frf])
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            found.append(np.nanmedian(per_frf, axis=0))
+    found = np.array(found)  # (B, n_modes, 2)
+    for k, mode in enumerate(result.modes):
+        if only_missing and mode.uncertainty_from:
+            continue
+        ok = np.isfinite(found[:, k, 0]) & np.isfinite(found[:, k, 1])
+        if ok.sum() >= 3:
+            f_order, z_order = _order_spread(result, k)
+            mode.frequency_u_hz = float(np.hypot(np.std(found[ok, k, 0], ddof=1), f_order))
+            mode.damping_u = float(np.hypot(np.std(found[ok, k, 1], ddof=1), z_order))
+            mode.uncertainty_from = "bootstrap over lines"

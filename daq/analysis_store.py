@@ -18,6 +18,7 @@ import numpy as np
 
 from analysis.beam import TABLE_1, BeamProperties
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits
+from analysis.spectra import convert_form
 from analysis.table2 import identified_table2
 from analysis.windows import WindowSpec
 from daq.store import Run, Store, StoreError
@@ -25,7 +26,7 @@ from daq.store.model import SOFTWARE
 
 RESULT_NAME = "analysis"
 #: Bumped when the analysis changes what it computes from the same run and options.
-ANALYSIS_VERSION = 1
+ANALYSIS_VERSION = 2
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
@@ -64,7 +65,12 @@ def window_specs(run: Run) -> tuple[WindowSpec, WindowSpec, str]:
     return specs[0], specs[1], origin
 
 
+#: What Table 2 says of a run whose test article is not a beam (or not recorded).
+NO_BEAM_MODEL = "no beam model for this run"
+
+
 def beam_of(run: Run) -> tuple[BeamProperties, str]:
+    """The beam the damping fit models: the run's test article, else Table 1 (said)."""
     if run.sample is None:
         return TABLE_1, "Table 1 (the run records no test article)"
     fields = {name: getattr(run.sample, name) for name in BeamProperties.__dataclass_fields__}
@@ -86,8 +92,15 @@ def analyze(run: Run, options: AnalysisOptions) -> tuple[RunAnalysis, dict[str, 
         source = "measured_frf" if run.measured_frfs is not None else "analyzer"
         frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
         decay, origin = _frf_window_decay(run, source)
-        result = analyze_frfs(frfs.frequency_hz, frfs.frf, frfs.coherence, source, options, decay)
+        form = getattr(frfs, "form", "accelerance")
+        frf = frfs.frf
+        if form != "accelerance":
+            # One form for every run: a receptance file and the same data as accelerance
+            # identify the same modes (the residual terms differ by form).
+            frf = convert_form(frf, frfs.frequency_hz, "accelerance", form)
+        result = analyze_frfs(frfs.frequency_hz, frf, frfs.coherence, source, options, decay)
         notes["windows"] = {"from": origin}
+        notes["form"] = {"stored": form, "analysed": "accelerance"}
     elif run.spectra is not None and run.hits is None:
         # Power, linear and cross spectra carry no phase between force and response:
         # no FRF can be made of them here (docs/sdf.md), so no modes either.
@@ -122,6 +135,51 @@ def cache_key(path: Path, options: AnalysisOptions) -> str:
 
 def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: AnalysisOptions) -> dict[str, Any]:
     """The JSON-able summary stored in the result and printed by ``daq analyze --json``."""
+    return {
+        "run_id": run.run_id,
+        "kind": run.kind,
+        "source": result.source,
+        "estimator": result.estimator if result.source == "hits" else None,
+        "n_averages": result.n_averages,
+        "added_decay_1_s": result.added_decay_1_s,
+        "band": _band(result),
+        "zones": [
+            {"low_hz": z.low_hz, "high_hz": z.high_hz, "max_order": z.max_order, "basis": z.basis}
+            for z in result.modal.zones
+        ],
+        "synthesis_error": _num(result.modal.synthesis_error),
+        "modes": [
+            {
+                "frequency_hz": m.frequency_hz,
+                "damping_ratio": _num(m.damping_ratio),
+                "damping_ratio_windowed": _num(m.damping_ratio_windowed),
+                "frequency_u_hz": _num(m.frequency_u_hz),
+                "damping_u": _num(m.damping_u),
+                "uncertainty_from": m.uncertainty_from or None,
+                "frequency_std_hz": _num(m.frequency_std_hz),
+                "damping_std": _num(m.damping_std),
+                "n_hits_matched": m.n_hits_matched,
+                "modal_constant": [[float(c.real), float(c.imag)] for c in m.modal_constant],
+                "quality": m.quality,
+            }
+            for m in result.modes
+        ],
+        "cautions": list(result.cautions),
+        "table2": _table2(run, result),
+        "options": asdict(options),
+        **notes,
+    }
+
+
+def _band(result: RunAnalysis) -> dict[str, Any] | None:
+    b = result.band
+    return None if b is None else {"low_hz": b.low_hz, "high_hz": b.high_hz, "reason": b.reason}
+
+
+def _table2(run: Run, result: RunAnalysis) -> dict[str, Any]:
+    """Table 2 of the seed beside the run's modes, for a run whose test article is a beam."""
+    if run.sample is None:
+        return {"beam": f"{NO_BEAM_MODEL}: it records no test article", "n_functions": None, "rows": []}
     beam, beam_origin = beam_of(run)
     freqs = np.array([m.frequency_hz for m in result.modes])
     zetas = np.array([m.damping_ratio for m in result.modes])
@@ -139,31 +197,7 @@ def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: Analy
                 "damping_ratio": _num(table.damping_ratio[k]),
             }
         )
-    return {
-        "run_id": run.run_id,
-        "kind": run.kind,
-        "source": result.source,
-        "estimator": result.estimator if result.source == "hits" else None,
-        "n_averages": result.n_averages,
-        "added_decay_1_s": result.added_decay_1_s,
-        "synthesis_error": _num(result.modal.synthesis_error),
-        "modes": [
-            {
-                "frequency_hz": m.frequency_hz,
-                "damping_ratio": _num(m.damping_ratio),
-                "damping_ratio_windowed": _num(m.damping_ratio_windowed),
-                "frequency_std_hz": _num(m.frequency_std_hz),
-                "damping_std": _num(m.damping_std),
-                "n_hits_matched": m.n_hits_matched,
-                "modal_constant": [[float(c.real), float(c.imag)] for c in m.modal_constant],
-                "quality": m.quality,
-            }
-            for m in result.modes
-        ],
-        "table2": {"beam": beam_origin, "n_functions": table.n_functions, "rows": rows},
-        "options": asdict(options),
-        **notes,
-    }
+    return {"beam": beam_origin, "n_functions": table.n_functions, "rows": rows}
 
 
 def _num(value: float) -> float | None:
@@ -228,6 +262,25 @@ def store_analysis(
     """Write (or replace, atomically) the analysis result of run ``run_id``."""
     payload = {"summary": info, "cache_key": key, **arrays}
     return store.write_result(run_id, RESULT_NAME, payload, overwrite=True)
+
+
+def stored_options(store: Store, run_id: str) -> AnalysisOptions | None:
+    """The options the stored analysis of ``run_id`` was made with (None: none stored or
+    unreadable): a report draws what the user tuned, not a default analysis."""
+    try:
+        info = store.read_result(run_id, RESULT_NAME)["summary"]
+        options = dict(info["options"])
+    except (StoreError, KeyError, TypeError, ValueError):
+        return None
+    for key in ("band_hz", "frequencies_hz"):
+        if options.get(key) is not None:
+            options[key] = tuple(float(v) for v in options[key])
+    try:
+        return AnalysisOptions(
+            **{k: v for k, v in options.items() if k in AnalysisOptions.__dataclass_fields__}
+        )
+    except (TypeError, ValueError):
+        return None
 
 
 def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, force: bool = False) -> dict:

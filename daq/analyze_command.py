@@ -72,15 +72,26 @@ def analyze(
     ] = None,
     all_runs: Annotated[bool, typer.Option("--all", help="Analyse every run of the store.")] = False,
     band: Annotated[
-        str | None, typer.Option(metavar="<low:high>", help="Identify modes in this band only, Hz.")
+        str | None,
+        typer.Option(
+            metavar="<low:high>",
+            show_default=False,
+            help="Identify modes in this band only, Hz [default: where the hammer put energy and the "
+            "coherence is usable].",
+        ),
     ] = None,
     frequencies: Annotated[
         str | None,
         typer.Option(metavar="<f1,f2,...>", help="Frequencies of interest, Hz (else found automatically)."),
     ] = None,
     max_order: Annotated[
-        int, typer.Option(metavar="<2-200>", help="Highest model order of the stability diagram.")
-    ] = 40,
+        int | None,
+        typer.Option(
+            metavar="<2-200>",
+            show_default=False,
+            help="LSCF model order of every frequency zone [default: each zone's, from its peaks].",
+        ),
+    ] = None,
     estimator: Annotated[
         str, typer.Option(metavar="<h1|h2|hv>", help="FRF estimator for time records.")
     ] = "h1",
@@ -263,23 +274,31 @@ def _print(info: dict) -> None:
     typer.echo(
         f"Run {info['run_id']} ({info['kind']}, {source}){cached}: {n_modes} mode{'s' * (n_modes != 1)}"
     )
+    band = info.get("band")
+    if band:
+        typer.echo(f"  band {band['low_hz']:.6g}-{band['high_hz']:.6g} Hz: {band['reason']}")
+    zones = info.get("zones") or []
+    if len(zones) > 1:
+        typer.echo(f"  {len(zones)} frequency zones, LSCF orders {min(z['max_order'] for z in zones)}-"
+                   f"{max(z['max_order'] for z in zones)}")  # fmt: skip
     windows = str(info.get("windows", {}).get("from", ""))
     if windows.startswith("unknown"):
         typer.echo(f"  caution: windows {windows}")
     for k, mode in enumerate(info["modes"], 1):
-        zeta = mode["damping_ratio"]
-        f_std, z_std = mode["frequency_std_hz"], mode["damping_std"]
-        spread = f" ± {f_std:.3g} Hz" if f_std is not None else ""
-        zspread = f" ± {100 * z_std:.2g} %" if z_std is not None else ""
-        zeta_text = f"{100 * zeta:.3g} %{zspread}" if zeta is not None else "n/a (window decay larger)"
-        q = mode["quality"]
-        typer.echo(
-            f"  mode {k}: {mode['frequency_hz']:.4f} Hz{spread}, damping {zeta_text}; "
-            f"stable over {q['n_stable_orders']} orders, {100 * q['synthesis_share']:.2g} % of the synthesis"
-        )
-    rows = [r for r in info["table2"]["rows"] if r["identified_hz"] is not None]
+        typer.echo(f"  mode {k}: {_mode_text(mode)}")
+    if n_modes:
+        u_from = {m.get("uncertainty_from") for m in info["modes"]} - {None}
+        how = f" from {', '.join(sorted(u_from))}" if u_from else ""
+        typer.echo(f"  ± is the standard uncertainty of the value{how} (docs/analysis.md)")
+    error = info.get("synthesis_error")
+    if error is not None:
+        typer.echo(f"  synthesis error {100 * error:.3g} % (the modes' FRF against the measured one)")
+    for text in info.get("cautions", []):
+        typer.echo(f"  caution: {text}")
+    table = info["table2"]
+    rows = [r for r in table["rows"] if r["identified_hz"] is not None]
     if rows:
-        typer.echo(f"  Table 2, beam: {info['table2']['beam']}")
+        typer.echo(f"  Table 2, beam: {table['beam']}")
         typer.echo("    mode   Ritz Hz  exact Hz   run Hz  run vs exact  damping")
         for r in rows:
             ritz = f"{r['ritz_hz']:.3f}" if r["ritz_hz"] is not None else "-"
@@ -288,3 +307,21 @@ def _print(info: dict) -> None:
                 f"    {r['mode']:>4}  {ritz:>8}  {r['exact_hz']:>8.3f}  {r['identified_hz']:>7.3f}  "
                 f"{r['difference_exact_pct']:>+10.2f} %  {zeta:>7}"
             )
+    elif not table["rows"]:
+        typer.echo(f"  Table 2: {table['beam']}")
+
+
+def _mode_text(mode: dict) -> str:
+    """'1234.5678 Hz ± 0.01 Hz, damping 0.123 % ± 0.004 %; stable over ...' of one mode."""
+    zeta = mode["damping_ratio"]
+    f_u, z_u = mode.get("frequency_u_hz"), mode.get("damping_u")
+    spread = f" ± {f_u:.2g} Hz" if f_u is not None else ""
+    zspread = f" ± {100 * z_u:.2g} %" if z_u is not None else ""
+    zeta_text = f"{100 * zeta:.3g} %{zspread}" if zeta is not None else "n/a (window decay larger)"
+    q = mode["quality"]
+    flag = "" if q.get("accepted", True) else " (asked for; fails a selection rule)"
+    return (
+        f"{mode['frequency_hz']:.4f} Hz{spread}, damping {zeta_text}; "
+        f"stable over {q['n_stable_orders']} orders{flag}, "
+        f"{100 * q['synthesis_share']:.2g} % of the synthesis"
+    )

@@ -26,11 +26,33 @@ def report(
     force: Annotated[
         bool, typer.Option("--force", help="Write over an earlier report in that folder.")
     ] = False,
+    band: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<low:high>", show_default=False, help="Analyse in this band first, Hz (as daq analyze)."
+        ),
+    ] = None,
+    frequencies: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<f1,f2,...>", show_default=False, help="Analyse for these frequencies first, Hz."
+        ),
+    ] = None,
+    max_order: Annotated[
+        int | None,
+        typer.Option(metavar="<2-200>", show_default=False, help="Analyse with this LSCF order first."),
+    ] = None,
+    estimator: Annotated[
+        str | None,
+        typer.Option(metavar="<h1|h2|hv>", show_default=False, help="Analyse with this estimator first."),
+    ] = None,
     store: StoreOption = None,
 ) -> None:
     """Write a run's report: hits, FRF and coherence, stability diagram, synthesis, Table 2.
 
     PNG files and index.html (everything embedded: it opens from disk, no network).
+    The analysis shown is the stored one, made by `daq analyze` with the options it was
+    given; analysis options here analyse again with them first (stored as by daq analyze).
     """
     from daq.report.build import build_report
     from daq.store import Store, StoreError, resolve_store_dir
@@ -47,8 +69,9 @@ def report(
         raise UserError(
             f"{folder} already holds a report; give --force to write over it or -o another folder"
         )
+    options = _options(band, frequencies, max_order, estimator)
     try:
-        html, pngs = build_report(store_dir, run_id)
+        html, pngs = build_report(store_dir, run_id, options)
     except (StoreError, ValueError) as exc:
         raise UserError(" ".join(str(exc).split())) from None
     try:
@@ -59,6 +82,23 @@ def report(
         _write(folder / f"{name}.png", png)
     _write(folder / "index.html", html.encode("utf-8"))
     typer.echo(f"Report of run {run_id}: {folder / 'index.html'} ({len(pngs)} figures)")
+
+
+def _options(band: str | None, frequencies: str | None, max_order: int | None, estimator: str | None):
+    """AnalysisOptions of the options given, or None when none was (the stored analysis is drawn)."""
+    if band is None and frequencies is None and max_order is None and estimator is None:
+        return None
+    from analysis.run_analysis import AnalysisOptions
+    from daq.analyze_command import parse_band, parse_frequencies
+
+    try:
+        return AnalysisOptions(
+            band_hz=parse_band(band), max_order=max_order, frequencies_hz=parse_frequencies(frequencies),
+            estimator=(estimator or "h1").lower(),
+        )  # fmt: skip
+    except ValueError as exc:
+        text = str(exc).replace("max_order", "--max-order").replace("estimator", "--estimator")
+        raise UserError(text.replace("band ", "--band "), exit_code=2) from None
 
 
 def _write(path: Path, data: bytes) -> None:

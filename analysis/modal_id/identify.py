@@ -6,13 +6,14 @@ their definitions (model order = number of pole pairs; status codes; residual te
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.lsfd import FORMS, lsfd
-from analysis.modal_id.stability import cluster_poles, pick_clusters, stability_diagram
+from analysis.modal_id.stability import Cluster, cluster_poles, pick_clusters, stability_diagram
+from analysis.modal_id.zones import MIN_ORDER, Zone, plan_zones
 
 
 @dataclass
@@ -20,12 +21,15 @@ class ModeQuality:
     """n_stable_orders: stable links of the mode's cluster; *_scatter_rel: std/median of
     the cluster's frequencies and damping ratios; synthesis_share: energy of the mode's
     term (both poles of the pair) over the sum of the energies of all terms of the
-    synthesis (modes and residuals), over the FRFs and lines used."""
+    synthesis (modes and residuals), over the FRFs and lines used; accepted: False for
+    a cluster picked for a frequency of interest that failed a selection rule (too few
+    stable orders, ...)."""
 
     n_stable_orders: int
     frequency_scatter_rel: float
     damping_scatter_rel: float
     synthesis_share: float
+    accepted: bool = True
 
 
 @dataclass
@@ -68,6 +72,7 @@ class ModalResult:
     synthesis_error: float
     stability: StabilityDiagram
     method: str
+    zones: list = field(default_factory=list)
 
 
 def _check_inputs(frequency_hz, frf, band, max_order, form):
@@ -84,7 +89,7 @@ def _check_inputs(frequency_hz, frf, band, max_order, form):
         raise ValueError("frf holds non-finite values")
     if form not in FORMS:
         raise ValueError(f"form must be one of {', '.join(FORMS)}, got {form!r}")
-    if not isinstance(max_order, int | np.integer) or max_order < 2:
+    if max_order is not None and (not isinstance(max_order, int | np.integer) or max_order < 2):
         raise ValueError(f"max_order must be an integer >= 2, got {max_order!r}")
     if band is None:
         band = (float(f[0]), float(f[-1]))
@@ -92,19 +97,42 @@ def _check_inputs(frequency_hz, frf, band, max_order, form):
     if not f1 < f2:
         raise ValueError(f"band must be (f1, f2) with f1 < f2, got {band}")
     use = (f >= f1) & (f <= f2)
-    if use.sum() < 2 * max_order + 2:
+    need = 2 * (max_order or MIN_ORDER) + 2
+    if use.sum() < need:
         raise ValueError(
-            f"band {band} holds {use.sum()} lines; LSCF of order {max_order} needs at least "
-            f"{2 * max_order + 2}: widen the band or lower max_order"
+            f"band {band} holds {use.sum()} lines; LSCF of order {max_order or MIN_ORDER} needs at least "
+            f"{need}: widen the band or lower max_order"
         )
     return f, h, (f1, f2), use
+
+
+@dataclass
+class _ZoneFit:
+    zone: Zone
+    fit: object
+    status: list
+    clusters: list
+    label: list
+
+
+def _fit_zone(f, h, zone, freq_tol, damping_tol, vector_tol, min_stable_orders, max_damping, line_hz):
+    use = (f >= zone.low_hz) & (f <= zone.high_hz)
+    order = min(zone.max_order, (int(use.sum()) - 2) // (2 if zone.basis == "real" else 1))
+    fit = lscf_poles(f[use], h[:, use], order, basis=zone.basis)
+    status, partner = stability_diagram(fit.poles, fit.residues, freq_tol, damping_tol, vector_tol, line_hz)
+    min_orders = min_stable_orders if min_stable_orders is not None else max(4, order // 5)
+    clusters, label = cluster_poles(
+        fit.poles, status, partner, (zone.low_hz, zone.high_hz), freq_tol=freq_tol, damping_tol=damping_tol,
+        min_stable_orders=min_orders, max_damping=max_damping, line_hz=line_hz,
+    )  # fmt: skip
+    return _ZoneFit(zone, fit, status, clusters, label)
 
 
 def identify_modes(
     frequency_hz: np.ndarray,
     frf: np.ndarray,
     band: tuple[float, float] | None = None,
-    max_order: int = 40,
+    max_order: int | None = None,
     frequencies_hz: np.ndarray | None = None,
     form: str = "accelerance",
     *,
@@ -113,36 +141,51 @@ def identify_modes(
     vector_tol: float = 0.1,
     min_stable_orders: int | None = None,
     max_damping: float = 0.3,
+    zones: list[Zone] | None = None,
 ) -> ModalResult:
     """Find the modes of FRFs without being told how many.
 
     frequency_hz (n_lines,) Hz, increasing; frf (n_lines,) or (n_frf, n_lines) complex
     in the units of ``form`` (accelerance: (m/s^2)/N); band (f1, f2) Hz, default all
-    lines; max_order: largest LSCF model (pole pairs); frequencies_hz: if given, the
-    stable cluster nearest each is selected instead of every accepted cluster.
-    Tolerances are relative (see analysis.modal_id.stability). min_stable_orders defaults
-    to max(4, max_order // 5). Raises ValueError on bad inputs.
+    lines; max_order: the LSCF order of every zone, default from each zone's peaks
+    (analysis.modal_id.zones); frequencies_hz: if given, the cluster nearest each is
+    selected instead of every accepted cluster. Tolerances are relative, the damping
+    tolerance widened to a fraction of a line (analysis.modal_id.stability).
+    min_stable_orders defaults to max(4, zone order // 5). zones: given zones instead of
+    planning them. Raises ValueError on bad inputs.
     """
     f, h, band, use = _check_inputs(frequency_hz, frf, band, max_order, form)
-    if min_stable_orders is None:
-        min_stable_orders = max(4, max_order // 5)
     fu, hu = f[use], h[:, use]
-    fit = lscf_poles(fu, hu, max_order)
-    status, partner = stability_diagram(fit.poles, fit.residues, freq_tol, damping_tol, vector_tol)
-    clusters, label = cluster_poles(
-        fit.poles,
-        status,
-        partner,
-        band,
-        freq_tol=freq_tol,
-        damping_tol=damping_tol,
-        min_stable_orders=min_stable_orders,
-        max_damping=max_damping,
-    )
+    line_hz = float(np.median(np.diff(fu)))
+    if zones is None:
+        zones = plan_zones(fu, hu, max_order)
+    fits = [
+        _fit_zone(fu, hu, z, freq_tol, damping_tol, vector_tol, min_stable_orders, max_damping, line_hz)
+        for z in zones
+    ]
+    # Every cluster of every zone whose frequency lies in the zone's core, by global index.
+    clusters: list[Cluster] = []
+    owner: list[tuple[int, int]] = []  # (zone, cluster within the zone)
+    for zi, zf in enumerate(fits):
+        for ci, c in enumerate(zf.clusters):
+            if zf.zone.in_core(c.frequency_hz, zi == len(fits) - 1):
+                clusters.append(c)
+                owner.append((zi, ci))
     freqs = None if frequencies_hz is None else np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
     chosen = pick_clusters(clusters, freqs)
     poles = np.array([clusters[c].pole for c in chosen], dtype=complex)
     est = lsfd(fu, hu, poles, form)
+    if freqs is None and poles.size:
+        keep = spurious_check(fu, hu, poles, est, form, line_hz)
+        for c in (c for c, k in zip(chosen, keep, strict=True) if not k):
+            clusters[c].accepted, clusters[c].reason = (
+                False,
+                "no feature in the data: removing it does not worsen the fit",
+            )
+        chosen = [c for c, k in zip(chosen, keep, strict=True) if k]
+        poles = poles[keep]
+        if not keep.all():
+            est = lsfd(fu, hu, poles, form)
     energy_modes = np.sum(np.abs(est.mode_terms) ** 2, axis=(1, 2))
     total = energy_modes.sum() + np.sum(np.abs(est.residual_terms) ** 2)
     modes = []
@@ -153,11 +196,11 @@ def identify_modes(
             frequency_scatter_rel=cl.frequency_scatter_rel,
             damping_scatter_rel=cl.damping_scatter_rel,
             synthesis_share=float(energy_modes[r] / total) if total > 0 else 0.0,
+            accepted=bool(cl.accepted),
         )
         modes.append(Mode(cl.frequency_hz, cl.damping_ratio, poles[r], est.modal_constants[r], quality))
-    to_mode = {c: r for r, c in enumerate(chosen)}
-    selected = [np.array([to_mode.get(int(c), -1) for c in lab], dtype=int) for lab in label]
-    diagram = StabilityDiagram(fit.orders, fit.poles, status, selected)
+    diagram = _diagram(fits, owner, chosen)
+    orders_text = ", ".join(f"{z.low_hz:g}-{z.high_hz:g} Hz order {z.max_order}" for z in zones)
     return ModalResult(
         frequency_hz=fu,
         modes=modes,
@@ -165,5 +208,76 @@ def identify_modes(
         residuals={"lower": est.lower, "upper": est.upper},
         synthesis_error=est.relative_error,
         stability=diagram,
-        method=f"LSCF (orders 1..{max_order}) + stability clustering + LSFD ({form})",
+        method=f"LSCF in {len(zones)} zone(s) ({orders_text}) + stability clustering + LSFD ({form})",
+        zones=list(zones),
     )
+
+
+def _diagram(fits: list[_ZoneFit], owner: list[tuple[int, int]], chosen: list[int]) -> StabilityDiagram:
+    """One stability diagram of all zones: per order, the poles of every zone."""
+    to_mode = {owner[c]: r for r, c in enumerate(chosen)}
+    n_orders = max(len(zf.fit.poles) for zf in fits)
+    poles, status, selected = [], [], []
+    for k in range(n_orders):
+        p, s, m = [np.empty(0, complex)], [np.empty(0, dtype="<U9")], [np.empty(0, dtype=int)]
+        for zi, zf in enumerate(fits):
+            if k < len(zf.fit.poles):
+                p.append(zf.fit.poles[k])
+                s.append(np.asarray(zf.status[k], dtype="<U9"))
+                m.append(np.array([to_mode.get((zi, int(c)), -1) for c in zf.label[k]], dtype=int))
+        poles.append(np.concatenate(p))
+        status.append(np.concatenate(s))
+        selected.append(np.concatenate(m))
+    return StabilityDiagram(np.arange(1, n_orders + 1), poles, status, selected)
+
+
+#: A mode is kept when removing it (the others refitted) worsens the fit near it by this
+#: factor at least ...
+SPURIOUS_ERROR_RATIO = 1.25
+#: ... and by this fraction of the FRF's norm there.
+SPURIOUS_ERROR_GAIN = 0.02
+
+
+def spurious_check(f, h, poles, est, form, line_hz) -> np.ndarray:
+    """(n_modes,) bool: True for each pole that is a feature of the data.
+
+    Near each pole (3 half-power half-widths, at least 3 lines, either side) its term
+    must peak NOISE_FACTOR times above the misfit around it (a pole fitted to noise is
+    as large as the noise), and removing it, the residues of the others
+    refitted, must worsen the fit there by SPURIOUS_ERROR_RATIO and by
+    SPURIOUS_ERROR_GAIN of |H| there. Poles on antiresonances lower the synthesis;
+    poles with no feature leave the fit unchanged. The refit is local (the lines within
+    LOCAL_SPAN half-widths, the poles there, residual terms for the rest), so the check
+    costs a few small solves per mode, not a fit of the whole band.
+    """
+    fn = np.abs(poles) / (2 * np.pi)
+    zeta = -poles.real / np.abs(poles)
+    keep = np.ones(poles.size, dtype=bool)
+    for r in range(poles.size):
+        half = max(3 * zeta[r] * fn[r], 3 * line_hz)
+        near = np.abs(f - fn[r]) <= half
+        if near.sum() < 3:
+            continue
+        local = np.abs(f - fn[r]) <= LOCAL_SPAN * half
+        noise = np.sqrt(np.mean(np.abs(h[:, local] - est.synthesized[:, local]) ** 2))
+        peak = np.max(np.sqrt(np.mean(np.abs(est.mode_terms[r][:, near]) ** 2, axis=0)))
+        if peak < NOISE_FACTOR * noise:
+            keep[r] = False
+            continue
+        inside = np.abs(fn - fn[r]) <= LOCAL_SPAN * half
+        fit_with = lsfd(f[local], h[:, local], poles[inside], form)
+        fit_without = lsfd(f[local], h[:, local], poles[inside & (np.arange(poles.size) != r)], form)
+        sub = near[local]
+        e_with = np.linalg.norm(h[:, near] - fit_with.synthesized[:, sub])
+        e_without = np.linalg.norm(h[:, near] - fit_without.synthesized[:, sub])
+        scale = np.linalg.norm(h[:, near])
+        keep[r] = bool(
+            e_without > SPURIOUS_ERROR_RATIO * e_with and (e_without - e_with) > SPURIOUS_ERROR_GAIN * scale
+        )
+    return keep
+
+
+#: A mode's term must peak this many times above the misfit around it (the noise there).
+NOISE_FACTOR = 3.0
+#: The local refit of spurious_check spans this many of its windows' half-widths.
+LOCAL_SPAN = 8

@@ -23,6 +23,16 @@ the mirror image); this is the best-conditioned choice when the band starts near
 Each FRF is divided by its RMS over the lines first, so every FRF weighs the same in
 the common denominator whatever its units or level.
 
+Zoomed form (``basis="complex"``), for a band [f1, f2] away from 0 Hz: the lines map
+onto the unit circle around the band's centre, z = exp(j (w - w_c) Ts) with
+Ts = 0.8 / (f2 - f1), so the band fills 80 % of the circle instead of the sliver
+[pi f1/f2, pi] that the real form gives it (a polynomial basis on a short arc is
+ill-conditioned: at order 30 on an arc of pi/8 the normal equations lose every
+digit). The coefficients are then complex and each root is one pole (no conjugate
+pairs: the negative-frequency poles are smooth over the band and the numerators take
+them up), so ``order`` n is a denominator of degree n. Frequency-domain zooming of
+this kind is how commercial LSCF (PolyMAX) handles narrow bands.
+
 Kept poles: roots with a non-zero imaginary part (one of each conjugate pair, the one
 with Im s > 0), a negative real part (|z| < 1), natural frequency inside the band.
 Discarded: real roots (over-damped or numerical, no oscillation), unstable roots
@@ -59,13 +69,18 @@ class LscfPoles:
     sampling_time: float
 
 
-def _toeplitz_terms(omega_ts: np.ndarray, h: np.ndarray, p_max: int):
-    """r(m), s_o(m), t(m) for lags m = -p_max..p_max, each Re sum over the lines."""
+def _toeplitz_terms(omega_ts: np.ndarray, h: np.ndarray, p_max: int, real: bool = True, weights=None):
+    """r(m), s_o(m), t(m) for lags m = -p_max..p_max: sums over the lines, each line
+    counted ``weights`` times (default once); their real parts for the real-coefficient
+    form, where each line stands for itself and its mirror."""
     lags = np.arange(-p_max, p_max + 1)
     zpow = np.exp(1j * np.outer(omega_ts, lags))  # (F, 2P+1)
-    r = zpow.real.sum(axis=0)
-    s = -(h @ zpow).real  # (n_frf, 2P+1)
-    t = ((np.abs(h) ** 2) @ zpow).real.sum(axis=0)
+    w = np.ones(omega_ts.size) if weights is None else np.asarray(weights, dtype=float)
+    r = w @ zpow
+    s = -((h * w) @ zpow)  # (n_frf, 2P+1)
+    t = ((np.abs(h) ** 2).sum(axis=0) * w) @ zpow
+    if real:
+        return lags, r.real, s.real, t.real
     return lags, r, s, t
 
 
@@ -90,6 +105,8 @@ def lscf_poles(
     max_order: int,
     band: tuple[float, float] | None = None,
     orders: tuple[int, ...] | None = None,
+    basis: str = "real",
+    weights: np.ndarray | None = None,
 ) -> LscfPoles:
     """Poles of LSCF models of order 1..max_order fitted to the lines inside ``band``.
 
@@ -97,65 +114,80 @@ def lscf_poles(
     band : (f1, f2) Hz; default the whole line range. Returns :class:`LscfPoles`.
     orders : only these orders get their poles (the others come back empty): the
         denominators of every order cost little, their roots most of the time.
+    basis : "real" (lines on [0, pi], order n = n pole pairs) or "complex" (the band
+        zoomed onto the circle, order n = n poles; see the module docstring).
+    weights : (n_lines,) how many times each line counts (a bootstrap over the lines).
     """
+    if basis not in ("real", "complex"):
+        raise ValueError(f"basis must be 'real' or 'complex', got {basis!r}")
+    real = basis == "real"
     f = np.asarray(frequency_hz, dtype=float)
     h = np.atleast_2d(np.asarray(frf, dtype=complex))
     f1, f2 = (f[0], f[-1]) if band is None else band
     use = (f >= f1) & (f <= f2)
     f, h = f[use], h[:, use]
+    weights = None if weights is None else np.asarray(weights, dtype=float)[use]
     n_orders = int(max_order)
-    p_max = 2 * n_orders
+    step = 2 if real else 1  # polynomial degree per order
+    p_max = step * n_orders
     if n_orders < 1 or f.size < p_max + 2:
-        raise ValueError(f"LSCF needs max_order >= 1 and more than 2*max_order+1 lines, got {f.size}")
-    ts = 0.5 / f[-1]
-    omega_ts = 2 * np.pi * f * ts
+        raise ValueError(f"LSCF needs max_order >= 1 and more than {p_max + 1} lines, got {f.size}")
+    if real:
+        ts, f_centre = 0.5 / f[-1], 0.0
+    else:
+        ts, f_centre = 0.8 / max(f[-1] - f[0], 1e-300), 0.5 * (f[0] + f[-1])
+    omega_ts = 2 * np.pi * (f - f_centre) * ts
     scale = np.sqrt(np.mean(np.abs(h) ** 2, axis=1))
     scale[scale == 0] = 1.0
     hn = h / scale[:, None]
     n_frf = h.shape[0]
 
-    _, r_lag, s_lag, t_lag = _toeplitz_terms(omega_ts, hn, p_max)
+    _, r_lag, s_lag, t_lag = _toeplitz_terms(omega_ts, hn, p_max, real, weights)
     r_full = _toeplitz_from_lags(r_lag, p_max)
     s_full = _toeplitz_from_lags(s_lag, p_max)  # (n_frf, P+1, P+1)
     t_full = _toeplitz_from_lags(t_lag, p_max)
-    # R_p = L_p L_p^T with L_p the leading block of the full factor, and the first p+1
+    # R_p = L_p L_p^H with L_p the leading block of the full factor, and the first p+1
     # rows of L^-1 S depend only on L_p: one triangular solve serves every order.
     chol = _cholesky(r_full)
     y = scipy.linalg.solve_triangular(chol, s_full.transpose(1, 0, 2).reshape(p_max + 1, -1), lower=True)
     y = y.reshape(p_max + 1, -1, p_max + 1).transpose(1, 0, 2)  # (n_frf, P+1, P+1)
-    # S_p^T R_p^-1 S_p = sum over rows k <= p of y[k]^T y[k]. Order n adds rows 2n-1 and
-    # 2n (order 1: rows 0..2): one batched matmul per row pair, then a cumulative sum.
-    degrees = 2 * np.arange(1, n_orders + 1)
-    rows = y[:, 1:, :].reshape(n_frf, n_orders, 2, p_max + 1).transpose(1, 0, 2, 3)
-    rows = rows.reshape(n_orders, 2 * n_frf, p_max + 1)
-    gram = np.cumsum(np.matmul(rows.transpose(0, 2, 1), rows), axis=0)
-    gram += y[:, 0, :].T @ y[:, 0, :]
-    m = t_full[None] - gram  # (n_orders, P+1, P+1), order n uses its leading (2n+1) block
-    # alpha_p = 1: M[:p, :p] alpha[:p] = -M[:p, p]; pad each order to p_max with identity.
-    idx = np.arange(p_max)
-    inside = idx[None, :] < degrees[:, None]  # (n_orders, P)
-    a_mat = np.where(inside[:, :, None] & inside[:, None, :], m[:, :p_max, :p_max], 0.0)
-    a_mat += np.eye(p_max) * ~inside[:, :, None]
-    rhs = -np.take_along_axis(m[:, :p_max, :], degrees[:, None, None], axis=2)[..., 0] * inside
-    alpha = np.zeros((n_orders, p_max + 1))
-    alpha[:, :p_max] = np.linalg.solve(a_mat, rhs[..., None])[..., 0]
-    alpha[np.arange(n_orders), degrees] = 1.0
-    # Numerators beta_o = -R_p^-1 S_o,p alpha = -L_p^-T (L_p^-1 S_o,p) alpha. Padding the
-    # right-hand side with zeros beyond p makes the full upper-triangular L^T solve return
-    # the order-p answer (zeros below), so one solve serves all orders and FRFs.
-    y_alpha = np.einsum("okj,nj->kno", y, alpha) * (
-        np.arange(p_max + 1)[:, None, None] <= degrees[None, :, None]
-    )
-    beta = -scipy.linalg.solve_triangular(chol.T, y_alpha.reshape(p_max + 1, -1), lower=False)
-    beta = beta.reshape(p_max + 1, n_orders, n_frf).transpose(1, 0, 2)  # (n_orders, P+1, n_frf)
-
+    # S_p^H R_p^-1 S_p = sum over rows k <= p of y[k]^H y[k]. Order n adds the rows of
+    # degrees step*(n-1)+1 .. step*n: one batched matmul per order, then a cumulative sum.
+    degrees = step * np.arange(1, n_orders + 1)
+    rows = y[:, 1:, :].reshape(n_frf, n_orders, step, p_max + 1).transpose(1, 0, 2, 3)
+    rows = rows.reshape(n_orders, step * n_frf, p_max + 1)
+    gram = np.cumsum(np.matmul(rows.conj().transpose(0, 2, 1), rows), axis=0)
+    gram += y[:, 0, :].conj().T @ y[:, 0, :]
+    m = t_full[None] - gram  # (n_orders, P+1, P+1), order n uses its leading (p+1) block
     wanted = np.arange(n_orders) if orders is None else np.array(sorted(orders), dtype=int) - 1
     if wanted.size == 0 or wanted.min() < 0 or wanted.max() >= n_orders:
         raise ValueError(f"orders must lie in 1..{n_orders}, got {orders}")
+    # Only the orders wanted are solved: the batched solve is the costly step at high order.
+    m, deg_w = m[wanted], degrees[wanted]
+    # alpha_p = 1: M[:p, :p] alpha[:p] = -M[:p, p]; pad each order to p_max with identity.
+    idx = np.arange(p_max)
+    inside = idx[None, :] < deg_w[:, None]  # (n_wanted, P)
+    a_mat = np.where(inside[:, :, None] & inside[:, None, :], m[:, :p_max, :p_max], 0.0)
+    a_mat += np.eye(p_max) * ~inside[:, :, None]
+    rhs = -np.take_along_axis(m[:, :p_max, :], deg_w[:, None, None], axis=2)[..., 0] * inside
+    alpha = np.zeros((n_orders, p_max + 1), dtype=m.dtype)
+    alpha[wanted, :p_max] = np.linalg.solve(a_mat, rhs[..., None])[..., 0]
+    alpha[wanted, deg_w] = 1.0
+    # Numerators beta_o = -R_p^-1 S_o,p alpha = -L_p^-H (L_p^-1 S_o,p) alpha. Padding the
+    # right-hand side with zeros beyond p makes the full upper-triangular L^H solve return
+    # the order-p answer (zeros below), so one solve serves all orders and FRFs.
+    y_alpha = np.einsum("okj,nj->kno", y, alpha[wanted]) * (
+        np.arange(p_max + 1)[:, None, None] <= deg_w[None, :, None]
+    )
+    beta = np.zeros((n_orders, p_max + 1, n_frf), dtype=y.dtype)
+    solved = -scipy.linalg.solve_triangular(chol.conj().T, y_alpha.reshape(p_max + 1, -1), lower=False)
+    beta[wanted] = solved.reshape(p_max + 1, wanted.size, n_frf).transpose(1, 0, 2)
+
     roots: list[np.ndarray] = [np.empty(0, complex)] * n_orders
     for k, r in zip(wanted, _batched_roots(alpha[wanted], degrees[wanted]), strict=True):
         roots[k] = r
     poles, residues = [], []
+    w_centre = 2 * np.pi * f_centre
     with np.errstate(all="ignore"):
         for k in range(n_orders):  # per order: a handful of poles, bookkeeping only
             z = roots[k]
@@ -163,8 +195,10 @@ def lscf_poles(
                 poles.append(np.empty(0, complex))
                 residues.append(np.empty((0, n_frf), complex))
                 continue
-            s = np.log(z) / ts
-            keep = (np.abs(z.imag) > 1e-12 * np.abs(z)) & (s.imag > 0) & (np.abs(z) < 1.0)
+            s = np.log(z) / ts + 1j * w_centre
+            keep = (s.imag > 0) & (np.abs(z) < 1.0)
+            if real:  # a real root stands for no oscillation; one of each conjugate pair is kept
+                keep &= np.abs(z.imag) > 1e-12 * np.abs(z)
             fn = np.abs(s) / (2 * np.pi)
             keep &= (fn >= f1) & (fn <= f2)
             z, s = z[keep], s[keep]
@@ -172,7 +206,7 @@ def lscf_poles(
             powers = z[:, None] ** np.arange(deg + 1)  # (n_r, p+1)
             num = powers @ beta[k, : deg + 1]  # (n_r, n_frf)
             dden = powers[:, :deg] @ (np.arange(1, deg + 1) * alpha[k, 1 : deg + 1])
-            # H(s) = N(e^(s Ts)) / D(e^(s Ts)): dD/ds = D'(z) z Ts at the pole.
+            # H(s) = N(z) / D(z), z = e^((s - j w_c) Ts): dD/ds = D'(z) z Ts at the pole.
             res = num / (dden * z * ts)[:, None] * scale[None, :]
             order = np.argsort(s.imag)
             poles.append(s[order])
@@ -189,7 +223,7 @@ def _batched_roots(alpha: np.ndarray, degrees: np.ndarray) -> list[np.ndarray]:
     out: list[np.ndarray] = [np.empty(0, complex)] * len(degrees)
     for bucket in np.array_split(np.arange(len(degrees)), min(_EIG_BUCKETS, len(degrees))):
         size = int(degrees[bucket].max())
-        comp = np.zeros((bucket.size, size, size))
+        comp = np.zeros((bucket.size, size, size), dtype=alpha.dtype)
         for row, k in enumerate(bucket):  # fills a (p, p) block per order
             p = degrees[k]
             comp[row, 0, :p] = -alpha[k, p - 1 :: -1][:p]

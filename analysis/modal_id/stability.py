@@ -14,6 +14,15 @@ Status codes per pole:
   "damping"   frequency and damping agree, the modal vector does not;
   "stable"    frequency, damping and modal vector agree.
 
+Tolerances that scale (``line_hz``, the line spacing, > 0): a damping ratio is read
+from the half-power width 2 zeta f, so on a line spacing df it is known to about a
+fraction of a line, not to a fixed percentage: a 0.03 % mode at 3 kHz on 1 Hz lines
+spans two lines and its estimate wanders by 20 % from one order to the next while its
+frequency holds to 0.01 %. The damping test is therefore
+|zeta_n - zeta_{n-1}| <= max(damping_tol zeta_{n-1}, LINE_FRACTION df / f), and the
+residue test, whose magnitude follows the damping (A ~ 2 zeta w |H_peak|), allows the
+same relative change. With line_hz = 0 the tolerances are the fixed percentages.
+
 Modal vector agreement: ||A_n - A_{n-1}|| / ||A_{n-1}|| <= vector_tol, with A the
 (n_frf,) complex residues of the pole (from the LSCF numerators). For one FRF this is
 the relative change of the complex modal constant; for several it also checks the
@@ -43,6 +52,14 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 STATUSES = ("new", "frequency", "damping", "stable")
+#: The fraction of a line to which a half-power width (2 zeta f) is known.
+LINE_FRACTION = 0.25
+
+
+def damping_tolerance(frequency_hz, damping_ratio, damping_tol: float, line_hz: float):
+    """Absolute tolerance on a damping ratio (see the module docstring); arrays broadcast."""
+    with np.errstate(all="ignore"):
+        return np.maximum(damping_tol * np.abs(damping_ratio), LINE_FRACTION * line_hz / frequency_hz)
 
 
 def frequency_damping(poles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -61,11 +78,13 @@ def classify_order(
     freq_tol: float = 0.01,
     damping_tol: float = 0.05,
     vector_tol: float = 0.1,
+    line_hz: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Status of each pole of order n against its own partner among the poles of order n-1.
 
     prev_poles (m,), poles (k,): complex rad/s. prev_vectors (m, n_frf), vectors
     (k, n_frf): residues, or None to skip the vector test (then "damping" never occurs).
+    line_hz: line spacing, Hz, for the tolerances that scale (0: fixed percentages).
     Returns status (k,) str and partner (k,) int index into prev_poles (-1: none).
     """
     poles = np.asarray(poles, dtype=complex)
@@ -82,9 +101,13 @@ def classify_order(
     rows, cols = rows[close], cols[close]
     partner[rows] = cols
     status[rows] = "frequency"
+    allowed = damping_tolerance(fp[cols], zp[cols], damping_tol, line_hz)
     with np.errstate(all="ignore"):
-        damp_ok = np.abs(z[rows] - zp[cols]) <= damping_tol * np.abs(zp[cols])
+        damp_ok = np.abs(z[rows] - zp[cols]) <= allowed
+        # The residue's size follows the damping: it may change by as much.
+        vec_allowed = np.maximum(vector_tol, 2 * allowed / np.abs(zp[cols]))
     rows_d, cols_d = rows[damp_ok], cols[damp_ok]
+    vec_allowed = vec_allowed[damp_ok]
     status[rows_d] = "damping"
     if vectors is None or prev_vectors is None:
         status[rows_d] = "stable"
@@ -93,7 +116,7 @@ def classify_order(
         b = np.asarray(prev_vectors)[cols_d]
         with np.errstate(all="ignore"):
             change = np.linalg.norm(a - b, axis=-1) / np.linalg.norm(b, axis=-1)
-        status[rows_d[change <= vector_tol]] = "stable"
+        status[rows_d[change <= vec_allowed]] = "stable"
     return status.astype(str), partner
 
 
@@ -128,6 +151,7 @@ def stability_diagram(
     freq_tol: float = 0.01,
     damping_tol: float = 0.05,
     vector_tol: float = 0.1,
+    line_hz: float = 0.0,
 ) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Status (str) and partner index of every pole, order by order (first order: "new")."""
     status = [np.full(len(poles[0]), "new")]
@@ -141,6 +165,7 @@ def stability_diagram(
             freq_tol,
             damping_tol,
             vector_tol,
+            line_hz,
         )
         status.append(s)
         partner.append(p)
@@ -157,6 +182,7 @@ def cluster_poles(
     min_stable_orders: int = 5,
     max_damping: float = 0.3,
     guard: float = 0.02,
+    line_hz: float = 0.0,
 ) -> tuple[list[Cluster], list[np.ndarray]]:
     """Chain stable poles into clusters, merge broken chains, apply the rejection rules.
 
@@ -190,7 +216,8 @@ def cluster_poles(
             orders_k = {m[0] for m in ck.members}
             if (
                 abs(cc.frequency_hz - ck.frequency_hz) <= freq_tol * ck.frequency_hz
-                and abs(cc.damping_ratio - ck.damping_ratio) <= 2 * damping_tol * ck.damping_ratio
+                and abs(cc.damping_ratio - ck.damping_ratio)
+                <= 2 * damping_tolerance(ck.frequency_hz, ck.damping_ratio, damping_tol, line_hz)
                 and not orders_k.intersection(m[0] for m in cc.members)
             ):
                 clusters[k] = _summarise(
@@ -226,7 +253,7 @@ def cluster_poles(
     kept_modes: list[Cluster] = []
     for c in sorted((c for c in final if c.accepted), key=lambda c: -c.n_stable_orders):
         for k in kept_modes:
-            width = min(c.damping_ratio, k.damping_ratio) * k.frequency_hz
+            width = max(min(c.damping_ratio, k.damping_ratio) * k.frequency_hz, line_hz)
             if abs(c.frequency_hz - k.frequency_hz) < width:
                 c.accepted, c.reason = False, "duplicate of a chain stable over more orders"
                 break
@@ -249,21 +276,35 @@ def _summarise(poles: list[np.ndarray], members: list[tuple[int, int]], n_links:
     )
 
 
-def pick_clusters(clusters: list[Cluster], frequencies_hz: np.ndarray | None = None) -> list[int]:
+def pick_clusters(
+    clusters: list[Cluster], frequencies_hz: np.ndarray | None = None, near: float = 0.05
+) -> list[int]:
     """Indices of the selected clusters, sorted by frequency.
 
-    Without frequencies of interest: every accepted cluster. With them: for each
-    frequency the nearest accepted cluster (relative distance), or, when none is
-    accepted, the nearest cluster with a physical damping; each cluster at most once.
+    Without frequencies of interest: every accepted cluster. With them, for each
+    frequency: the nearest accepted cluster within ``near`` (relative), else the cluster
+    within ``near`` with a physical damping that is stable over the most orders, else
+    the nearest cluster with a physical damping; each cluster at most once. Accepted
+    clusters elsewhere in the band do not hide a weaker cluster at a frequency asked for.
     """
     accepted = [i for i, c in enumerate(clusters) if c.accepted]
     if frequencies_hz is None:
-        chosen = accepted
-    else:
-        pool = accepted or [i for i, c in enumerate(clusters) if c.damping_ratio > 0]
-        chosen = []
-        for f in np.atleast_1d(frequencies_hz):
-            free = [i for i in pool if i not in chosen]
-            if free:
-                chosen.append(min(free, key=lambda i: abs(clusters[i].frequency_hz - f) / f))
+        return sorted(accepted, key=lambda i: clusters[i].frequency_hz)
+    physical = [i for i, c in enumerate(clusters) if c.damping_ratio > 0]
+    chosen: list[int] = []
+    for f in np.atleast_1d(frequencies_hz):
+
+        def dist(i: int, f: float = float(f)) -> float:
+            return abs(clusters[i].frequency_hz - f) / f
+
+        free_acc = [i for i in accepted if i not in chosen and dist(i) <= near]
+        free_phys = [i for i in physical if i not in chosen and dist(i) <= near]
+        if free_acc:
+            chosen.append(min(free_acc, key=dist))
+        elif free_phys:
+            chosen.append(max(free_phys, key=lambda i: (clusters[i].n_stable_orders, -dist(i))))
+        else:
+            rest = [i for i in physical if i not in chosen]
+            if rest:
+                chosen.append(min(rest, key=dist))
     return sorted(chosen, key=lambda i: clusters[i].frequency_hz)

@@ -7,19 +7,25 @@ from pathlib import Path
 from typing import Any
 
 
-def build_report(store_dir: Path, run_id: str) -> tuple[str, dict[str, bytes]]:
-    """(index.html text, {figure name: PNG bytes}) of run ``run_id``; analyses the run
-    and fits it (least squares) first when that was not done. StoreError or
-    ValueError when the run cannot be read or analysed."""
+def build_report(store_dir: Path, run_id: str, options: Any = None) -> tuple[str, dict[str, bytes]]:
+    """(index.html text, {figure name: PNG bytes}) of run ``run_id``.
+
+    The analysis drawn is the stored one, with the options it was made with (brought up
+    to date with those same options if the software changed); ``options``
+    (AnalysisOptions) analyses with these instead; a run never analysed is analysed
+    with ``options`` or the defaults. The run is fitted (least squares) first when that
+    was not done. StoreError or ValueError when the run cannot be read or analysed."""
     from analysis.run_analysis import AnalysisOptions
-    from daq.analysis_store import RESULT_NAME, analyze_stored
+    from daq.analysis_store import RESULT_NAME, analyze_stored, stored_options
     from daq.fit_store import FitOptions
     from daq.report import figures, page
     from daq.store import Store
 
     the_store = Store(store_dir)
+    if options is None:
+        options = stored_options(the_store, run_id) or AnalysisOptions()
     try:
-        analyze_stored(store_dir, run_id, AnalysisOptions())
+        analyze_stored(store_dir, run_id, options)
     except ValueError as exc:  # e.g. a run of spectra alone: say which run has nothing to show
         raise ValueError(f"run {run_id}: {exc}") from None
     the_run = the_store.open(run_id)

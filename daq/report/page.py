@@ -16,6 +16,7 @@ th { background: #f4f4f4; text-align: left; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.rejected td { color: #c0392b; } img { max-width: 100%; border: 1px solid #eee; }
 .note { color: #666; font-size: 0.9em; }
+.caution { color: #8a4b00; background: #fff4e0; border-left: 4px solid #e69500; padding: 4px 8px; }
 """
 
 
@@ -82,25 +83,30 @@ def render(
     parts.append("<h2>Modes</h2>")
     source = {"hits": f"{s['n_averages']} accepted hits, {s.get('estimator')}"}.get(s["source"], s["source"])
     windows = s.get("windows", {}).get("from", "")
+    band = s.get("band")
+    band_text = f" Band {band['low_hz']:.6g}-{band['high_hz']:.6g} Hz: {band['reason']}." if band else ""
+    u_from = sorted({m.get("uncertainty_from") for m in s["modes"]} - {None})
     parts.append(
-        f"<p class='note'>From {_e(source)}. Windows: {_e(windows)}; the exponential window's decay "
-        f"({s['added_decay_1_s']:.4g} 1/s) is removed from every damping ratio. "
+        f"<p class='note'>From {_e(source)}.{_e(band_text)} Windows: {_e(windows)}; the exponential "
+        f"window's decay ({s['added_decay_1_s']:.4g} 1/s) is removed from every damping ratio. "
+        + (f"± is the standard uncertainty of the value, from {_e(', '.join(u_from))}. " if u_from else "")
         + (
-            "± is the standard deviation over the hits identified one by one."
-            if s["source"] == "hits"
+            f"Synthesis error {100 * s['synthesis_error']:.3g} %."
+            if s.get("synthesis_error") is not None
             else ""
         )
         + "</p>"
     )
+    parts += _cautions(s.get("cautions", []))
     mode_rows = []
     for k, m in enumerate(s["modes"], 1):
         q = m["quality"]
         zeta = m["damping_ratio"]
         mode_rows.append([
             f"<td class='num'>{k}</td>",
-            f"<td class='num'>{m['frequency_hz']:.4f} ± {_num(m['frequency_std_hz'], '.2g')}</td>",
+            f"<td class='num'>{m['frequency_hz']:.4f} ± {_num(m.get('frequency_u_hz'), '.2g')}</td>",
             f"<td class='num'>{_num(None if zeta is None else 100 * zeta, '.3g')} ± "
-            f"{_num(None if m['damping_std'] is None else 100 * m['damping_std'], '.2g')}</td>",
+            f"{_num(None if m.get('damping_u') is None else 100 * m['damping_u'], '.2g')}</td>",
             f"<td class='num'>{q['n_stable_orders']}</td>",
             f"<td class='num'>{100 * q['synthesis_share']:.2g} %</td>",
         ])  # fmt: skip
@@ -118,12 +124,16 @@ def render(
         ]
         for r in t["rows"]
     ]  # fmt: skip
-    parts += [
-        f"<h2>Table 2</h2><p class='note'>Beam: {_e(t['beam'])}; Ritz with N = {t['n_functions']}.</p>",
-        _table(
-            ["mode", "Ritz (Hz)", "exact beam (Hz)", "this run (Hz)", "run vs exact (%)", "damping (%)"], rows
-        ),
-    ]
+    if t.get("n_functions") is None:
+        parts.append(f"<h2>Table 2</h2><p class='note'>{_e(t['beam'])}.</p>")
+    else:
+        parts += [
+            f"<h2>Table 2</h2><p class='note'>Beam: {_e(t['beam'])}; Ritz with N = {t['n_functions']}.</p>",
+            _table(
+                ["mode", "Ritz (Hz)", "exact beam (Hz)", "this run (Hz)", "run vs exact (%)", "damping (%)"],
+                rows,
+            ),
+        ]
     for name, title in (("frf", "FRF and coherence"), ("stability", "Stability diagram"),
                         ("synthesis", "Synthesis")):  # fmt: skip
         if name in figures:
@@ -132,6 +142,11 @@ def render(
         parts += _fit_section(fits, figures)
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def _cautions(cautions: list[str]) -> list[str]:
+    """Each caution as a paragraph the eye cannot miss (escaped: texts may come from runs)."""
+    return [f"<p class='caution'>caution: {_e(text)}</p>" for text in cautions]
 
 
 def _fit_section(fits: dict[str, dict], figures: dict[str, bytes]) -> list[str]:
@@ -170,6 +185,7 @@ def _fit_section(fits: dict[str, dict], figures: dict[str, bytes]) -> list[str]:
             for k, m in enumerate(s["modes"], 1)
         ]  # fmt: skip
         parts.append(_table(["mode", "frequency (Hz)", "damping (%)"], mode_rows))
+        parts += _cautions(s.get("cautions", []))
     for key, title in (("response_fit", "Measured and model response"), ("convergence", "Convergence")):
         if key in figures:
             parts += [f"<h2>{_e(title)}</h2>", _img(figures[key], title)]

@@ -1,0 +1,157 @@
+"""Frequency zones: a wide band cut into overlapping sub-bands, each fitted on its own.
+
+Why: one LSCF model over 26 lightly damped modes from 800 Hz to 9.3 kHz needs an order
+near 100 before every mode is stable, costs seconds and gigabytes, and fills the
+diagram with poles on antiresonances; one over a sub-band of six peaks needs an order
+of about 20. Commercial tools do the same (PolyMAX bands, ME'scope's sections).
+
+How the zones are cut (plan_zones):
+  * a mode indicator, the sum over the FRFs of |H|^2 (each FRF scaled to unit RMS),
+    counts the resonance peaks: local maxima standing ``PEAK_PROMINENCE_DB`` above the
+    higher of the valleys either side (scipy.signal.find_peaks, in dB);
+  * the band is split into cores of at most ``PEAKS_PER_ZONE`` peaks, cut at the
+    deepest valley of the indicator between the last peak of one core and the first
+    of the next;
+  * a core also spans at least MIN_CORE_LINES lines (a noisy FRF has peaks of noise a
+    few lines apart; a zone that narrow cannot hold a heavily damped mode);
+  * each zone is its core widened to take in the peak next to it on either side, up to
+    the valley beyond it, and by at least EXTEND_FRACTION of the core (never by more
+    than the core's width): the neighbouring modes are then modelled, not left to bend
+    the core's poles. Only the modes whose frequency lies inside a zone's core are
+    kept from that zone, so the overlap yields no duplicates.
+
+The model order of a zone follows its content: 3 x its peaks + ORDER_MARGIN (a
+complex-basis order is one pole, see analysis.modal_id.lscf; the indicator misses modes
+hidden in a neighbour's skirt, hence 3 and not 1 per peak), between MIN_ORDER and
+MAX_ORDER.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import find_peaks
+
+#: A peak of the mode indicator must stand this far above its surroundings, dB.
+PEAK_PROMINENCE_DB = 10.0
+#: Peaks per zone core.
+PEAKS_PER_ZONE = 4
+#: A zone's core spans at least this many lines.
+MIN_CORE_LINES = 200
+#: A zone reaches at least this fraction of its core's width beyond it on each side.
+EXTEND_FRACTION = 0.25
+#: Orders a zone gets beyond two per peak: room for the noise and the modes just outside.
+ORDER_MARGIN = 10
+MIN_ORDER = 16
+MAX_ORDER = 60
+#: A zone starting closer to 0 Hz than this fraction of its width keeps the real basis:
+#: near DC the mirror poles at negative frequencies lie next to the band.
+REAL_BASIS_BELOW = 0.5
+
+
+@dataclass(frozen=True)
+class Zone:
+    """low_hz, high_hz: the lines fitted; core_low_hz, core_high_hz: the modes kept
+    (core_low_hz <= f < core_high_hz, the last core closed); n_peaks: indicator peaks in
+    the zone; max_order: its LSCF order; basis: "real" or "complex"."""
+
+    low_hz: float
+    high_hz: float
+    core_low_hz: float
+    core_high_hz: float
+    n_peaks: int
+    max_order: int
+    basis: str
+
+    def in_core(self, frequency_hz: float, last: bool) -> bool:
+        above = frequency_hz >= self.core_low_hz
+        return above and (frequency_hz <= self.core_high_hz if last else frequency_hz < self.core_high_hz)
+
+
+def mode_indicator(frf: np.ndarray) -> np.ndarray:
+    """(n_lines,) sum over the FRFs of |H|^2, each FRF scaled to unit mean square."""
+    h = np.atleast_2d(frf)
+    power = np.abs(h) ** 2
+    mean = power.mean(axis=1, keepdims=True)
+    mean[mean == 0] = 1.0
+    return (power / mean).sum(axis=0)
+
+
+def indicator_peaks(mif: np.ndarray) -> np.ndarray:
+    """Indices of the lines where the indicator peaks (see the module docstring)."""
+    with np.errstate(divide="ignore"):
+        level_db = 10 * np.log10(np.maximum(mif, np.finfo(float).tiny))
+    peaks, _ = find_peaks(level_db, prominence=PEAK_PROMINENCE_DB)
+    return peaks
+
+
+def zone_order(n_peaks: int, max_order: int | None) -> int:
+    """The LSCF order of a zone with ``n_peaks`` peaks, or the order the user fixed."""
+    if max_order is not None:
+        return int(max_order)
+    return int(min(MAX_ORDER, max(MIN_ORDER, 3 * n_peaks + ORDER_MARGIN)))
+
+
+def plan_zones(
+    frequency_hz: np.ndarray,
+    frf: np.ndarray,
+    max_order: int | None = None,
+    peaks_per_zone: int = PEAKS_PER_ZONE,
+) -> list[Zone]:
+    """Zones covering the lines ``frequency_hz`` (n_lines,) Hz of ``frf`` (n_frf, n_lines).
+
+    max_order: every zone's order if given (else from its peaks). One zone when the band
+    holds at most ``peaks_per_zone`` + 2 peaks or fewer than 2 x MIN_CORE_LINES lines.
+    """
+    f = np.asarray(frequency_hz, dtype=float)
+    mif = mode_indicator(frf)
+    peaks = indicator_peaks(mif)
+    f_lo, f_hi = float(f[0]), float(f[-1])
+    if peaks.size <= peaks_per_zone + 2 or f.size < 2 * MIN_CORE_LINES:
+        return [_zone(f_lo, f_hi, f_lo, f_hi, peaks.size, max_order)]
+    # Cores of `peaks_per_zone` peaks and at least MIN_CORE_LINES lines: a noisy FRF has
+    # peaks of noise a few lines apart, and a zone a few lines wide cannot hold a
+    # heavily damped mode.
+    groups: list[list[int]] = [[]]
+    for p in peaks:
+        g = groups[-1]
+        if len(g) >= peaks_per_zone and p - g[0] >= MIN_CORE_LINES:
+            groups.append([])
+        groups[-1].append(int(p))
+    if len(groups) > 1 and (f.size - 1 - groups[-1][0]) < MIN_CORE_LINES:
+        groups[-2] += groups.pop()  # the last core too narrow: join it to the one before
+    if len(groups) == 1:
+        return [_zone(f_lo, f_hi, f_lo, f_hi, peaks.size, max_order)]
+    cuts = [_valley(mif, a[-1], b[0]) for a, b in itertools.pairwise(groups)]
+    bounds = [0, *cuts, f.size - 1]
+    zones = []
+    for k in range(len(groups)):
+        core_lo, core_hi = bounds[k], bounds[k + 1]
+        # Widen by the neighbouring peak on each side (up to the valley beyond it), and by
+        # at least EXTEND_FRACTION of the core: the modes next door are then modelled.
+        reach = int(EXTEND_FRACTION * (core_hi - core_lo))
+        before, after = peaks[peaks < core_lo], peaks[peaks > core_hi]
+        low = _valley(mif, before[-2], before[-1]) if before.size >= 2 else 0
+        high = _valley(mif, after[0], after[1]) if after.size >= 2 else f.size - 1
+        # ... but never by more than the core's width (a lone peak far off is not next door).
+        width = core_hi - core_lo
+        low = max(0, core_lo - width, min(low, core_lo - reach))
+        high = min(f.size - 1, core_hi + width, max(high, core_hi + reach))
+        n_in = int(np.count_nonzero((peaks >= low) & (peaks <= high)))
+        zones.append(_zone(f[low], f[high], f[core_lo], f[core_hi], n_in, max_order))
+    return zones
+
+
+def _valley(mif: np.ndarray, i: int, j: int) -> int:
+    """Index of the indicator's minimum between lines i and j (exclusive)."""
+    if j - i < 2:
+        return int(i)
+    return int(i + 1 + np.argmin(mif[i + 1 : j]))
+
+
+def _zone(low: float, high: float, core_low: float, core_high: float, n_peaks: int, max_order: int | None):
+    basis = "real" if low < REAL_BASIS_BELOW * (high - low) else "complex"
+    return Zone(float(low), float(high), float(core_low), float(core_high), int(n_peaks),
+                zone_order(n_peaks, max_order), basis)  # fmt: skip
