@@ -190,6 +190,7 @@ def _frf_dict(frf) -> dict[str, Any] | None:
         "f_max_hz": float(frf.frequency_hz[-1]),
         "coherence": frf.coherence is not None,
         "labels": list(frf.labels),
+        "form": frf.form,
     }
 
 
@@ -262,6 +263,8 @@ def _one_line(value: Any) -> str:
 
 
 def _print_run(d: dict[str, Any], store: str) -> None:
+    from daq.store.model import FRF_FORM_UNITS
+
     def field(name: str, value: Any) -> None:
         print(f"{name:<14}{value}")
 
@@ -323,7 +326,8 @@ def _print_run(d: dict[str, Any], store: str) -> None:
         field(
             name,
             f"{frf['n_frf']} FRF(s) x {frf['n_lines']} points, {frf['f_min_hz']:g}-{frf['f_max_hz']:g} Hz, "
-            f"{coherence}; labels: {', '.join(_one_line(x) for x in frf['labels'])}",
+            f"{frf['form']} ({FRF_FORM_UNITS[frf['form']]}), {coherence}; "
+            f"labels: {', '.join(_one_line(x) for x in frf['labels'])}",
         )
     spectra = d["spectra"]
     if spectra is None:

@@ -30,10 +30,10 @@ def check_schema(f: h5py.File) -> int:
     if schema != layout.SCHEMA_NAME:
         raise StoreError(f"not a run file (schema {schema!r}, expected {layout.SCHEMA_NAME!r})")
     version = get_int(f, layout.ATTR_SCHEMA_VERSION)
-    if version > layout.SCHEMA_VERSION:
+    if version > layout.READ_SCHEMA_VERSION:
         raise StoreError(
             f"run schema version {version} is newer than this software reads "
-            f"({layout.SCHEMA_VERSION}); update cantilever-daq"
+            f"({layout.READ_SCHEMA_VERSION}); update cantilever-daq"
         )
     if version < 1:
         raise StoreError(f"run schema version {version} is not valid")
@@ -121,6 +121,8 @@ def _decode_frf(group: h5py.Group) -> MeasuredFrf:
         frf=get_array(group, layout.D_FRF, "c", 2),
         coherence=get_array(group, layout.D_COHERENCE, "f", 2, required=False),
         labels=get_text_array(group, layout.D_LABEL),
+        # Runs written before FRFs had a form hold accelerance, the only form there was.
+        form=get_text(group, layout.ATTR_FRF_FORM) if layout.ATTR_FRF_FORM in group.attrs else "accelerance",
     )
 
 

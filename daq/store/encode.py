@@ -7,15 +7,15 @@ import numpy as np
 
 from daq.store import layout
 from daq.store.h5io import add_dataset, compact_json, nx_group, set_json, set_number, set_text, text_array
-from daq.store.model import SOFTWARE, Hits, MeasuredFrf, Run, Spectra
-
-FRF_UNITS = "(m/s^2)/N"
+from daq.store.model import FRF_FORM_UNITS, SOFTWARE, Hits, MeasuredFrf, Run, Spectra
 
 
 def encode_run(f: h5py.File, run: Run) -> None:
     """Write ``run`` into the empty, open file ``f`` following layout.py."""
     set_text(f, layout.ATTR_SCHEMA, layout.SCHEMA_NAME)
-    set_number(f, layout.ATTR_SCHEMA_VERSION, layout.SCHEMA_VERSION)
+    forms = {frf.form for frf in (run.analyzer, run.measured_frfs) if frf is not None}
+    version = layout.SCHEMA_VERSION if forms <= {"accelerance"} else layout.SCHEMA_VERSION_FRF_FORMS
+    set_number(f, layout.ATTR_SCHEMA_VERSION, version)
     set_text(f, layout.ATTR_CREATOR, SOFTWARE)
     set_text(f, layout.ATTR_DEFAULT, layout.ENTRY)
 
@@ -88,11 +88,12 @@ def _encode_hits(entry: h5py.Group, hits: Hits) -> None:
 def _encode_frf(entry: h5py.Group, name: str, frf: MeasuredFrf, what: str) -> None:
     group = nx_group(entry, name, "NXdata")
     set_text(group, layout.ATTR_SIGNAL, layout.D_FRF)
+    set_text(group, layout.ATTR_FRF_FORM, frf.form)
     group.attrs.create(layout.ATTR_AXES, text_array([layout.D_FRF_INDEX, layout.D_FREQUENCY]))
     if frf.coherence is not None:
         set_text(group, layout.ATTR_AUX_SIGNALS, layout.D_COHERENCE)
     add_dataset(group, layout.D_FREQUENCY, frf.frequency_hz, "Hz", "frequency")
-    add_dataset(group, layout.D_FRF, frf.frf, FRF_UNITS, what)
+    add_dataset(group, layout.D_FRF, frf.frf, FRF_FORM_UNITS[frf.form], f"{what} ({frf.form})")
     add_dataset(group, layout.D_FRF_INDEX, np.arange(frf.n_frf, dtype=np.int64), None, "FRF number")
     if frf.coherence is not None:
         add_dataset(group, layout.D_COHERENCE, frf.coherence, "", "coherence")

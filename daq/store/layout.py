@@ -12,9 +12,21 @@ from __future__ import annotations
 SCHEMA_NAME = "cantilever-daq.run"
 # Bumped only for changes an older reader would misread; readers refuse newer versions.
 SCHEMA_VERSION = 1
+# Version 2 = version 1 plus FRF groups whose `form` is not accelerance. Written only by
+# runs that hold such an FRF: a version-1 reader, which knows no `form`, would take a
+# receptance for an accelerance, so it must refuse the file instead. Every other run is
+# still written as version 1, readable by older software.
+SCHEMA_VERSION_FRF_FORMS = 2
+READ_SCHEMA_VERSION = SCHEMA_VERSION_FRF_FORMS  # the newest version this code reads
 
 RESULT_SCHEMA_NAME = "cantilever-daq.result"
 RESULT_SCHEMA_VERSION = 1
+# Version 2 = version 1 plus FRF groups whose `form` is not accelerance. Written only by
+# runs that hold such an FRF: a version-1 reader, which knows no `form`, would take a
+# receptance for an accelerance, so it must refuse the file instead. Every other run is
+# still written as version 1, readable by older software.
+SCHEMA_VERSION_FRF_FORMS = 2
+READ_SCHEMA_VERSION = SCHEMA_VERSION_FRF_FORMS  # the newest version this code reads
 
 # HDF5 file-format features: exactly those of HDF5 1.10. They checksum every piece
 # of metadata (superblock v3, object headers v2, attribute and link heaps, and the
@@ -90,6 +102,9 @@ D_FRF = "frf"  # (n_frf, n_lines) complex128, (m/s^2)/N
 D_COHERENCE = "coherence"  # (n_frf, n_lines) dimensionless
 D_LABEL = "label"  # (n_frf,) UTF-8 text
 D_FRF_INDEX = "frf_index"  # (n_frf,) 0..n-1, the first axis for viewers
+# Group attribute: "receptance", "mobility" or "accelerance"; absent (runs written before
+# it existed) means accelerance.
+ATTR_FRF_FORM = "form"
 
 # --- /entry/spectra (optional; spectra that are not FRFs) --------------------------
 # D_FREQUENCY and D_LABEL as in the FRF groups, and:

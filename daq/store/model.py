@@ -102,22 +102,35 @@ class Hits:
         return self.start_s + np.arange(self.n_samples) / self.sample_rate_hz
 
 
+# What an FRF is, and its SI unit: displacement, velocity or acceleration over force.
+FRF_FORMS = ("receptance", "mobility", "accelerance")
+FRF_FORM_UNITS = {"receptance": "m/N", "mobility": "(m/s)/N", "accelerance": "(m/s^2)/N"}
+
+
 @dataclass(eq=False)
 class MeasuredFrf:
-    """Frequency response functions, (m/s^2)/N, with coherence when known.
+    """Frequency response functions in SI units, with coherence when known.
 
     frequency_hz: (n_lines,) Hz, strictly increasing.
-    frf: (n_frf, n_lines) complex128, acceleration over force, (m/s^2)/N.
+    frf: (n_frf, n_lines) complex128 in the unit of ``form``.
     coherence: (n_frf, n_lines) float64 (dimensionless, 0..1) or None.
     labels: n_frf names, e.g. "H21" or the UFF record's description.
+    form: what the FRFs are: "receptance" (displacement over force, m/N), "mobility"
+        (velocity over force, (m/s)/N) or "accelerance" (acceleration over force,
+        (m/s^2)/N, what an impact test measures). The data stay in the form they came in;
+        analysis.spectra.convert_form turns one form into another.
     """
 
     frequency_hz: np.ndarray
     frf: np.ndarray
     coherence: np.ndarray | None
     labels: list[str]
+    form: str = "accelerance"
 
     def __post_init__(self) -> None:
+        if self.form not in FRF_FORMS:
+            raise ValueError(f"frf.form {self.form!r} is not one of {', '.join(FRF_FORMS)}")
+        self.form = str(self.form)
         self.frequency_hz = freq = _frequency_axis(self.frequency_hz, "frf.frequency_hz")
         frf = _array(self.frf, "frf.frf", "fiuc", None, np.complex128)
         if frf.ndim != 2 or frf.shape[0] == 0 or frf.shape[1] != freq.size:

@@ -148,3 +148,4 @@ def assert_same_run(got: Run, want: Run) -> None:
         assert_same_array(g.frf, w.frf)
         assert_same_array(g.coherence, w.coherence)
         assert g.labels == w.labels
+        assert g.form == w.form

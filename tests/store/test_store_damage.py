@@ -160,7 +160,7 @@ def test_newer_schema_version_is_refused(sealed, tmp_path):
     _, path = sealed
     copy = writable_copy(path, tmp_path)
     with h5py.File(copy, "a") as f:
-        f.attrs["schema_version"] = np.int64(2)
+        f.attrs["schema_version"] = np.int64(3)  # 2 is read: FRF forms
     assert_refused(copy, "newer")
 
 
