@@ -287,14 +287,22 @@ def _pilkey_inman(damping: Any, model: Any, f_hz: np.ndarray, zeta: np.ndarray, 
     r, info = damping.pilkey_inman(model, poles, psd=psd)
     left_out = int((~paired).sum())
     info = {**_jsonable(info), "poles_used": int(paired.sum()), "poles_left_out": left_out}
-    message = f"Pilkey-Inman from {int(paired.sum())} identified poles" + (
-        f" ({left_out} more identified modes than model modes left out)" if left_out else ""
+    miss = info.get("residual")
+    # Noisy poles never meet the iteration's 1e-10: matched to POLE_MATCH is success,
+    # a larger miss is a caution of its own (fit_cautions).
+    matched = miss is not None and miss <= POLE_MATCH
+    message = (
+        f"Pilkey-Inman from {int(paired.sum())} identified poles"
+        + (f" ({left_out} more identified modes than model modes left out)" if left_out else "")
+        + (f", matched to {miss:.2g}" if miss is not None else ", not matched")
     )
-    return replace(
-        _fixed(damping, "pilkey-inman", r, objective, int(info.get("iterations", 0)),
-               bool(info.get("converged")), message),
-        psd=psd,
-    ), info  # fmt: skip
+    iterations = int(info.get("iterations", 0))
+    result = _fixed(damping, "pilkey-inman", r, objective, iterations, matched, message)
+    return replace(result, psd=psd), info
+
+
+#: Largest relative pole miss at which the pole iteration counts as matching the poles.
+POLE_MATCH = 1e-3
 
 
 def _relative_residual(data: Any, domain: str, residual: np.ndarray) -> float | None:
@@ -332,7 +340,10 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
         tries.append(f"--functions {min(found, MAX_FUNCTIONS)} (one function per identified mode)")
     if summary["options"].get("stiffness") != "modes" and summary["stiffness"].get("update") != "none":
         tries.append("--stiffness modes (each mode at its identified frequency)")
-    tries.append("--starts 8 or --method de (is the optimum global?)")
+    if summary["method"] in ("modal", "pilkey-inman"):
+        tries.append("--method ls (fitted to the records themselves)")
+    else:
+        tries.append("--starts 8 or --method de (is the optimum global?)")
     floor = summary.get("psi_noise_floor")
     if floor and summary["psi"] > PSI_CAUTION * floor:
         out.append(
@@ -347,12 +358,13 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
         )
     elif more_modes and not (floor and summary["psi"] > PSI_CAUTION * floor):
         out.append(f"{more_modes} (the modes beyond the model are left to the residual)")
-    if not summary.get("success", True):
+    if not summary.get("success", True) and summary["method"] != "pilkey-inman":
         out.append(f"the {summary['method']} fit did not converge ({summary.get('message', '')}): "
                    "its R is where it stopped; try --starts 8 or another --method")  # fmt: skip
     box = summary.get("search_box")
     needed = summary.get("start", {}).get("coded_scale")
-    if box is not None and needed is not None and needed > box:
+    at_floor = bool(floor) and summary["psi"] <= PSI_CAUTION * floor
+    if box is not None and needed is not None and needed > box and not at_floor:
         out.append(
             f"the modal estimate needs terms up to {needed:.4g}, outside the search range "
             f"[-{box:g}, {box:g}]{' (the seed paper’s GA range)' if summary['method'] == 'ga' else ''}: "
@@ -378,7 +390,7 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
     if any(z is None or z <= 0 or z >= 1 for z in zetas):
         out.append("with this R some mode is unstable, undamped or overdamped: R does not describe the beam")
     poles = summary.get("pole_fit") or {}
-    if poles and (poles.get("residual") is None or poles["residual"] > 1e-3):
+    if poles and (poles.get("residual") is None or poles["residual"] > POLE_MATCH):
         miss = poles.get("residual")
         out.append(
             "the pole iteration did not match the identified poles"
@@ -488,10 +500,11 @@ GA_BOUNDS = (-10.0, 10.0)
 
 
 def _coded_scale(start: np.ndarray, psd: bool) -> float:
-    """Largest coded term the modal estimate needs: max |R_ij|, or its square root
-    with R = L L^T (the Cholesky factor's scale)."""
-    scale = float(np.max(np.abs(start)))
-    return float(np.sqrt(scale)) if psd else scale
+    """Largest coded term the modal estimate needs: max |R_ij|, or with R = L L^T the
+    largest term of its Cholesky factor L."""
+    from analysis.damping import matrix_to_theta
+
+    return float(np.max(np.abs(matrix_to_theta(start, psd))))
 
 
 def _de_bounds(start: np.ndarray, psd: bool) -> tuple[float, float]:

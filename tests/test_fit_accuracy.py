@@ -60,7 +60,8 @@ def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(tmp_path
     zetas = [m["damping_ratio"] for m in info["modes"]]
     assert zetas == pytest.approx(REALISTIC_DAMPING_RATIOS, rel=0.15)
     assert info["psi"] < 1.5 * info["psi_noise_floor"]
-    assert info["psd"] and min(info["damping_eigenvalues"]) >= -1e-9 * max(info["damping_eigenvalues"])
+    assert info["psd"]
+    assert min(info["damping_eigenvalues"]) >= -1e-9 * max(info["damping_eigenvalues"])
     assert all(row[i] > 0 for i, row in enumerate(info["damping_matrix"]))
     assert info["cautions"] == []
     assert info["stiffness"]["mode_frequencies"]["applied"]
