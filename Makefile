@@ -57,6 +57,7 @@ bench: $(VENV)/.installed-dev
 	$(BIN)/python bench/bench_sdf_import.py
 	$(BIN)/python bench/bench_spectra.py
 	$(BIN)/python bench/bench_modal.py
+	$(BIN)/python bench/bench_wideband.py
 	$(BIN)/python bench/bench_analysis.py
 	$(BIN)/python bench/bench_damping.py
 	$(BIN)/python bench/bench_ga_seeds.py
