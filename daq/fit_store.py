@@ -338,6 +338,8 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
     tries = []
     if more_modes:
         tries.append(f"--functions {min(found, MAX_FUNCTIONS)} (one function per identified mode)")
+    elif summary["model"].get("functions_requested") is None and n < MAX_FUNCTIONS:
+        tries.append(f"--functions {n + 1} (if the analysis missed a mode in the band)")
     if summary["options"].get("stiffness") != "modes" and summary["stiffness"].get("update") != "none":
         tries.append("--stiffness modes (each mode at its identified frequency)")
     if summary["method"] in ("modal", "pilkey-inman"):

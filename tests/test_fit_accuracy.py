@@ -27,7 +27,8 @@ def seed_run(tmp_path_factory) -> tuple[Path, str]:
 
 def test_seed_run_least_squares_gives_the_eq18_damping_at_the_noise_level(seed_run):
     store, run_id = seed_run
-    (info,) = fit_json(store, run_id)
+    # eq (18) is 3 x 3: the model is the seed's N = 3 whatever the analysis identified.
+    (info,) = fit_json(store, run_id, "--functions", "3")
     assert info["run_id"] == run_id
     assert info["method"] == "ls"
     assert len(info["damping_matrix"]) == 3
@@ -40,9 +41,9 @@ def test_seed_run_least_squares_gives_the_eq18_damping_at_the_noise_level(seed_r
 
 def test_the_seed_ga_is_reproducible_and_reported_as_it_comes_out(seed_run):
     store, run_id = seed_run
-    first = fit_json(store, run_id, "--method", "ga", "--seed", "3")[0]
-    again = fit_json(store, run_id, "--method", "ga", "--seed", "3", "--force")[0]
-    other = fit_json(store, run_id, "--method", "ga", "--seed", "4", "--force")[0]
+    first = fit_json(store, run_id, "--method", "ga", "--seed", "3", "--functions", "3")[0]
+    again = fit_json(store, run_id, "--method", "ga", "--seed", "3", "--functions", "3", "--force")[0]
+    other = fit_json(store, run_id, "--method", "ga", "--seed", "4", "--functions", "3", "--force")[0]
     assert first["damping_matrix"] == again["damping_matrix"]
     assert other["damping_matrix"] != first["damping_matrix"]
     assert first["n_evaluations"] >= 1500  # the seed's budget: 50 x 30 (+ the first generation)
@@ -112,19 +113,25 @@ def test_any_model_size_and_the_per_hit_cross_check(seed_run):
     assert len(info["damping_matrix"]) == 4
     assert all(len(row) == 4 for row in info["damping_matrix"])
     assert len(info["uncertainty"]["names"]) == 10  # 4 x 5 / 2 symmetric terms
-    (three,) = fit_json(store, run_id)
+    (three,) = fit_json(store, run_id, "--functions", "3")
     from_hits = three["uncertainty"]["std_from_hits"]
     assert from_hits is not None
     assert len(from_hits) == 6
     # Refitting each hit alone gives a spread of the same order as the Fisher figure
     # (both measure how noise moves R; they need not agree closely, see docs/damping.md).
-    for fisher, hits in zip(three["uncertainty"]["std"], from_hits, strict=True):
+    unc = three["uncertainty"]
+    for fisher, hits in zip(unc["std_fisher"], from_hits, strict=True):
         assert 0.1 < hits / fisher < 10
+    # The printed ± is the larger of the two, term by term, and says which it is.
+    figures = zip(unc["std"], unc["std_fisher"], from_hits, unc["std_source"], strict=True)
+    for std, fisher, hits, source in figures:
+        assert std == max(fisher, hits)
+        assert source == ("hits" if hits > fisher else "fisher")
 
 
 def test_the_frequency_domain_fit_models_the_exponential_window(seed_run):
     store, run_id = seed_run
-    (info,) = fit_json(store, run_id, "--domain", "frequency")
+    (info,) = fit_json(store, run_id, "--domain", "frequency", "--functions", "3")
     assert info["domain"] == "frequency"
     zetas = [m["damping_ratio"] for m in info["modes"]]
     # The analysed FRF carries the exponential window's extra decay (docs/analysis.md);
@@ -158,7 +165,7 @@ def test_an_imported_frf_run_is_fitted_in_the_frequency_domain(tmp_path):
 
 def test_random_starts_find_no_better_optimum_on_the_seed_run(seed_run):
     store, run_id = seed_run
-    (info,) = fit_json(store, run_id, "--starts", "4")
+    (info,) = fit_json(store, run_id, "--starts", "4", "--functions", "3")
     check = info["multi_start"]
     assert check["starts"] == 4
     assert not check["better_psi_found"]
