@@ -223,6 +223,8 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band) -> Run
                     "damping_scatter_rel": float(mode.quality.damping_scatter_rel),
                     "synthesis_share": float(mode.quality.synthesis_share),
                     "accepted": bool(mode.quality.accepted),
+                    "frequency_spread_top_hz": float(mode.quality.frequency_spread_top_hz),
+                    "damping_spread_top": float(mode.quality.damping_spread_top),
                 },
             )
         )
@@ -343,14 +345,11 @@ def _estimates(result: RunAnalysis, frf: np.ndarray, decay: float, weights=None)
 
 
 def _order_spread(result: RunAnalysis, k: int) -> tuple[float, float]:
-    """Standard deviation of mode k's frequency (Hz) and damping over the orders of its
-    cluster: the part of the uncertainty the choice of model order makes."""
-    m = result.modes[k]
-    q = m.quality
-    return (
-        q["frequency_scatter_rel"] * m.frequency_hz,
-        q["damping_scatter_rel"] * abs(m.damping_ratio_windowed),
-    )
+    """Standard deviation of mode k's frequency (Hz) and damping over the top orders of
+    its zone: the part of the uncertainty the choice of model order makes (0 if unknown)."""
+    q = result.modes[k].quality
+    f, z = q.get("frequency_spread_top_hz", np.nan), q.get("damping_spread_top", np.nan)
+    return (float(f) if np.isfinite(f) else 0.0, float(z) if np.isfinite(z) else 0.0)
 
 
 def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions, decay: float) -> None:

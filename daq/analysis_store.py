@@ -160,7 +160,7 @@ def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: Analy
                 "damping_std": _num(m.damping_std),
                 "n_hits_matched": m.n_hits_matched,
                 "modal_constant": [[float(c.real), float(c.imag)] for c in m.modal_constant],
-                "quality": m.quality,
+                "quality": {k: _num(v) if isinstance(v, float) else v for k, v in m.quality.items()},
             }
             for m in result.modes
         ],

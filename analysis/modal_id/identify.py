@@ -12,7 +12,13 @@ import numpy as np
 
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.lsfd import FORMS, lsfd
-from analysis.modal_id.stability import Cluster, cluster_poles, pick_clusters, stability_diagram
+from analysis.modal_id.stability import (
+    Cluster,
+    cluster_poles,
+    frequency_damping,
+    pick_clusters,
+    stability_diagram,
+)
 from analysis.modal_id.zones import MIN_ORDER, Zone, plan_zones
 
 
@@ -23,13 +29,17 @@ class ModeQuality:
     term (both poles of the pair) over the sum of the energies of all terms of the
     synthesis (modes and residuals), over the FRFs and lines used; accepted: False for
     a cluster picked for a frequency of interest that failed a selection rule (too few
-    stable orders, ...)."""
+    stable orders, ...); *_spread_top: standard deviation of the cluster's frequency
+    (Hz) and damping over its poles in the top TOP_ORDERS orders of its zone (the
+    models a result is read from; the lowest orders of a chain are still immature)."""
 
     n_stable_orders: int
     frequency_scatter_rel: float
     damping_scatter_rel: float
     synthesis_share: float
     accepted: bool = True
+    frequency_spread_top_hz: float = float("nan")
+    damping_spread_top: float = float("nan")
 
 
 @dataclass
@@ -197,6 +207,7 @@ def identify_modes(
             damping_scatter_rel=cl.damping_scatter_rel,
             synthesis_share=float(energy_modes[r] / total) if total > 0 else 0.0,
             accepted=bool(cl.accepted),
+            **_top_spread(fits[owner[c][0]], cl),
         )
         modes.append(Mode(cl.frequency_hz, cl.damping_ratio, poles[r], est.modal_constants[r], quality))
     diagram = _diagram(fits, owner, chosen)
@@ -211,6 +222,22 @@ def identify_modes(
         method=f"LSCF in {len(zones)} zone(s) ({orders_text}) + stability clustering + LSFD ({form})",
         zones=list(zones),
     )
+
+
+#: Orders at the top of a zone whose poles give a mode's spread over the model orders.
+TOP_ORDERS = 11
+
+
+def _top_spread(zone_fit: _ZoneFit, cluster: Cluster) -> dict[str, float]:
+    top = len(zone_fit.fit.poles) - TOP_ORDERS
+    p = np.array([zone_fit.fit.poles[k][i] for k, i in cluster.members if k >= top])
+    if p.size < 2:
+        return {}
+    f, z = frequency_damping(p)
+    return {
+        "frequency_spread_top_hz": float(np.std(f, ddof=1)),
+        "damping_spread_top": float(np.std(z, ddof=1)),
+    }
 
 
 def _diagram(fits: list[_ZoneFit], owner: list[tuple[int, int]], chosen: list[int]) -> StabilityDiagram:

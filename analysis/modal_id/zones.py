@@ -1,9 +1,11 @@
 """Frequency zones: a wide band cut into overlapping sub-bands, each fitted on its own.
 
 Why: one LSCF model over 26 lightly damped modes from 800 Hz to 9.3 kHz needs an order
-near 100 before every mode is stable, costs seconds and gigabytes, and fills the
-diagram with poles on antiresonances; one over a sub-band of six peaks needs an order
-of about 20. Commercial tools do the same (PolyMAX bands, ME'scope's sections).
+near 100 before every mode is stable; this project's whole-band fit took 25 s and 1.2 GB
+at order 200 and put poles on antiresonances (measured on a real 5-hit impact test
+before zones), while the default order 40 found 4 modes. A sub-band of a few peaks needs
+an order of about 20, fits in milliseconds, and its stability diagram is readable.
+Commercial tools do the same (PolyMAX bands, ME'scope's sections).
 
 How the zones are cut (plan_zones):
   * a mode indicator, the sum over the FRFs of |H|^2 (each FRF scaled to unit RMS),
