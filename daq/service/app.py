@@ -400,19 +400,47 @@ def _run_row(service: Service, s: Any) -> dict[str, Any]:
     row = summary_dict(s)
     row.pop("file", None)
     row.update(analysis="none", fit="none", frequencies_hz=None, damping_ratios=None, fit_psi=None)
+    # Added later (older clients ignore them): what the page must show beside the numbers,
+    # so that a result that may mislead is never silent in the listing.
+    row.update(
+        frequencies_u_hz=None, damping_u=None, band=None, synthesis_error=None, cautions=[], fit_cautions=[]
+    )
     if s.error is not None:
         return plain(row)
     state = service.jobs.state(s.run_id)
     row.update(analysis=state["analysis"], fit=state["fit"])
     analysis = service.analysis(s.run_id) if state["analysis"] == "done" else None
     if analysis is not None:
-        modes = analysis["summary"].get("modes", [])
+        summary = analysis["summary"]
+        modes = summary.get("modes", [])
         row["frequencies_hz"] = [m["frequency_hz"] for m in modes]
         row["damping_ratios"] = [m["damping_ratio"] for m in modes]
+        row["frequencies_u_hz"] = [m.get("frequency_u_hz") for m in modes]
+        row["damping_u"] = [m.get("damping_u") for m in modes]
+        row["band"] = summary.get("band")
+        row["synthesis_error"] = summary.get("synthesis_error")
+        row["cautions"] = analysis_cautions(summary)
     fit = service.default_fit(s.run_id) if state["fit"] == "done" else None
     if fit is not None:
         row["fit_psi"] = fit["summary"].get("psi")
+        row["fit_cautions"] = _texts(fit["summary"].get("cautions"))
     return plain(row)
+
+
+def analysis_cautions(summary: dict[str, Any]) -> list[str]:
+    """The analysis's cautions as ``daq analyze`` prints them: its ``cautions``, and
+    the windows' when the source does not say which it applied."""
+    out = _texts(summary.get("cautions"))
+    windows = summary.get("windows")
+    source = windows.get("from") if isinstance(windows, dict) else None
+    if isinstance(source, str) and source.startswith("unknown"):
+        out.insert(0, f"windows {source}")
+    return out
+
+
+def _texts(value: Any) -> list[str]:
+    """A stored list of sentences as a list of strings (anything else: none)."""
+    return [str(v) for v in value] if isinstance(value, list | tuple) else []
 
 
 def _remove(folder: Path) -> None:

@@ -230,3 +230,36 @@ def sim_server(*args: str, port: int = 0) -> Iterator[tuple[subprocess.Popen, st
         proc.wait(10)
         proc.stdout.close()
         proc.stderr.close()
+
+
+def import_noise_frf(tmp_path: Path, store: Path, seed: int = 1) -> str:
+    """`daq import` of a UFF 58 FRF of pure complex noise (1-800 Hz) into ``store``: a
+    run whose analysis finds no mode and says so in its cautions; the new run's id."""
+    import gc
+    import warnings
+
+    import numpy as np
+    import pyuff
+    from cli_helpers import invoke_daq
+
+    from daq.store import Store
+
+    rng = np.random.default_rng(seed)
+    x = np.arange(1, 801, dtype=float)
+    dset = pyuff.prepare_58(
+        binary=1, id1="noise", func_type=4, rsp_node=2, rsp_dir=3, ref_node=1, ref_dir=3,
+        abscissa_spacing=1, abscissa_spec_data_type=18, ordinate_spec_data_type=12,
+        orddenom_spec_data_type=13, z_axis_spec_data_type=0,
+        data=rng.normal(size=x.size) + 1j * rng.normal(size=x.size), x=x,
+    )  # fmt: skip
+    dset.update(abscissa_axis_units_lab="Hz", ordinate_axis_units_lab="m/s^2", orddenom_axis_units_lab="N")
+    path = tmp_path / f"noise-{seed}.uff"
+    with warnings.catch_warnings():  # pyuff leaves its file for the collector to close
+        warnings.simplefilter("ignore", ResourceWarning)
+        pyuff.UFF(str(path)).write_sets([dset], mode="add")
+        gc.collect()
+    before = {s.run_id for s in Store(store).list()} if store.is_dir() else set()
+    result = invoke_daq("import", str(path), "--store", str(store))
+    assert result.returncode == 0, result.stderr
+    (run_id,) = {s.run_id for s in Store(store).list()} - before
+    return run_id

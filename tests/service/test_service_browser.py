@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from conftest import NO_BROWSER
-from service_helpers import serving, wait_for
+from service_helpers import import_noise_frf, serving, wait_for
 
 from daq.store import Store
 
@@ -113,6 +113,21 @@ def test_a_technician_captures_accepts_and_rejects_by_clicking(tmp_path, browser
         assert page.locator("#table2 tbody tr").count() >= 3
         assert page.locator("#damping-matrix tr").count() >= 3
 
+        # Beside the numbers: ± the standard uncertainty, the band and why, the synthesis
+        # error, and one "caution:" line for every caution of the analysis and the fit.
+        analysis = served.get(f"/api/runs/{run_id}/analysis").json()
+        assert " ± " in first_mode
+        assert "standard uncertainty" in page.locator("#modes-note").inner_text()
+        band = page.locator("#analysis-band").inner_text()
+        assert band.startswith("band ")
+        assert analysis["band"]["reason"] in band
+        assert "synthesis error" in band
+        shown = page.locator("#analysis-cautions .caution").all_inner_texts()
+        assert shown == [f"caution: {c}" for c in analysis["cautions"]]
+        fit = served.get(f"/api/runs/{run_id}/fits").json()["fit-ls"]
+        shown = page.locator("#fit-cautions .caution").all_inner_texts()
+        assert shown == [f"caution: {c}" for c in fit["cautions"]]
+
         # The runs page lists it with its results and report.
         page.goto(f"{served.url}/runs")
         row = page.locator(f'#runs-table tr[data-run-id="{run_id}"]')
@@ -127,3 +142,37 @@ def test_a_technician_captures_accepts_and_rejects_by_clicking(tmp_path, browser
         assert served.get(report).status_code == 200
     assert errors == []
     assert outside == []  # every script and style came from the service itself
+
+
+def test_the_runs_page_shows_the_cautions_of_a_run_of_pure_noise(tmp_path, browser_page):
+    page, errors, outside = browser_page
+    store = tmp_path / "store"
+    run_id = import_noise_frf(tmp_path, store)
+    with serving(tmp_path, "--sim", "--workers", "1", store=store) as served:
+        page.goto(f"{served.url}/runs")
+        notes = page.locator(f'#runs-table tr[data-notes-for="{run_id}"]')
+        no_mode = notes.locator(".caution", has_text="caution: no mode found in 1-800 Hz")
+        no_mode.wait_for(timeout=120_000)  # once its analysis is done
+        assert no_mode.is_visible()
+        lines = notes.locator(".caution").all_inner_texts()
+        assert all(line.startswith("caution: ") for line in lines)
+        assert any("synthesis error" in line for line in lines)
+        facts = notes.locator(".run-facts").inner_text()
+        assert facts.startswith("band 1–800 Hz: ")
+        assert "synthesis error 99" in facts
+
+        # The texts are text: a foreign run's caution cannot put markup on the page.
+        (row,) = [r for r in served.get("/api/runs").json() if r["run_id"] == run_id]
+        row["cautions"] = ["<img src=x onerror=window.pwned=1>"]
+        row["fit_cautions"] = ["<b>bold</b>"]
+        page.route(re.compile(r".*/api/runs$"), lambda route: route.fulfill(json=[row]))
+        page.reload()
+        notes.locator(".caution").first.wait_for()
+        assert notes.locator(".caution").all_inner_texts() == [
+            "caution: <img src=x onerror=window.pwned=1>",
+            "caution: fit: <b>bold</b>",
+        ]
+        assert page.locator("#runs-table img, #runs-table b").count() == 0
+        assert page.evaluate("() => window.pwned") is None
+    assert errors == []
+    assert outside == []

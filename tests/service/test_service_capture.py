@@ -78,7 +78,7 @@ def test_a_capture_decided_through_the_api_lands_with_the_right_flags_and_gets_i
         analysis = served.get(f"/api/runs/{run_id}/analysis").json()
         assert [r["mode"] for r in analysis["table2"]["rows"]][:3] == [1, 2, 3]
         fits = served.get(f"/api/runs/{run_id}/fits").json()
-        zetas = [m["damping_ratio"] for m in fits["fit-ls"]["modes"]]
+        zetas = [m["damping_ratio"] for m in fits["fit-ls"]["modes"]][:3]  # one function per identified mode
         assert zetas == pytest.approx(REALISTIC_DAMPING_RATIOS[:3], rel=0.25)
         detail = served.get(f"/api/runs/{run_id}").json()
         assert detail["run"]["file"] == f"{run_id}.h5"  # never the server's path

@@ -398,6 +398,47 @@
     },
   };
 
+  /* --------------------------------------------------------------- cautions */
+
+  /* Stored texts (a list of sentences) as strings; anything else: none. */
+  function texts(list) {
+    return Array.isArray(list) ? list.filter((t) => t !== null && t !== undefined).map(String) : [];
+  }
+
+  /* An analysis summary's cautions as `daq analyze` prints them: the windows' when the
+   * source does not say which it applied, then the summary's own `cautions`. */
+  function analysisCautions(summary) {
+    if (!summary || typeof summary !== "object") return [];
+    const out = texts(summary.cautions);
+    const from = summary.windows && typeof summary.windows === "object" ? summary.windows.from : null;
+    if (typeof from === "string" && from.startsWith("unknown")) out.unshift("windows " + from);
+    return out;
+  }
+
+  /* One visible "caution: ..." line per text, each an element `tag` (li, p, div).
+   * Text only (textContent): the sentences may come from a foreign run. */
+  function cautionLines(list, tag) {
+    return texts(list).map((t) => el(tag || "li", { class: "caution" }, "caution: " + t));
+  }
+
+  /* "band 5-7035 Hz: <reason>" of an analysis summary; "" when it has none. */
+  function bandText(band) {
+    if (!band || typeof band !== "object") return "";
+    let text = "band " + fmt.sig(band.low_hz, 6) + "–" + fmt.sig(band.high_hz, 6) + " Hz";
+    if (band.reason) text += ": " + String(band.reason);
+    return text;
+  }
+
+  /* "synthesis error 38 %" (a fraction stored); "" when unknown. */
+  function synthesisText(error) {
+    return isNum(error) ? "synthesis error " + fmt.sig(error * 100, 3) + " %" : "";
+  }
+
+  /* "12.3456 ± 0.0012" of a value and its standard uncertainty (u may be null). */
+  function withU(valueText, u, uText) {
+    return isNum(u) ? valueText + " ± " + uText : valueText;
+  }
+
   /* ------------------------------------------------------------------ plots */
 
   /* plot(container, {xLabel, yLabel, series: [{label, stroke}], logY, yRange: [lo, hi],
@@ -576,5 +617,10 @@
     el,
     $,
     plot,
+    analysisCautions,
+    cautionLines,
+    bandText,
+    synthesisText,
+    withU,
   };
 })();

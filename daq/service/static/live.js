@@ -345,9 +345,19 @@
     box.textContent = text;
   }
 
+  /* The band analysed and why, the synthesis error, and every caution of the analysis
+   * as a visible "caution: ..." line: a result that may mislead is never silent. */
+  function renderAnalysisNotes() {
+    const a = results.analysis && typeof results.analysis === "object" ? results.analysis : null;
+    $("analysis-band").textContent = a
+      ? [DAQ.bandText(a.band), DAQ.synthesisText(a.synthesis_error)].filter(Boolean).join(" · ")
+      : "";
+    $("analysis-cautions").replaceChildren(...DAQ.cautionLines(DAQ.analysisCautions(a)));
+  }
+
   function renderModes() {
     const body = $("modes-table").tBodies[0];
-    const modes = (results.analysis && results.analysis.modes) || [];
+    const modes = (results.analysis && Array.isArray(results.analysis.modes) && results.analysis.modes) || [];
     body.replaceChildren(
       ...modes.map((m, i) =>
         el(
@@ -356,28 +366,39 @@
           el("td", { class: "num" }, String(i + 1)),
           el(
             "td",
-            { class: "num", title: typeof m.frequency_std_hz === "number" ? "± " + fmt.sig(m.frequency_std_hz, 2) + " Hz" : null },
-            fmt.fixed(m.frequency_hz, 4)
+            { class: "num frequency", title: m.uncertainty_from ? "± from " + m.uncertainty_from : null },
+            DAQ.withU(fmt.fixed(m.frequency_hz, 4), m.frequency_u_hz, fmt.sig(m.frequency_u_hz, 2))
           ),
           el(
             "td",
-            { class: "num", title: typeof m.damping_std === "number" ? "± " + fmt.pct(m.damping_std, 3) + " %" : null },
-            fmt.pct(m.damping_ratio, 3)
+            { class: "num damping", title: m.uncertainty_from ? "± from " + m.uncertainty_from : null },
+            DAQ.withU(fmt.pct(m.damping_ratio, 3), m.damping_u, fmt.sig(m.damping_u * 100, 2))
           )
         )
       )
     );
+    const from = [...new Set(modes.map((m) => m.uncertainty_from).filter(Boolean))].sort();
+    $("modes-note").textContent = modes.some((m) => typeof m.frequency_u_hz === "number" || typeof m.damping_u === "number")
+      ? "± is the standard uncertainty of the value" + (from.length ? ", from " + from.join(", ") : "") + "."
+      : "";
   }
 
   function renderTable2() {
     const body = $("table2").tBodies[0];
     const t2 = results.analysis && results.analysis.table2;
-    const rows = (t2 && t2.rows) || [];
-    $("table2-caption").textContent = t2
-      ? [t2.beam ? "beam: " + t2.beam : null, t2.n_functions ? "Ritz N = " + t2.n_functions : null]
-          .filter(Boolean)
-          .join(", ")
-      : "";
+    const rows = (t2 && Array.isArray(t2.rows) && t2.rows) || [];
+    const noBeam = t2 && !rows.length && t2.beam;
+    $("table2-caption").textContent =
+      t2 && !noBeam
+        ? [t2.beam ? "beam: " + t2.beam : null, t2.n_functions ? "Ritz N = " + t2.n_functions : null]
+            .filter(Boolean)
+            .join(", ")
+        : "";
+    if (noBeam) {
+      // e.g. "no beam model for this run: it records no test article"
+      body.replaceChildren(el("tr", { class: "empty-row no-beam" }, el("td", { colspan: "6" }, String(t2.beam))));
+      return;
+    }
     body.replaceChildren(
       ...rows.map((r) =>
         el(
@@ -446,6 +467,7 @@
     if (name) select.value = name;
 
     const fit = name ? fits[name] : null;
+    $("fit-cautions").replaceChildren(...DAQ.cautionLines(fit && fit.cautions));
     if (table.tHead) table.tHead.remove();
     if (!fit || !Array.isArray(fit.damping_matrix)) {
       body.replaceChildren();
@@ -504,6 +526,7 @@
 
   function renderResults() {
     renderResultsStatus();
+    renderAnalysisNotes();
     renderModes();
     renderTable2();
     renderFits();
@@ -643,6 +666,7 @@
     }
     if (my !== resultsReq.analysis || runId !== results.runId) return;
     results.analysis = a;
+    renderAnalysisNotes();
     renderModes();
     renderTable2();
   }

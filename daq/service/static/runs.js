@@ -23,6 +23,31 @@
     return list.slice(0, 3).map(format).join(", ");
   }
 
+  /* The k-th standard uncertainty of a list (older services send none). */
+  function uOf(list, k) {
+    return Array.isArray(list) ? list[k] : null;
+  }
+
+  /* Under a run with an analysis or a fit: the band analysed and why, the synthesis
+   * error, and every caution of the analysis and the fit as a "caution: ..." line. */
+  function notesRow(r) {
+    const cautions = DAQ.analysisCautions({ cautions: r.cautions }).concat(
+      (Array.isArray(r.fit_cautions) ? r.fit_cautions : []).map((t) => "fit: " + t)
+    );
+    const facts = [DAQ.bandText(r.band), DAQ.synthesisText(r.synthesis_error)].filter(Boolean).join(" · ");
+    if (!cautions.length && !facts) return null;
+    return el(
+      "tr",
+      { class: "run-notes-row", dataset: { notesFor: r.run_id } },
+      el(
+        "td",
+        { colspan: "10", class: "run-notes" },
+        facts ? el("div", { class: "muted small run-facts" }, facts) : null,
+        ...DAQ.cautionLines(cautions, "div")
+      )
+    );
+  }
+
   function newestFirst(a, b) {
     const ta = Date.parse(a.start_time);
     const tb = Date.parse(b.start_time);
@@ -54,8 +79,20 @@
       cells.push(el("td", { class: "run-error", colspan: "3" }, r.error));
     } else {
       cells.push(
-        el("td", { class: "num frequencies" }, firstThree(r.frequencies_hz, (f) => fmt.fixed(f, 2))),
-        el("td", { class: "num damping" }, firstThree(r.damping_ratios, (d) => fmt.pct(d, 2))),
+        el(
+          "td",
+          { class: "num frequencies" },
+          firstThree(r.frequencies_hz, (f, k) =>
+            DAQ.withU(fmt.fixed(f, 2), uOf(r.frequencies_u_hz, k), fmt.sig(uOf(r.frequencies_u_hz, k), 1))
+          )
+        ),
+        el(
+          "td",
+          { class: "num damping" },
+          firstThree(r.damping_ratios, (d, k) =>
+            DAQ.withU(fmt.pct(d, 2), uOf(r.damping_u, k), fmt.sig(uOf(r.damping_u, k) * 100, 1))
+          )
+        ),
         el("td", { class: "num psi", title: r.fit ? "fit: " + r.fit : null }, fmt.sig(r.fit_psi, 3))
       );
     }
@@ -78,7 +115,9 @@
       ["Files"]
     );
     cells.forEach((c, i) => c.setAttribute("data-label", labels[i]));
-    return el("tr", { dataset: { runId: id }, class: r.error ? "damaged" : null }, ...cells);
+    const main = el("tr", { dataset: { runId: id }, class: r.error ? "damaged" : null }, ...cells);
+    const notes = r.error ? null : notesRow(r);
+    return notes ? [main, notes] : [main];
   }
 
   function render() {
@@ -87,7 +126,7 @@
     if (!sorted.length) {
       body.replaceChildren(el("tr", { class: "empty-row" }, el("td", { colspan: "10" }, "No runs in the store yet.")));
     } else {
-      body.replaceChildren(...sorted.map(row));
+      body.replaceChildren(...sorted.flatMap(row));
     }
     const damaged = sorted.filter((r) => r.error).length;
     $("runs-summary").textContent =
