@@ -26,9 +26,16 @@ TEXT_SUFFIXES = (".csv", ".txt", ".tsv", ".dat", ".asc")
 UFF_SUFFIXES = (".uff", ".unv", ".uf")
 
 
+class FrfForm(enum.StrEnum):
+    receptance = "receptance"
+    mobility = "mobility"
+    accelerance = "accelerance"
+
+
 class ImportFormat(enum.StrEnum):
     auto = "auto"
     csv = "csv"
+    frf_text = "frf-text"
     uff = "uff"
     sdf = "sdf"
     run = "run"
@@ -45,8 +52,9 @@ def import_file(
         typer.Option(
             "--format",
             "-f",
-            help="csv (or whitespace text), uff (dataset 58), sdf (HP Standard Data Format), "
-            "run (a run file of another store); auto guesses from the content and the name.",
+            help="csv (time records as text), frf-text (a table of frequency and Re/Im or "
+            "magnitude/phase per FRF), uff (dataset 58), sdf (HP Standard Data Format), "
+            "run (a run file of another store); auto decides from the content and the name, and says why.",
         ),
     ] = ImportFormat.auto,
     columns: Annotated[
@@ -58,32 +66,56 @@ def import_file(
         ),
     ] = None,
     force_unit: Annotated[
-        str, typer.Option(metavar="<unit>", help="CSV: N, kN, lbf, or volts with a sensitivity: mV@2.25mV/N.")
-    ] = "N",
+        str | None,
+        typer.Option(
+            metavar="<unit>",
+            help="CSV: N, kN, lbf, or volts with a sensitivity: mV@2.25mV/N; wins over the header's "
+            "unit [default: the header's, else N].",
+        ),
+    ] = None,
     response_unit: Annotated[
-        str,
-        typer.Option(metavar="<unit>", help="CSV: m/s^2, g, mm/s^2, or volts with a sensitivity: mV@10mV/g."),
-    ] = "m/s^2",
+        str | None,
+        typer.Option(
+            metavar="<unit>",
+            help="CSV: m/s^2, g, mm/s^2, or volts with a sensitivity: mV@10mV/g; wins over the "
+            "header's unit [default: the header's, else m/s^2].",
+        ),
+    ] = None,
+    frf_form: Annotated[
+        FrfForm | None,
+        typer.Option(
+            help="frf-text: what the values are (displacement, velocity or acceleration over force, "
+            "in SI units); wins over the header's unit [default: the header's, else accelerance].",
+        ),
+    ] = None,
     operator: Annotated[str, typer.Option(metavar="<name>", help="Stored with the run.")] = "",
     note: Annotated[str, typer.Option(metavar="<text>", help="Stored with the run.")] = "",
     store: StoreOption = None,
 ) -> None:
-    """Import a CSV, UFF 58, SDF or run file into the store as a new run (kind "imported").
+    """Import a CSV, FRF table, UFF 58, SDF or run file into the store as a new run (kind "imported").
 
     CSV: columns time (s), force, response; one hit, or several (a `hit` column, or
-    time starting over). UFF: dataset 58 time records (force and acceleration) and/or
-    FRFs with coherence. SDF (HP analyzers, revisions 1-3): time records of a force and a
-    response channel, FRFs with coherence, and spectra (power, linear, cross, coherence
-    alone), kept as the run's spectra, not FRFs. Nothing is written unless the whole file
-    reads cleanly.
+    time starting over); units from the header (`Force [N]`) unless given. FRF table
+    (frf-text): frequency, then Re/Im or magnitude/phase per FRF, stored as measured FRFs
+    in their form (receptance, mobility, accelerance). UFF: dataset 58 time records (force
+    and acceleration) and/or FRFs with coherence. SDF (HP analyzers, revisions 1-3): time
+    records of a force and a response channel, FRFs with coherence, and spectra (power,
+    linear, cross, coherence alone), kept as the run's spectra, not FRFs. Nothing is
+    written unless the whole file reads cleanly.
     """
     from daq.capture import utc_now
     from daq.formats.imported import show_path
     from daq.store import Run, Store, StoreError, new_run_id, resolve_store_dir
 
-    chosen = format.value if format is not ImportFormat.auto else guess_format(file)
-    if chosen != "csv" and (columns is not None or force_unit != "N" or response_unit != "m/s^2"):
+    if format is ImportFormat.auto:
+        chosen, why = detect_format(file)
+        how = f"detected: {why}"
+    else:
+        chosen, how = format.value, "given by --format"
+    if chosen != "csv" and (columns is not None or force_unit is not None or response_unit is not None):
         raise UserError("--columns, --force-unit and --response-unit apply to CSV files only", exit_code=2)
+    if chosen != "frf-text" and frf_form is not None:
+        raise UserError("--frf-form applies to frf-text files only", exit_code=2)
     started = utc_now()
     store_dir, _ = resolve_store_dir(store)
     try:
@@ -95,7 +127,7 @@ def import_file(
         parts = _from_run_file(file)
     else:
         try:
-            data = _read(file, chosen, columns, force_unit, response_unit)
+            data = _read(file, chosen, columns, force_unit, response_unit, frf_form)
         except MemoryError:
             # A well-formed file can still decode to more than this machine holds (int16
             # samples become float64 records four times their size).
@@ -114,6 +146,7 @@ def import_file(
             "sha256": digest,
             "size_bytes": size,
             "format": chosen,
+            "format_from": how,
             **parts.pop("details"),
         }
     }
@@ -135,10 +168,14 @@ def import_file(
         )
     for frfs in (run.analyzer, run.measured_frfs):
         if frfs is not None:
-            what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} points")
+            what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} points, {frfs.form}")
     if run.spectra is not None:
         what.append(f"{run.spectra.n_traces} spectra of {run.spectra.n_lines} points")
     typer.echo(f"Imported {show_path(file.name)} ({chosen}: {', '.join(what)}) as run {run.run_id}: {path}")
+    if format is ImportFormat.auto:  # a given --format is named in the line above
+        typer.echo(f"format {chosen}: {how}")
+    for line in said_units(provenance["imported_from"]):
+        typer.echo(line)
     for warning in unit_warnings(provenance["imported_from"]):
         typer.echo(f"warning: {warning}", err=True)
 
@@ -152,11 +189,33 @@ def unit_warnings(details: dict[str, Any]) -> list[str]:
     return [f"{note} (stored under the SI label)" for note in notes if "values kept" in note]
 
 
+def said_units(details: dict[str, Any]) -> list[str]:
+    """One line saying which units (and FRF form) the import used, and where each came from."""
+    if "units_from" in details:
+        origin = details["units_from"]
+        return [
+            f"units: time {details.get('time_unit', 's')}, force {details['force_unit']} "
+            f"({origin['force']}), response {details['response_unit']} ({origin['response']})"
+        ]
+    if "form_from" in details:
+        return [f"form: {details['form']} ({details['form_from']})"]
+    forms = details.get("frf_forms")
+    if forms:
+        return [f"form: {', '.join(forms)} (from the UFF records' data types and units)"]
+    return []
+
+
 def guess_format(path: Path) -> str:
-    """csv, uff, sdf or run from the file's first bytes and its name; UserError if unsure.
+    """csv, frf-text, uff, sdf or run (see detect_format); UserError if unsure."""
+    return detect_format(path)[0]
+
+
+def detect_format(path: Path) -> tuple[str, str]:
+    """(format, why) from the file's first bytes and its name; UserError if unsure.
 
     The content decides first (HDF5 signature: run; "B\\0" and a plausible SDF FILE_HDR:
-    sdf; a UFF "-1" line: uff), then the name (.sdf, UFF and text suffixes)."""
+    sdf; a UFF "-1" line: uff), then the name (.sdf, UFF and text suffixes); a text file
+    whose header's first column is a frequency is an FRF table (frf-text), else csv."""
     from daq.formats.imported import check_regular_file, show_path
 
     check_regular_file(path)
@@ -166,28 +225,63 @@ def guess_format(path: Path) -> str:
     except OSError as exc:
         raise UserError(f"{show_path(path)}: cannot read it ({exc.strerror or exc})") from None
     if head.startswith(HDF5_SIGNATURE):
-        return "run"
+        return "run", "the HDF5 signature of a run file"
     if looks_like_sdf(head):
-        return "sdf"
+        return "sdf", "an SDF FILE_HDR record at the start"
     suffix = path.suffix.lower()
-    if (
-        suffix in UFF_SUFFIXES
-        or head.lstrip(b" ").startswith(b"-1\n")
-        or head.lstrip(b" ").startswith(b"-1\r")
-    ):
-        return "uff"
+    if head.lstrip(b" ").startswith((b"-1\n", b"-1\r")):
+        return "uff", "it starts with a UFF -1 delimiter line"
+    if suffix in UFF_SUFFIXES:
+        return "uff", f"the name ends in {suffix}"
     if suffix in SDF_SUFFIXES:
-        return "sdf"
+        return "sdf", f"the name ends in {suffix}"
     if head.startswith(b"B\0"):
         # A NUL in the first two bytes is no text file: a damaged SDF file (HP analyzers
         # name theirs .DAT) gets the SDF reader's reason, not a CSV parse error.
-        return "sdf"
+        return "sdf", "it starts with SDF's B and NUL"
+    header = text_header(head)
+    if header and is_frequency_header(header[0]):
+        return "frf-text", f"the header's first column {header[0]!r} is a frequency"
     if suffix in TEXT_SUFFIXES:
-        return "csv"
+        why = f"the name ends in {suffix}"
+        return "csv", f"{why}, and the header's first column {header[0]!r} is no frequency" if header else why
     raise UserError(
         f"{show_path(path)}: cannot tell its format from its name or content; "
-        "give --format csv, uff, sdf or run"
+        "give --format csv, frf-text, uff, sdf or run"
     )
+
+
+def text_header(head: bytes) -> list[str]:
+    """The cells of a text file's header row (its first line that is neither empty nor a
+    comment, when it is not all numbers), or [] when there is none or it is no text."""
+    from daq.formats.csv_text import COMMENT_MARKS
+
+    if b"\0" in head:
+        return []
+    text = head.decode("utf-8-sig", errors="replace")
+    for line in text.splitlines():
+        stripped = line.strip()
+        if not stripped or stripped.startswith(COMMENT_MARKS):
+            continue
+        delimiter = next((d for d in (";", "\t", ",") if d in stripped), None)
+        cells = [
+            c.strip().strip("\"'") for c in (stripped.split(delimiter) if delimiter else stripped.split())
+        ]
+        numeric = 0
+        for cell in cells:
+            try:
+                float(cell.replace(",", "."))
+                numeric += 1
+            except ValueError:
+                pass
+        return cells if numeric < len(cells) else []
+    return []
+
+
+def is_frequency_header(cell: str) -> bool:
+    from daq.formats.csv_text import header_name_unit, is_frequency_name
+
+    return is_frequency_name(*header_name_unit(cell))
 
 
 def looks_like_sdf(head: bytes) -> bool:
@@ -218,11 +312,22 @@ def sha256_of(path: Path) -> tuple[str, int]:
     return digest.hexdigest(), size
 
 
-def _read(file: Path, chosen: str, columns: str | None, force_unit: str, response_unit: str) -> Any:
+def _read(
+    file: Path,
+    chosen: str,
+    columns: str | None,
+    force_unit: str | None,
+    response_unit: str | None,
+    frf_form: str | None,
+) -> Any:
     if chosen == "csv":
         from daq.formats.csv_text import read_csv
 
         return read_csv(file, columns, force_unit, response_unit)
+    if chosen == "frf-text":
+        from daq.formats.frf_text import read_frf_text
+
+        return read_frf_text(file, None if frf_form is None else str(frf_form))
     if chosen == "sdf":
         from daq.formats.sdf.run_import import read_sdf_run
 

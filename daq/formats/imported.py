@@ -33,8 +33,9 @@ class ImportedData:
 
     hits: the time records (all accepted, no overloads, peak_force_n = max |force| per
         hit, timestamp_utc = the file's modification time), or None.
-    measured_frfs: FRFs in (m/s^2)/N with coherence when the file has it, or None.
-    format: "csv", "uff" or "sdf".
+    measured_frfs: FRFs in SI units of their form (receptance m/N, mobility (m/s)/N,
+        accelerance (m/s^2)/N) with coherence when the file has it, or None.
+    format: "csv", "frf-text", "uff" or "sdf".
     details: JSON-able notes for the run's provenance (columns, units, counts...).
     spectra: spectra that are not FRFs (power, linear, cross, coherence alone), in SI
         units where known, or None.
@@ -153,11 +154,16 @@ def make_hits(
 
 
 def make_frfs(
-    path: Path, frequency_hz: np.ndarray, frf: np.ndarray, coherence: np.ndarray | None, labels: list[str]
+    path: Path,
+    frequency_hz: np.ndarray,
+    frf: np.ndarray,
+    coherence: np.ndarray | None,
+    labels: list[str],
+    form: str = "accelerance",
 ) -> MeasuredFrf:
     """MeasuredFrf from imported arrays; the model's ValueError becomes a UserError naming the file."""
     try:
-        return MeasuredFrf(frequency_hz=frequency_hz, frf=frf, coherence=coherence, labels=labels)
+        return MeasuredFrf(frequency_hz=frequency_hz, frf=frf, coherence=coherence, labels=labels, form=form)
     except ValueError as exc:
         raise UserError(f"{show_path(path)}: {one_line(str(exc))}") from None
 

@@ -106,3 +106,50 @@ def _voltage_factor(text: str, quantity: str) -> float:
 def _show(text: str) -> str:
     # repr() escapes newlines; long input is cut so the message stays one readable line.
     return repr(text if len(text) <= 40 else text[:40] + "...")
+
+
+# --- units read from files: time columns, header labels, FRF units ---------------------------
+
+TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+FREQUENCY_UNITS = {"Hz": 1.0, "hz": 1.0, "kHz": 1e3, "khz": 1e3}
+# Numerator of an FRF unit: (form, SI factor).
+_FRF_NUMERATORS: dict[str, tuple[str, float]] = {
+    "m": ("receptance", 1.0),
+    "mm": ("receptance", 1e-3),
+    "um": ("receptance", 1e-6),
+    "µm": ("receptance", 1e-6),
+    "m/s": ("mobility", 1.0),
+    "mm/s": ("mobility", 1e-3),
+    **{unit: ("accelerance", factor) for unit, factor in _PHYSICAL["response"].items()},
+}
+
+
+def clean_label(unit: str) -> str:
+    """A unit as files print it, in the spelling parse_unit knows: "m/s²" -> "m/s^2",
+    "m/s**2" -> "m/s^2", surrounding spaces, brackets and quotes removed."""
+    text = unit.strip().strip("[]()\"'").strip()
+    text = text.replace("²", "^2").replace("**", "^").replace(" ", "")
+    return text
+
+
+def frf_unit(unit: str) -> tuple[str, float]:
+    """(form, SI factor) of an FRF unit such as "(m/s^2)/N", "g/N", "m/N", "mm/s/N", "m/s/N".
+
+    form: "receptance", "mobility" or "accelerance". UserError (one line) otherwise.
+    """
+    text = clean_label(unit)
+    top, slash, bottom = text.rpartition("/")
+    force = _PHYSICAL["force"].get(bottom) if slash else None
+    numerator = top.strip().removeprefix("(").removesuffix(")").strip()
+    if force is None or numerator not in _FRF_NUMERATORS:
+        raise UserError(
+            f"unknown FRF unit {_show(unit)}: use a displacement, velocity or acceleration over a force, "
+            "e.g. m/N, (m/s)/N, (m/s^2)/N, g/N, mm/N"
+        )
+    form, factor = _FRF_NUMERATORS[numerator]
+    return form, factor / force
+
+
+def response_form(unit: str) -> tuple[str, float] | None:
+    """(form, SI factor) of a response unit alone (m, mm/s, g...): the numerator of an FRF."""
+    return _FRF_NUMERATORS.get(clean_label(unit))

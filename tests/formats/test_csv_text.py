@@ -241,7 +241,8 @@ def test_hand_written_zoom_file(tmp_path):
         ("# center_hz = abc\n0,1,2\n1,2,3\n", {}, "center_hz 'abc' is not a number"),
         ("0,1,2\n1,2,3\n", {"force_unit": "furlong"}, "unknown force unit 'furlong'"),
         ("0,1,2\n1,2,3\n", {"response_unit": "mV@0mV/g"}, "sensitivity must be positive"),
-        ("t;F;a\n1,5;2,3;4\n", {}, "line 2 column 1: '1,5' is not a number"),
+        # A decimal comma is read (";" separates); a thousands mark as well is not.
+        ("t;F;a\n1.234,5;2;3\n", {}, "line 2 column 1: '1.234,5' is not a number"),
     ],
 )
 def test_bad_input_refused(tmp_path, text, kwargs, expected):

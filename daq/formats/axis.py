@@ -1,0 +1,162 @@
+"""Is a printed time column regular? The rule every reader of time records shares.
+
+A column is regular when a straight line t_k = start + k * step passes within the
+tolerance of every value, where a value's tolerance is the larger of
+
+- the precision it was printed with: half a unit of its last printed digit, and
+- 1 % of the step.
+
+So a 51.2 kHz record printed with 7 significant digits (1.953125e-05, ...,
+0.9999805) is regular although its printed steps differ by several percent near 1 s,
+while a dropped sample (one step twice as long) or a jump is refused. The run stores the
+fitted step, not any printed one.
+
+Trailing zeros: %g drops them ("0.5" for 0.5000000), so a value's own last digit can
+claim less precision than the column has. The column's precision is taken from all its
+values: the most decimals any value shows (fixed-point writers, %f) or the most
+significant digits (%e, %g), whichever claims less; a value's tolerance is never looser
+than its own last digit says.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+STEP_FRACTION = 0.01  # a value may sit 1 % of the step off the line, whatever its precision
+# Printed so coarsely that half a unit is more than a quarter of the step (integer
+# milliseconds at 1 kHz), a column cannot show a dropped sample within its precision:
+# its values then count with a quarter of the step, so a dropped sample is still refused.
+COARSEST_FRACTION = 0.25
+_NUMBER = re.compile(r"\s*[-+]?([0-9]*)(?:[.,]([0-9]*))?(?:[eE]([-+]?[0-9]+))?\s*")
+
+
+@dataclass(frozen=True)
+class AxisFit:
+    """A regular axis: first value and step (fitted), or where it is not regular.
+
+    start, step: the fitted line (step > 0) when ``bad`` is None.
+    bad: index of the first value that breaks the rule (the later one of an odd step).
+    tolerance: the largest tolerance used (s, or the column's unit).
+    """
+
+    start: float
+    step: float
+    bad: int | None
+    tolerance: float
+
+
+def printed_half_units(texts: list[str]) -> np.ndarray:
+    """Half a unit of the last printed digit of each value, with the column's precision.
+
+    texts: the values as printed (decimal point or decimal comma, optional exponent).
+    Returns (n,) float64 >= 0; 0 for a text it cannot read (never looser than needed).
+    """
+    n = len(texts)
+    quantum = np.zeros(n, dtype=np.int64)  # exponent of the last printed digit
+    sig = np.zeros(n, dtype=np.int64)  # significant digits printed
+    lead = np.zeros(n, dtype=np.int64)  # exponent of the first non-zero digit
+    zero = np.zeros(n, dtype=bool)
+    known = np.zeros(n, dtype=bool)
+    for i, text in enumerate(texts):
+        match = _NUMBER.fullmatch(text)
+        if match is None or not (match.group(1) or match.group(2)):
+            continue
+        whole, frac, exp = match.group(1), match.group(2) or "", int(match.group(3) or 0)
+        if abs(exp) > 400:
+            continue
+        digits = whole + frac
+        quantum[i] = exp - len(frac)
+        stripped = digits.lstrip("0")
+        sig[i] = len(stripped)
+        zero[i] = not stripped
+        lead[i] = exp + len(whole) - 1 - (len(digits) - len(stripped))
+        known[i] = True
+    out = np.zeros(n, dtype=np.float64)
+    if not known.any():
+        return out
+    finest_quantum = int(quantum[known].min())  # most decimals shown: fixed-point writers
+    most_sig = int(sig[known].max())  # most significant digits: %e / %g writers
+    fixed = 0.5 * 10.0**finest_quantum
+    relative = 0.5 * 10.0 ** (lead - most_sig + 1).astype(np.float64)
+    model = np.where(zero, fixed, np.maximum(fixed, relative))
+    literal = 0.5 * 10.0 ** quantum.astype(np.float64)
+    out[known] = np.minimum(literal, model)[known]
+    return out
+
+
+def fit_regular(values: np.ndarray, half_units: np.ndarray | None = None) -> AxisFit:
+    """Fit a straight line to ``values`` (n >= 2, strictly increasing) within the rule.
+
+    half_units: (n,) the printed precision of each value (printed_half_units), or None
+        for values that were not printed (binary doubles): 1 % of the step then.
+    """
+    t = np.asarray(values, dtype=np.float64)
+    n = t.size
+    d = np.diff(t)
+    typical = float(np.median(d))
+    h = np.zeros(n) if half_units is None else np.asarray(half_units, dtype=np.float64)
+    tol = np.maximum(np.minimum(h, COARSEST_FRACTION * typical), STEP_FRACTION * typical)
+    k = np.arange(n, dtype=np.float64)
+    # Least squares first (the usual case passes here), around the first value so that
+    # a record far from t = 0 keeps its precision.
+    rel = t - t[0]
+    kc = k - k.mean()
+    step = float(np.dot(kc, rel - rel.mean()) / np.dot(kc, kc))
+    start = float(t[0] + rel.mean() - step * k.mean())
+    resid = t - (start + step * k)
+    if np.all(np.abs(resid) <= tol) and step > 0:
+        return AxisFit(_first(t, start, tol), step, None, float(tol.max()))
+    found = _band_line(rel, tol, k)
+    if found is not None and found[1] > 0:
+        return AxisFit(_first(t, t[0] + found[0], tol), found[1], None, float(tol.max()))
+    # Not regular: point at the first odd step, else at the first value off the line.
+    odd = np.flatnonzero(np.abs(d - typical) > tol[:-1] + tol[1:])
+    bad = int(odd[0] + 1) if odd.size else int(np.flatnonzero(np.abs(resid) > tol)[0])
+    return AxisFit(start, step, bad, float(tol.max()))
+
+
+def _first(t: np.ndarray, fitted: float, tol: np.ndarray) -> float:
+    """The start to store: the first value as printed (a record starting at 0 s or at the
+    exporter's exact pre-trigger time keeps it), which is within its tolerance of the line."""
+    return float(t[0]) if abs(float(t[0]) - fitted) <= tol[0] else float(fitted)
+
+
+def _band_line(t: np.ndarray, tol: np.ndarray, k: np.ndarray) -> tuple[float, float] | None:
+    """(intercept, slope) of a line within t +- tol at every k, or None if there is none.
+
+    The gap g(b) = max(lo - b k) - min(hi - b k) is convex in the slope b, and a line
+    exists exactly when its minimum is <= 0: golden-section search for it.
+    """
+    lo, hi = t - tol, t + tol
+    last = k[-1]
+    left, right = (lo[-1] - hi[0]) / last, (hi[-1] - lo[0]) / last
+    if not (math.isfinite(left) and math.isfinite(right)) or right < left:
+        return None
+
+    def gap(b: float) -> float:
+        return float(np.max(lo - b * k) - np.min(hi - b * k))
+
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = left, right
+    c, e = b - ratio * (b - a), a + ratio * (b - a)
+    gc, ge = gap(c), gap(e)
+    for _ in range(200):
+        if gc <= 0 or ge <= 0 or b - a <= 1e-15 * max(abs(a), abs(b)):
+            break
+        if gc < ge:
+            b, e, ge = e, c, gc
+            c = b - ratio * (b - a)
+            gc = gap(c)
+        else:
+            a, c, gc = c, e, ge
+            e = a + ratio * (b - a)
+            ge = gap(e)
+    slope = c if gc <= ge else e
+    if min(gc, ge) > 0:
+        return None
+    intercept = (np.max(lo - slope * k) + np.min(hi - slope * k)) / 2.0
+    return float(intercept), float(slope)
