@@ -100,6 +100,9 @@ def fit_regular(values: np.ndarray, half_units: np.ndarray | None = None) -> Axi
     typical = float(np.median(d))
     h = np.zeros(n) if half_units is None else np.asarray(half_units, dtype=np.float64)
     tol = np.maximum(np.minimum(h, COARSEST_FRACTION * typical), STEP_FRACTION * typical)
+    # A value exactly half a unit off (0.0003125 printed 0.000313) must pass despite the
+    # rounding of the text to binary and of the arithmetic here: a few ulps of slack.
+    tol = tol * (1.0 + 1e-9) + 8.0 * np.finfo(np.float64).eps * np.abs(t)
     k = np.arange(n, dtype=np.float64)
     # Least squares first (the usual case passes here), around the first value so that
     # a record far from t = 0 keeps its precision.
@@ -113,9 +116,12 @@ def fit_regular(values: np.ndarray, half_units: np.ndarray | None = None) -> Axi
     found = _band_line(rel, tol, k)
     if found is not None and found[1] > 0:
         return AxisFit(_first(t, t[0] + found[0], tol), found[1], None, float(tol.max()))
-    # Not regular: point at the first odd step, else at the first value off the line.
-    odd = np.flatnonzero(np.abs(d - typical) > tol[:-1] + tol[1:])
-    bad = int(odd[0] + 1) if odd.size else int(np.flatnonzero(np.abs(resid) > tol)[0])
+    # Not regular: point at the oddest step (a dropped sample, a jump) when one stands out
+    # beyond what the values' tolerances allow, else at the first value off the line.
+    deviation = np.abs(d - typical)
+    odd = int(np.argmax(deviation))
+    off = np.flatnonzero(np.abs(resid) > tol)
+    bad = odd + 1 if deviation[odd] > tol[odd] + tol[odd + 1] or not off.size else int(off[0])
     return AxisFit(start, step, bad, float(tol.max()))
 
 

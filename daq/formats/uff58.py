@@ -13,7 +13,8 @@ agree with the header. FRF frequency axes are written with even spacing when pyu
 Records written (all func types as pyuff names them):
 - func_type 1 (time response): per hit, force (node 1 +Z, ordinate type 13, N), then
   response (node 2 +Z, type 12, m/s^2); abscissa time, s.
-- func_type 4 (FRF): analyzer then measured FRFs, (m/s^2)/N, reference node 1 +Z, response node 2 +Z.
+- func_type 4 (FRF): analyzer then measured FRFs in their form (ordinate type 8 m, 11 m/s or
+  12 m/s^2 over 13 N: receptance, mobility, accelerance), reference node 1 +Z, response node 2 +Z.
 - func_type 6 (coherence): after all FRFs, in the same order, for FRF sets that have it.
 """
 
@@ -31,6 +32,7 @@ import numpy as np
 import pyuff
 
 from daq.errors import UserError
+from daq.formats.axis import fit_regular
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
     ImportedData,
@@ -41,14 +43,18 @@ from daq.formats.imported import (
     one_line,
     show_path,
 )
-from daq.formats.units import parse_unit
+from daq.formats.units import frf_unit, parse_unit, response_form
 
 FUNC_TIME, FUNC_FRF, FUNC_COHERENCE = 1, 4, 6
 FORCE_TYPES = (13, 9)  # excitation force, reaction force
 RESPONSE_TYPES = (12,)  # acceleration
 HEADER_TOLERANCE = 1e-5  # %13.5e keeps 6 significant digits: relative error <= 5e-6
 AXIS_TOLERANCE = 1e-9  # relative to the step: all records of the hits share one time axis
-STEP_TOLERANCE = 1e-6  # uneven time abscissa: every step within this of the mean step
+# Ordinate specific data type of an FRF -> its form (what over force).
+FRF_FORM_OF_TYPE = {8: "receptance", 11: "mobility", 12: "accelerance"}
+FRF_TYPE_OF_FORM = {form: kind for kind, form in FRF_FORM_OF_TYPE.items()}
+UNKNOWN_TYPES = (0, 1)  # "unknown", "general": the unit labels must say what the data are
+FORCE_DENOMINATOR_TYPES = (0, 1, 9, 13)  # unknown, general, reaction force, excitation force
 _KEY_VALUE = re.compile(r"([a-z_]+)=(\S+)")
 _NO_UNIT = ("", "NONE")
 
@@ -60,6 +66,7 @@ class _Record:
     index: int
     func: int
     kind: int  # ordinate specific data type
+    denominator_kind: int  # ordinate denominator specific data type
     data: np.ndarray
     x: np.ndarray
     even: bool
@@ -73,7 +80,7 @@ class _Record:
 
 
 def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
-    """Read dataset 58 records: time records as hits (N, m/s^2) and FRFs ((m/s^2)/N).
+    """Read dataset 58 records: time records as hits (N, m/s^2) and FRFs (SI units of their form).
 
     Any problem, including whatever pyuff raises on a damaged file: one-line UserError.
     """
@@ -160,6 +167,7 @@ def _record(d: Any, k: int, name: str) -> _Record:
         index=k,
         func=_int(d.get("func_type"), -1),
         kind=_int(d.get("ordinate_spec_data_type"), 0),
+        denominator_kind=_int(d.get("orddenom_spec_data_type"), 0),
         data=data,
         x=x,
         even=_int(d.get("abscissa_spacing"), 0) == 1,
@@ -226,9 +234,17 @@ def _time_axis(name: str, rec: _Record) -> tuple[float, float]:
         start, step = rec.x_min, rec.x_inc
     else:
         d = np.diff(rec.x)
-        start, step = float(rec.x[0]), float((rec.x[-1] - rec.x[0]) / (rec.x.size - 1))
-        if np.any(d <= 0) or np.any(np.abs(d - step) > STEP_TOLERANCE * step):
-            raise UserError(f"{name}: time record #{rec.index} has uneven or non-increasing time steps")
+        if np.any(d <= 0):
+            raise UserError(f"{name}: time record #{rec.index} has non-increasing time steps")
+        # ASCII 58 prints x with %13.5e (6 significant digits): half a unit of the last is
+        # at most 5e-6 of the value; binary 58 holds doubles (1 % of the step then decides).
+        fit = fit_regular(rec.x, 5e-6 * np.abs(rec.x))
+        if fit.bad is not None:
+            raise UserError(
+                f"{name}: time record #{rec.index} has uneven time steps (from sample {fit.bad}: "
+                "no straight line within the printed precision or 1 % of the step)"
+            )
+        start, step = fit.start, fit.step
     if not (math.isfinite(start) and math.isfinite(step) and step > 0):
         raise UserError(f"{name}: time record #{rec.index} has no usable time axis (step {step!r} s)")
     return start, step
@@ -282,6 +298,13 @@ def _frfs(path: Path, name: str, frf_recs: list[_Record], coh_recs: list[_Record
                 f"{name}: FRF record #{rec.index} has a different frequency axis from #{frf_recs[0].index}"
             )
     units: list[str] = []
+    forms = [_frf_form(name, rec) for rec in frf_recs]
+    other = next((k for k, form in enumerate(forms) if form != forms[0]), None)
+    if other is not None:
+        raise UserError(
+            f"{name}: FRF records #{frf_recs[0].index} ({forms[0]}) and #{frf_recs[other].index} "
+            f"({forms[other]}) are of different forms; one run holds FRFs of one form"
+        )
     frf = np.stack([_scaled(rec.data.astype(np.complex128), _frf_factor(rec, units)) for rec in frf_recs])
     labels = [rec.ids[0] if rec.ids[0] not in _NO_UNIT else _dof_label(rec) for rec in frf_recs]
     coherence = None
@@ -296,12 +319,52 @@ def _frfs(path: Path, name: str, frf_recs: list[_Record], coh_recs: list[_Record
             details["notes"].append("complex coherence values: ignored")
         else:
             coherence = np.stack([rec.data.real for rec in coh_recs])
-    details.update(n_frf=len(frf_recs), n_lines=int(freq.size), frf_units=sorted(set(units)))
+    details.update(
+        n_frf=len(frf_recs), n_lines=int(freq.size), frf_units=sorted(set(units)), frf_forms=[forms[0]]
+    )
     # The exponential window the FRFs went through, when the file says (daq export does).
     decay, pulse = _float(frf_recs[0].keys.get("exp_decay_s")), _float(frf_recs[0].keys.get("pulse_s"))
     if math.isfinite(decay) and decay > 0:
         details.update(exp_decay_s=decay, pulse_s=pulse if math.isfinite(pulse) else 0.0)
-    return make_frfs(path, freq, frf, coherence, labels)
+    return make_frfs(path, freq, frf, coherence, labels, forms[0])
+
+
+def _unit_form(rec: _Record) -> str | None:
+    """The form the record's unit labels say (m/N, g, (m/s)/N...), or None if they say none."""
+    num = rec.unit
+    try:
+        return frf_unit(num)[0]  # the whole unit in the numerator label, e.g. "m/N"
+    except UserError:
+        pass
+    found = response_form(num) if num not in _NO_UNIT else None
+    return found[0] if found else None
+
+
+def _frf_form(name: str, rec: _Record) -> str:
+    """receptance, mobility or accelerance: the ordinate's data type (8, 11, 12) and its
+    unit labels decide; an unknown type, a non-force denominator or a disagreement: UserError."""
+    by_unit = _unit_form(rec)
+    if rec.kind in FRF_FORM_OF_TYPE:
+        form = FRF_FORM_OF_TYPE[rec.kind]
+        if by_unit is not None and by_unit != form:
+            raise UserError(
+                f"{name}: FRF record #{rec.index} has ordinate data type {rec.kind} ({form}) but unit "
+                f"{rec.unit!r} ({by_unit}); which is it?"
+            )
+    elif rec.kind in UNKNOWN_TYPES and by_unit is not None:
+        form = by_unit
+    else:
+        raise UserError(
+            f"{name}: FRF record #{rec.index} has ordinate data type {rec.kind} and unit "
+            f"{rec.unit or 'none'!r}: only displacement (8), velocity (11) or acceleration (12) over "
+            "force can be imported"
+        )
+    if rec.denominator_kind not in FORCE_DENOMINATOR_TYPES:
+        raise UserError(
+            f"{name}: FRF record #{rec.index} has denominator data type {rec.denominator_kind}, "
+            "not a force (13 or 9)"
+        )
+    return form
 
 
 def _frf_factor(rec: _Record, units: list[str]) -> float:
@@ -315,7 +378,10 @@ def _frf_factor(rec: _Record, units: list[str]) -> float:
     pairs += [(num[:i].strip(" ()"), num[i + 1 :].strip(" ()")) for i, ch in enumerate(num) if ch == "/"]
     for top, bottom in pairs:
         try:
-            factor = parse_unit(top, "response") / parse_unit(bottom, "force")
+            found = response_form(top)
+            if found is None:
+                raise UserError(f"unknown unit {top!r}")
+            factor = found[1] / parse_unit(bottom, "force")
         except UserError:
             continue
         units.append(f"{top}/{bottom}")

@@ -105,7 +105,8 @@ def _frf_sets(run: Run) -> list[dict]:
         if frfs is None:
             continue
         even = _even_axis(frfs.frequency_hz)
-        axis, frf_kinds, coh_kinds = frfs.frequency_hz, ((12, "m/s^2"), (13, "N")), ((0, "NONE"), (0, "NONE"))
+        numerator = {"receptance": (8, "m"), "mobility": (11, "m/s"), "accelerance": (12, "m/s^2")}[frfs.form]
+        axis, frf_kinds, coh_kinds = frfs.frequency_hz, (numerator, (13, "N")), ((0, "NONE"), (0, "NONE"))
         windows = _frf_windows(run, tag)
         for i in range(frfs.n_frf):
             head = (_id_text(frfs.labels[i]), f"{run.run_id} {tag}", run.start_time, windows, "NONE")

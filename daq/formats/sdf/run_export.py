@@ -114,6 +114,12 @@ def sdf_of_run(run: Run) -> SdfFile:
         (tag, f) for tag, f in (("Analyzer", run.analyzer), ("Imported", run.measured_frfs)) if f is not None
     ]
     for tag, frfs in sets:
+        if frfs.form != "accelerance":
+            # The SDF writer labels every FRF (m/s^2)/N; a receptance must not pass as one.
+            raise UserError(
+                f"run {run.run_id} holds FRFs of {frfs.form}; SDF export writes accelerance only: "
+                "use --format uff"
+            )
         data.append(_frf_header(f"{tag} FRF", frfs, frfs.frf, codes.FREQ_RESP_DATA))
     for tag, frfs in sets:
         if frfs.coherence is not None:
