@@ -287,3 +287,70 @@ def test_a_store_that_is_a_file_fails_before_any_hit(tmp_path):
     result = invoke_daq("capture", "--sim", "--yes", "--hits", "2", "--store", str(not_a_folder))
     assert_one_line_error(result, "is a file, not a folder")
     assert "Hit 1" not in result.stdout
+
+
+# --- what instruments and programs really write ----------------------------------------------
+
+
+def test_a_frequency_table_imports_as_frfs_and_says_why(tmp_path):
+    path = tmp_path / "frf.csv"
+    path.write_text("Frequency (Hz);Re [m/N];Im [m/N]\n0,5;1,0;0,0\n1,0;0,5;-0,5\n")
+    store = tmp_path / "store"
+    result = daq_in(store, "import", str(path))
+    assert result.returncode == 0, result.stderr
+    assert (
+        "format frf-text: detected: the header's first column 'Frequency (Hz)' is a frequency"
+        in result.stdout
+    )
+    assert "form: receptance (header (m/N))" in result.stdout
+    (only,) = Store(store).list()
+    run = Store(store).open(only.run_id)
+    assert run.hits is None
+    assert run.measured_frfs.form == "receptance"
+    assert run.measured_frfs.frf[0].tolist() == [1.0, 0.5 - 0.5j]
+
+
+def test_a_frequency_table_forced_as_csv_is_refused_not_a_1_hz_record(tmp_path):
+    path = tmp_path / "frf.csv"
+    path.write_text("frequency,Re,Im\n1,1,0\n2,0.5,-0.5\n3,0.1,0\n")
+    store = tmp_path / "store"
+    result = daq_in(store, "import", str(path), "--format", "csv")
+    assert_one_line_error(result, "--format frf-text")
+    assert not store.exists() or Store(store).list() == []
+
+
+def test_header_units_are_used_and_said(tmp_path):
+    path = tmp_path / "impact.txt"
+    rows = ["Time (s)\tForce [kN]\tacc (g)"] + [f"{i / 51200:.7g}\t0,5\t1,0" for i in range(64)]
+    path.write_text("\n".join(rows) + "\n")
+    store = tmp_path / "store"
+    result = daq_in(store, "import", str(path))
+    assert result.returncode == 0, result.stderr
+    assert "units: time s, force kN (header), response g (header)" in result.stdout
+    (only,) = Store(store).list()
+    hits = Store(store).open(only.run_id).hits
+    assert hits.force_n[0, 0] == 500.0
+    assert hits.sample_rate_hz == pytest.approx(51200.0, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("content", "fragment"),
+    [
+        (
+            "t;F;a\n" + "".join(f"0,00{i};1;2\n" for i in (0, 1, 2, 3, 5, 6, 7)),
+            "line 6: uneven time step",
+        ),
+        ("t (s);F (N);a (mV)\n0;1;2\n0,001;1;2\n", "--response-unit mV@10.2mV/g"),
+        ("t (fortnight),F,a\n0,1,2\n1,1,2\n", "unknown time unit"),
+        ("freq,Re\n1,2\n2,3\n", "starts no FRF"),
+    ],
+)
+def test_bad_real_world_files_are_one_line_and_nothing_is_written(tmp_path, content, fragment):
+    path = tmp_path / "bad.csv"
+    path.write_text(content)
+    store = tmp_path / "store"
+    result = daq_in(store, "import", str(path))
+    assert_one_line_error(result, fragment)
+    assert result.returncode == 1
+    assert str(path) in result.stderr
+    assert not store.exists() or Store(store).list() == []
