@@ -146,7 +146,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     std, std_source = combined_std(ident.std, per_hit)
     relative_std = std / parameter_scale(theta, n)
     global_check = (
-        multi_start_check(residual_fn, batched, r, result.psi, options.starts, options.seed)
+        multi_start_check(residual_fn, batched, r, result.psi, options.starts, options.seed, options.psd)
         if options.starts
         else None
     )

@@ -15,12 +15,20 @@ from analysis.damping.params import matrix_to_theta, theta_to_matrix
 
 
 def multi_start_check(
-    residual_fn: Callable, batched: Callable, r: np.ndarray, psi: float, starts: int, seed: int = 0
+    residual_fn: Callable,
+    batched: Callable,
+    r: np.ndarray,
+    psi: float,
+    starts: int,
+    seed: int = 0,
+    psd: bool = False,
 ) -> dict:
-    """Local fits from ``starts`` random starts beside the chosen fit: how many
-    reach its Psi (to 0.1 %), whether any does better, and the largest distance of the
-    equally good ones from its R (a flat direction shows as equal Psi, other R)."""
-    fits = multi_start(residual_fn, batched, r.shape[0], starts=starts, seed=seed)
+    """Local fits from ``starts`` random starts beside the chosen fit, in the same
+    coding (``psd``: R = L L^T, so that an indefinite R does not count as a better
+    optimum of a dissipative fit): how many reach its Psi (to 0.1 %), whether any does
+    better, and the largest distance of the equally good ones from its R (a flat
+    direction shows as equal Psi, other R)."""
+    fits = multi_start(residual_fn, batched, r.shape[0], starts=starts, seed=seed, psd=psd)
     psis = np.array([f.psi for f in fits])
     same = np.abs(psis - psi) <= 1e-3 * psi
     distances = [
@@ -41,13 +49,17 @@ def per_hit_std(data: BandLimitedData, r: np.ndarray, psd: bool = False) -> np.n
     """(P,) standard deviation of each term of R (upper triangle, row-major) over
     least-squares fits to each accepted hit alone (started from the joint fit ``r``,
     R = L L^T with ``psd``), divided by sqrt(n_hits): the spread of the mean of the
-    refits, the figure comparable with the joint fit's. None with fewer than 3 hits."""
+    refits, the figure comparable with the joint fit's. None with fewer than 3 hits.
+    """
     n_hits = data.force_n.shape[0]
     if n_hits < 3:
         return None
     start = np.asarray(r, dtype=float)
     if psd:
+        # A full-rank start: at a rank-deficient R = L L^T the factor's zero columns do
+        # not move R to first order, and refits would stay put along them.
         start = _nearest_psd(start)
+        start = start + PER_HIT_LIFT * np.max(np.linalg.eigvalsh(start)) * np.eye(start.shape[0])
     thetas = []
     for k in range(n_hits):
         one = replace(data, force_n=data.force_n[k : k + 1], response_m_s2=data.response_m_s2[k : k + 1])
@@ -62,6 +74,9 @@ def per_hit_std(data: BandLimitedData, r: np.ndarray, psd: bool = False) -> np.n
     return np.std(np.array(thetas), axis=0, ddof=1) / np.sqrt(n_hits)
 
 
+#: The smallest eigenvalue given to a per-hit refit's start with R = L L^T, as a
+#: fraction of the largest.
+PER_HIT_LIFT = 1e-3
 #: Iterations (scipy's count) each per-hit refit may take: they start at the joint
 #: optimum, and a flat direction must not make one wander for minutes.
 PER_HIT_MAX_NFEV = 50

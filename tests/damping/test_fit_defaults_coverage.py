@@ -5,7 +5,7 @@ noise on both the response and the force, fitted as `daq fit` does by default (l
 squares, R = L L^T); the uncertainty of each term is the larger of the Fisher figure
 and the per-hit refits' spread / sqrt(n) (analysis.damping.checks.combined_std).
 Over the seeds, the truth must lie within ±1 u about 68 % of the time and within
-±2 u about 95 % of the time.
+±2 u about 95 % of the time (a little more: the larger of two figures is conservative).
 """
 
 from __future__ import annotations
@@ -56,9 +56,12 @@ def test_the_uncertainty_covers_the_truth_like_a_standard_uncertainty():
     z = np.abs(np.array(errors))  # (seeds, 6 terms)
     within_1, within_2 = float(np.mean(z <= 1)), float(np.mean(z <= 2))
     # 96 values, correlated within a seed (~16 to 96 independent): the binomial spread
-    # of a 68 % share is 5 to 12 points; allow about two of those.
-    assert 0.50 <= within_1 <= 0.88, (within_1, within_2)
-    assert within_2 >= 0.85, (within_1, within_2)
+    # of a 68 % share is 5 to 12 points. The larger of two estimates of one spread is
+    # conservative by construction (measured: 82 % within ±1 u, 99 % within ±2 u), so
+    # the upper bound is wider than the lower one: u must not be too small, and not
+    # grossly too large either.
+    assert 0.55 <= within_1 <= 0.92, (within_1, within_2)
+    assert within_2 >= 0.88, (within_1, within_2)
     # ... and both figures take their turn: the force's noise, coloured by the model,
     # makes the refits spread wider than the Fisher figure on some terms.
     assert 0 < sources.count("hits") < len(sources)
