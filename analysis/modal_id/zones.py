@@ -123,7 +123,8 @@ def plan_zones(
             groups.append([])
         groups[-1].append(int(p))
     if len(groups) > 1 and (f.size - 1 - groups[-1][0]) < MIN_CORE_LINES:
-        groups[-2] += groups.pop()  # the last core too narrow: join it to the one before
+        last = groups.pop()  # the last core too narrow: join it to the one before
+        groups[-1] += last
     if len(groups) == 1:
         return [_zone(f_lo, f_hi, f_lo, f_hi, peaks.size, max_order)]
     cuts = [_valley(mif, a[-1], b[0]) for a, b in itertools.pairwise(groups)]

@@ -165,3 +165,13 @@ def test_frf_estimate_helper_agrees_with_spectra():
     keep = (est.frequency_hz > 20) & (est.frequency_hz < 300)
     exact = accelerance(est.frequency_hz[keep], fn, zeta, amp)
     assert np.max(np.abs(est.h1[keep] - exact) / np.abs(exact)) < 0.02
+
+
+def test_a_narrow_last_core_joins_the_one_before():
+    # Twelve peaks over 620 lines: a third core would start 175 lines from the end, too
+    # narrow to stand alone (joining it once raised IndexError).
+    f = np.arange(1, 621) * 1.0
+    fn = np.linspace(20.0, 600.0, 12)
+    zones = plan_zones(f, accelerance(f, fn, np.full(12, 0.005), np.ones(12))[np.newaxis, :])
+    assert zones[-1].core_high_hz == f[-1]
+    assert all(z.core_high_hz - z.core_low_hz >= 199 for z in zones)
