@@ -145,7 +145,7 @@ def analyze_hits(
             _scatter(result, per_hit_frf(spectra), options, decay)
         else:
             _bootstrap(result, decay)
-    result.cautions += _cautions(result)
+    result.cautions += _cautions(result, options.frequencies_hz is not None)
     return result
 
 
@@ -168,7 +168,7 @@ def analyze_frfs(
     result = _identify(f, frf, coherence, source, options, added_decay_1_s, band)
     if result.modes:
         _bootstrap(result, added_decay_1_s)
-    result.cautions += _cautions(result)
+    result.cautions += _cautions(result, options.frequencies_hz is not None)
     return result
 
 
@@ -250,12 +250,13 @@ POOR_SYNTHESIS = 0.2
 EDGE_FRACTION = 0.02
 
 
-def _cautions(result: RunAnalysis) -> list[str]:
-    """What in the result may mislead, and what to try: one sentence each."""
+def _cautions(result: RunAnalysis, asked: bool = False) -> list[str]:
+    """What in the result may mislead, and what to try: one sentence each. ``asked``:
+    frequencies of interest were given (each has its own caution when not found)."""
     out = []
     band = result.band
     span = f"{band.low_hz:.6g}-{band.high_hz:.6g} Hz" if band else "the band"
-    if not result.modes:
+    if not result.modes and not asked:
         out.append(
             f"no mode found in {span}: the stability diagram holds no pole that stays stable; try "
             "--band around a peak of the FRF, --max-order higher, or --frequencies with the peaks you expect"

@@ -84,10 +84,12 @@ def test_every_model_identifies_the_same_modes_within_the_coarsest_line_spacing(
 def test_each_model_run_gets_a_damping_fit(chains, model):
     _, _, fit, _ = chains[model]
     ratios = [mode["damping_ratio"] for mode in fit["modes"]]
-    assert len(ratios) == 3
-    # The realistic beam's truth (tests/reference.py): the fitted model's modes carry
-    # it within 10 % whatever the analyzer measured it with.
-    for zeta, truth in zip(ratios, REALISTIC_DAMPING_RATIOS[:3], strict=True):
+    # One Ritz function per mode identified in the band (daq fit's default): at least the
+    # beam's first three, the first four carrying the realistic beam's truth
+    # (tests/reference.py) within 10 % whatever the analyzer measured it with.
+    assert len(ratios) >= 3
+    n = min(len(ratios), len(REALISTIC_DAMPING_RATIOS))
+    for zeta, truth in zip(ratios[:n], REALISTIC_DAMPING_RATIOS[:n], strict=True):
         assert zeta == pytest.approx(truth, rel=0.1), (model, ratios)
 
 

@@ -185,8 +185,12 @@ def identify_modes(
     chosen = pick_clusters(clusters, freqs)
     poles = np.array([clusters[c].pole for c in chosen], dtype=complex)
     est = lsfd(fu, hu, poles, form)
-    if freqs is None and poles.size:
+    if poles.size:
         keep = spurious_check(fu, hu, poles, est, form, line_hz)
+        if freqs is not None:
+            # Asked for: an accepted cluster stays whatever; one that failed a selection
+            # rule must at least be a feature of the data, not a noise pole near the ask.
+            keep |= np.array([clusters[c].accepted for c in chosen], dtype=bool)
         for c in (c for c, k in zip(chosen, keep, strict=True) if not k):
             clusters[c].accepted, clusters[c].reason = (
                 False,

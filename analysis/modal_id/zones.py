@@ -46,7 +46,7 @@ MIN_CORE_LINES = 200
 EXTEND_FRACTION = 0.25
 #: Orders a zone gets beyond two per peak: room for the noise and the modes just outside.
 ORDER_MARGIN = 10
-MIN_ORDER = 16
+MIN_ORDER = 30
 MAX_ORDER = 60
 #: A zone starting closer to 0 Hz than this fraction of its width keeps the real basis:
 #: near DC the mirror poles at negative frequencies lie next to the band.
