@@ -5,22 +5,33 @@
 next event; without a decision the policy decides (default: the checks' verdict).
 The analyzer runs in preview, so its own average holds only the accepted hits; after
 ``hits_wanted`` accepted hits its averaged FRF and coherence are fetched and
-``Finished(run)`` is the last event. The caller seals the run. After an interruption
-(Ctrl-C, a driver error) ``partial_run()`` gives the hits so far as an incomplete run.
+``Finished(run)`` is the last event. The caller seals the run (``seal``). After an
+interruption (Ctrl-C, a driver error) ``partial_run()`` gives the hits so far as an
+incomplete run.
+
+With ``store_dir`` set, every hit and every verdict is also appended to a hit journal in
+the store and fsynced before the capture goes on (daq/store/journal.py): the run's
+metadata once the analyzer is configured, each hit as it arrives, each verdict before
+the analyzer is told. ``seal`` turns the capture into a run and removes the journal; a
+capture that dies without sealing leaves the journal, which the next command on the
+store seals as an incomplete run.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field, replace
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from analysis.beam import TABLE_1
 from analysis.hit_checks import HitCheck, failed_names, run_checks
-from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, new_run_id
+from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, Store, StoreError, new_run_id
+from daq.store.journal import Journal, run_bytes_needed
 from drivers.analyzer import SignalAnalyzer
 from drivers.dialects import model_of
 from drivers.settings import ChannelSetup, ImpactSettings
@@ -31,6 +42,26 @@ OPERATOR_REJECT = "rejected by operator"
 
 class CaptureError(Exception):
     """The capture cannot go on (e.g. too many hits rejected); one line for the user."""
+
+
+#: Control characters other than tab and line breaks: refused in the text a run stores
+#: (a NUL cannot be stored at all, an escape sequence would drive a terminal listing
+#: runs). The same rule as the service's (daq/service/app.py).
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+
+def check_plain_text(value: str, what: str, one_line: bool) -> str:
+    """``value`` if it is valid UTF-8 text without control characters (nor tab or line
+    breaks when ``one_line``), else ValueError naming ``what``. Bytes that are not UTF-8
+    on the command line reach Python as lone surrogates: those are refused too."""
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        raise ValueError(f"{what} is not valid UTF-8 text (check the terminal's encoding)") from None
+    if _CONTROL.search(value) or (one_line and re.search(r"[\r\n\t]", value)):
+        extra = " (one line of text)" if one_line else ""
+        raise ValueError(f"{what}: control characters are not allowed{extra}")
+    return value
 
 
 @dataclass(frozen=True)
@@ -156,6 +187,8 @@ class Capture:
     stop_after_hits : end after this many hits even if fewer were accepted (replay of
         an incomplete run); the run is then incomplete, without the analyzer's FRF.
     replayed_from : the original run's provenance when this is a replay (kind "replayed").
+    store_dir : the run store; when set, the hits are journaled there as they are taken
+        (and the store is checked for room for the whole run before the first hit).
     """
 
     driver: SignalAnalyzer
@@ -172,6 +205,7 @@ class Capture:
     hit_timeout_s: float | None = None
     stop_after_hits: int | None = None
     replayed_from: dict[str, Any] | None = None
+    store_dir: Path | None = None
 
     def __post_init__(self) -> None:
         if not 1 <= self.hits_wanted <= 9999:
@@ -186,6 +220,7 @@ class Capture:
         self.start_s = 0.0
         self._pending: HitArrived | None = None
         self._decision: tuple[bool, str] | None = None
+        self.journal: Journal | None = None
 
     @property
     def accepted(self) -> int:
@@ -206,6 +241,8 @@ class Capture:
             self.actual = dsa.configure(wanted)
         except ValueError as exc:  # settings this analyzer cannot take (lines, pre-trigger)
             raise CaptureError(f"{dsa.dialect.name} analyzer: {exc}") from None
+        if self.store_dir is not None:
+            self._start_journal()
         yield Configured(self.actual)
         range_v = self.actual.hammer.range_v
         range_n = None if range_v is None else range_v / self.actual.hammer.sensitivity_v_per_eu
@@ -240,10 +277,14 @@ class Capture:
                 peak_force_n=float(np.max(np.abs(force.data))),
                 accepted_so_far=self.accepted,
             )
+            if self.journal is not None:
+                self.journal.add_hit(hit.index, self._hit_info(hit), hit.force_n, hit.response_m_s2)
             self._pending, self._decision = hit, None
             yield hit
             accept, reason = self._decision if self._decision is not None else self.policy(hit)
             reason = "" if accept else (reason.strip() or OPERATOR_REJECT)
+            if self.journal is not None:
+                self.journal.add_verdict(hit.index, accept, reason)
             if accept:
                 dsa.accept()
             else:
@@ -257,6 +298,56 @@ class Capture:
             labels=["H21"],
         )  # fmt: skip
         yield Finished(self._run(complete=True, analyzer=analyzer))
+
+    def _start_journal(self) -> None:
+        """The journal, with the run's metadata, once the analyzer's settings are known;
+        StoreError when the store has no room for the whole run."""
+        assert self.actual is not None
+        assert self.store_dir is not None
+        points = round(2.56 * (self.actual.lines or 400))
+        need = run_bytes_needed(self.hits_wanted, points, complex_records=bool(self.actual.center_hz))
+        meta = {
+            "run_id": self.run_id, "kind": self._kind(), "start_time": self.start_time,
+            "operator": self.operator, "note": self.note, "provenance": self._provenance(),
+            "instrument": asdict(self._instrument()), "sample": asdict(self.sample),
+        }  # fmt: skip
+        self.journal = Journal.create(self.store_dir, self.run_id, meta, need_bytes=need)
+
+    def _hit_info(self, hit: HitArrived) -> dict[str, Any]:
+        assert self.actual is not None
+        return {
+            "overload": [bool(f) for f in hit.overload], "peak_force_n": hit.peak_force_n,
+            "timestamp_utc": hit.timestamp_utc, "checks": {c.name: c.as_dict() for c in hit.checks},
+            "sample_rate_hz": self.sample_rate_hz, "start_s": self.start_s,
+            "center_hz": self.actual.center_hz or 0.0,
+        }  # fmt: skip
+
+    def seal(self, run: Run) -> Path:
+        """Seal ``run`` into ``store_dir`` and remove the journal; its path. If sealing
+        fails (StoreError), the journal is kept and unlocked, so the next command on the
+        store seals it as an incomplete run."""
+        if self.store_dir is None:
+            raise ValueError("this capture has no store_dir to seal into")
+        try:
+            path = Store(self.store_dir).seal(run)
+        except StoreError:
+            self.release_journal()
+            raise
+        if self.journal is not None:
+            self.journal.remove()
+            self.journal = None
+        return path
+
+    def discard_journal(self) -> None:
+        """The hits are thrown away on purpose (the service's Abort): delete the journal."""
+        if self.journal is not None:
+            self.journal.remove()
+            self.journal = None
+
+    def release_journal(self) -> None:
+        """Keep the journal on disk for recovery, and stop holding it."""
+        if self.journal is not None:
+            self.journal.release()
 
     def _keep(self, hit: HitArrived, accept: bool, reason: str) -> None:
         self._pending = None
@@ -300,7 +391,24 @@ class Capture:
             timestamp_utc=[h.timestamp_utc for h in self.hits],
             checks=[h.checks for h in self.hits],
         )
-        instrument = Instrument(
+        return Run(
+            run_id=self.run_id,
+            kind=self._kind(),
+            complete=complete,
+            start_time=self.start_time,
+            end_time=utc_now(),
+            operator=self.operator,
+            note=self.note,
+            provenance=self._provenance(),
+            instrument=self._instrument(),
+            sample=self.sample,
+            hits=hits,
+            analyzer=analyzer,
+        )
+
+    def _instrument(self) -> Instrument:
+        assert self.actual is not None
+        return Instrument(
             model=model_of(self.driver.dialect, self.identification),
             identification=self.identification,
             resource=self.resource,
@@ -308,23 +416,16 @@ class Capture:
             dialect=self.driver.dialect.name,
             settings=settings_as_dict(self.actual),
         )
+
+    def _provenance(self) -> dict[str, Any]:
         provenance: dict[str, Any] = {"hits_wanted": self.hits_wanted}
         if self.simulator is not None:
             provenance["simulator"] = self.simulator
         if self.replayed_from is not None:
             provenance["replayed_from"] = self.replayed_from
-        kind = "simulated" if self.simulator is not None else "captured"
-        return Run(
-            run_id=self.run_id,
-            kind="replayed" if self.replayed_from is not None else kind,
-            complete=complete,
-            start_time=self.start_time,
-            end_time=utc_now(),
-            operator=self.operator,
-            note=self.note,
-            provenance=provenance,
-            instrument=instrument,
-            sample=self.sample,
-            hits=hits,
-            analyzer=analyzer,
-        )
+        return provenance
+
+    def _kind(self) -> str:
+        if self.replayed_from is not None:
+            return "replayed"
+        return "simulated" if self.simulator is not None else "captured"

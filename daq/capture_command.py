@@ -1,8 +1,10 @@
 """`daq capture`: take an impact test's hits, check each, seal the run into the store.
 
-With --sim, or when no analyzer is configured (--resource, $DAQ_RESOURCE, the config
-file's ``resource``), the built-in simulator serves on 127.0.0.1 (a real TCP socket)
-and the first line says so. The workflow itself lives in daq/capture.py.
+With --sim the built-in simulator serves on 127.0.0.1 (a real TCP socket) and the first
+line says so; without --sim an analyzer must be configured (--resource, $DAQ_RESOURCE,
+the config file's ``resource``). Before the first hit the operator and note are checked,
+and the store must be writable with room for the whole run. The workflow itself lives
+in daq/capture.py; every hit is journaled in the store as it is taken.
 """
 
 from __future__ import annotations
@@ -205,6 +207,7 @@ def capture(
     if print_setup:
         sys.stdout.write(setup_toml(ImpactSettings()))
         return
+    check_operator_and_note(operator, note)
     settings = read_setup(setup) if setup is not None else ImpactSettings()
     hits_wanted = hits if hits is not None else settings.averages
     if not 1 <= hits_wanted <= 9999:
@@ -212,6 +215,12 @@ def capture(
     if sim and resource:
         raise UserError("--sim and --resource exclude each other", exit_code=2)
     real = None if sim else configured_resource(resource)
+    if real is None and not sim:
+        raise UserError(
+            "no analyzer configured: give --resource <resource> (or set $DAQ_RESOURCE, or resource "
+            "in the config file, see daq config), or --sim for the built-in simulator",
+            exit_code=2,
+        )
     sim_options = {
         "--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--hammer": hammer,
         "--model": model,
@@ -226,6 +235,18 @@ def capture(
         time_scale=0.05 if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
         dialect=check_dialect(dialect), model=(model or SimModel.hp35660a).value,
     )  # fmt: skip
+
+
+def check_operator_and_note(operator: str, note: str) -> None:
+    """UserError (exit 2) unless --operator is one line and --note is text, both valid
+    UTF-8 without control characters: the rule the service applies to its requests."""
+    from daq.capture import check_plain_text
+
+    try:
+        check_plain_text(operator, "--operator", one_line=True)
+        check_plain_text(note, "--note", one_line=False)
+    except ValueError as exc:
+        raise UserError(str(exc), exit_code=2) from None
 
 
 def run_capture(
@@ -274,11 +295,10 @@ def run_capture(
                 "scenario": scenario, "seed": seed, "time_scale": time_scale, "hammer": hammer or "",
                 "model": model,
             }  # fmt: skip
-            why = "--sim" if sim_asked else "no analyzer configured (--resource, $DAQ_RESOURCE, config file)"
-            console.print(f"Simulated {model} ({scenario} beam) at {resource}: {why}")
+            console.print(f"Simulated {model} ({scenario} beam) at {resource}: --sim")
         dsa = open_analyzer(stack, resource, dialect)
         job = Capture(
             dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
-            simulator=simulator, operator=operator, note=note,
+            simulator=simulator, operator=operator, note=note, store_dir=store_dir,
         )  # fmt: skip
         drive(console, job, store_dir, ask=not yes)

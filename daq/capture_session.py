@@ -57,18 +57,26 @@ def open_analyzer(stack: contextlib.ExitStack, resource: str, dialect: str | Non
 def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
     """Run ``job`` (a daq.capture.Capture) to its end with a display, seal the run and
     return it. With ``ask`` the operator decides each hit at the keyboard, else the
-    job's policy does. Ctrl-C, a dropped link, an instrument error or no answer seal
-    the hits so far as an incomplete run and raise UserError saying where it is."""
-    from daq.store import Store, StoreError
+    job's policy does. Every hit is journaled in the store as it is taken. Ctrl-C,
+    SIGTERM, SIGHUP, a dropped link, an instrument error or no answer seal the hits so
+    far as an incomplete run and raise UserError saying where it is (exit status 130
+    for Ctrl-C, 128 + the signal's number for SIGTERM (143) and SIGHUP (129))."""
+    from daq.store import StoreError
+
+    if job.store_dir is None:
+        job.store_dir = Path(store_dir)
 
     def seal_partial(why: str, exit_code: int) -> UserError:
         run = job.partial_run()
         if run is None:
+            job.discard_journal()
             return UserError(f"{why}; no hits to keep", exit_code)
         try:
-            path = Store(store_dir).seal(run)
+            path = job.seal(run)
         except StoreError as exc:
-            return UserError(f"{why}; the {run.hits.n_hits} hits so far could not be sealed: {exc}", 1)
+            journal = job.journal.path if job.journal is not None else None
+            kept = f"; they stay in the hit journal {journal}" if journal is not None else ""
+            return UserError(f"{why}; the {run.hits.n_hits} hits so far could not be sealed: {exc}{kept}", 1)
         return UserError(
             f"{why}; {run.hits.n_hits} hits kept as incomplete run {run.run_id} in {path}", exit_code
         )
@@ -78,35 +86,61 @@ def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
         return _follow(console, job, store_dir, ask, hits_wanted, seal_partial)
 
 
+class Signalled(KeyboardInterrupt):
+    """SIGTERM or SIGHUP: the capture stops as on Ctrl-C, with exit status 128 + signum."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+#: What the error line says for each stopping signal.
+_WHY = {
+    signal.SIGINT: "interrupted",
+    signal.SIGTERM: "terminated (SIGTERM)",
+    signal.SIGHUP: "hung up (SIGHUP)",
+}
+
+
 @contextlib.contextmanager
 def _one_interrupt():
-    """The first Ctrl-C interrupts the capture; later ones, while the hits so far are
-    sealed, are ignored: a technician pressing twice must not lose the run. Outside the
-    main thread (no signal handlers there) this does nothing."""
+    """The first Ctrl-C, SIGTERM or SIGHUP interrupts the capture; later ones, while the
+    hits so far are sealed, are ignored: a technician pressing twice, or a system
+    shutting down (SIGTERM then SIGHUP), must not lose the run. Outside the main thread
+    (no signal handlers there) this does nothing. An ignored SIGINT or SIGHUP (a
+    background job, nohup) stays ignored."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     pressed = False
 
-    def on_sigint(signum: int, frame: Any) -> None:
+    def on_signal(signum: int, frame: Any) -> None:
         nonlocal pressed
         if pressed:
             return
         pressed = True
-        raise KeyboardInterrupt
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise Signalled(signum)
 
-    previous = signal.signal(signal.SIGINT, on_sigint)
+    previous = {}
+    for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        old = signal.getsignal(signum)
+        if signum != signal.SIGINT and old is signal.SIG_IGN:
+            continue
+        previous[signum] = signal.signal(signum, on_signal)
     try:
         yield
     finally:
         # Once interrupted the command is on its way out with the run sealed: another
-        # Ctrl-C now would only turn its exit status 130 into a death by signal.
-        signal.signal(signal.SIGINT, signal.SIG_IGN if pressed else previous)
+        # signal now would only turn its exit status into a death by signal.
+        for signum, old in previous.items():
+            signal.signal(signum, signal.SIG_IGN if pressed else old)
 
 
 def _follow(console: Any, job: Any, store_dir: Path, ask: bool, hits_wanted: int, seal_partial: Any) -> Run:
     from daq.capture import CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
-    from daq.store import Store, StoreError
+    from daq.store import StoreError
     from drivers.errors import DriverError
 
     try:
@@ -127,18 +161,26 @@ def _follow(console: Any, job: Any, store_dir: Path, ask: bool, hits_wanted: int
                 verdict = "accepted" if event.accepted else f"rejected ({event.reason})"
                 console.print(f"  -> {verdict}; {event.accepted_so_far}/{hits_wanted} accepted")
             elif isinstance(event, Finished):
-                path = Store(store_dir).seal(event.run)
+                path = job.seal(event.run)
                 state = "" if event.run.complete else " (incomplete, as its original)"
                 console.print(f"Run {event.run.run_id} sealed{state}: {path}")
                 return event.run
+    except Signalled as exc:
+        raise seal_partial(_WHY[exc.signum], 128 + exc.signum) from None
     except KeyboardInterrupt:
         raise seal_partial("interrupted", 130) from None
     except EOFError:
         raise seal_partial("no answer on stdin (use --yes to decide by the checks)", 1) from None
     except DriverError as exc:
         raise seal_partial(str(exc), 1) from None
-    except StoreError as exc:
-        raise UserError(str(exc)) from None
+    except StoreError as exc:  # no room, a journal that cannot be written, a seal that failed
+        message = str(exc)
+        if job.journal is not None and "journal" not in message:
+            message += (
+                f"; the hits stay in the hit journal {job.journal.path}, sealed as an incomplete run "
+                "by the next daq command on this store once it can write there"
+            )
+        raise UserError(message) from None
     except CaptureError as exc:  # e.g. too many hits failed their checks: keep what was taken
         raise seal_partial(str(exc), 1) from None
     raise AssertionError("a capture ends with Finished or an exception")

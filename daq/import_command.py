@@ -104,9 +104,11 @@ def import_file(
     written unless the whole file reads cleanly.
     """
     from daq.capture import utc_now
+    from daq.capture_command import check_operator_and_note
     from daq.formats.imported import show_path
     from daq.store import Run, Store, StoreError, new_run_id, resolve_store_dir
 
+    check_operator_and_note(operator, note)  # before the file is even read
     if format is ImportFormat.auto:
         chosen, why = detect_format(file)
         how = f"detected: {why}"

@@ -5,7 +5,11 @@ the same runs. What differs is who decides each hit: the page or the API
 (``decide``), or the checks when the capture was started with ``auto``. Every step
 is published as an event (daq/service/events.py). However the capture ends, the
 hits taken are sealed: complete, or as an incomplete run after Stop, a dropped
-link or an instrument error. Only Abort discards them, as asked.
+link or an instrument error. Only Abort discards them, as asked. Every hit and its
+verdict is journaled in the store as it is taken (daq/store/journal.py), so a service
+killed outright (SIGKILL, OOM, power cut) loses no decided hit either: the next start
+of the service, or any command listing the store, seals the journal as an incomplete
+run.
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ from daq.capture import (
 )
 from daq.service.events import EventHub
 from daq.service.instrument_link import InstrumentLink
-from daq.store import Run, Store, StoreError
+from daq.store import Run, StoreError
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings
 
@@ -105,7 +109,7 @@ class CaptureController:
         simulator = self.link.sim.provenance() if self.link.sim is not None else None
         job = Capture(
             dsa, self.settings, hits_wanted, resource=self.link.resource, transport=self.link.transport_name,
-            simulator=simulator, operator=operator, note=note,
+            simulator=simulator, operator=operator, note=note, store_dir=self.store_dir,
         )  # fmt: skip
         with self._cond:
             self._reset(job, hits_wanted, auto)
@@ -251,22 +255,28 @@ class CaptureController:
         if how == "abort":
             with self._cond:
                 taken = len(self.hits)  # the hit waiting for a decision too
+            job.discard_journal()
             return "aborted", f"{_hits(taken)} discarded", None
         why = message or "stopped"
         try:
             run = job.partial_run()
         except CaptureError as exc:
+            job.release_journal()
             return "failed", f"{why}; the hits could not be kept: {exc}", None
         if run is None:
+            job.discard_journal()
             return ("stopped" if how == "stop" else outcome), f"{why}; no hits to keep", None
         try:
-            self._seal(run)
+            self._seal(run, job)
         except (StoreError, ValueError) as exc:
-            return "failed", f"{why}; the {_hits(run.hits.n_hits)} so far could not be sealed: {exc}", None
+            job.release_journal()
+            kept = f"; they stay in the hit journal {job.journal.path}" if job.journal is not None else ""
+            lost = f"{why}; the {_hits(run.hits.n_hits)} so far could not be sealed: {exc}{kept}"
+            return "failed", lost, None
         return "incomplete", f"{why}; {_hits(run.hits.n_hits)} kept as an incomplete run", run
 
-    def _seal(self, run: Run) -> None:
-        Store(self.store_dir).seal(run)
+    def _seal(self, run: Run, job: Capture) -> None:
+        job.seal(run)
         self.hub.publish(
             "run_sealed",
             {"run_id": run.run_id, "complete": run.complete, "n_hits": run.hits.n_hits,
@@ -297,7 +307,7 @@ class CaptureController:
             elif isinstance(event, HitDecided):
                 self._decided(job, event)
             elif isinstance(event, Finished):
-                self._seal(event.run)
+                self._seal(event.run, job)
                 return event.run
         raise CaptureError("the capture ended without a run")
 

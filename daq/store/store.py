@@ -1,14 +1,19 @@
 """A folder of runs: where it is, what is in it, and picking a run by id or prefix.
 
 Only files named exactly ``<run_id>.h5`` are runs. Hidden temporaries
-(``.<run_id>.h5.tmp-...``), result files (``<run_id>.<name>.h5``) and the index cache
-are never listed.
+(``.<run_id>.h5.tmp-...``), hit journals (``.journal-...``), result files
+(``<run_id>.<name>.h5``) and the index cache are never listed.
+
+Listing the store (``list``) and getting it ready for writing (``ensure_writable``)
+first seal every hit journal left by a capture that died (daq/store/journal.py) as an
+incomplete run, saying so in one line on stderr.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import sys
 import time
 from collections.abc import Mapping
 from pathlib import Path
@@ -19,6 +24,7 @@ from daq.store.config import APP_DIR, load_config
 from daq.store.errors import StoreError
 from daq.store.ids import RUN_ID_PATTERN, validate_run_id_prefix
 from daq.store.index import cached_summaries
+from daq.store.journal import recover
 from daq.store.model import Run
 from daq.store.reader import RunSummary, open_run, read_summary
 from daq.store.results import read_result, write_result
@@ -78,6 +84,17 @@ class Store:
             raise StoreError(f"cannot create store folder {self.path}: {exc.strerror or exc}") from None
         if not os.access(self.path, os.W_OK | os.X_OK):
             raise StoreError(f"store folder {self.path} is not writable by this user")
+        self.recover_journals()
+
+    def recover_journals(self) -> list[str]:
+        """Seal the hit journals of captures that died as incomplete runs (each said in
+        one line on stderr); the lines."""
+        lines = recover(self.path)
+        for line in lines:
+            with contextlib.suppress(OSError, ValueError):
+                sys.stderr.write(f"daq: {line}\n")
+                sys.stderr.flush()
+        return lines
 
     def seal(self, run: Run) -> Path:
         """Write ``run`` atomically into the store (never overwriting); its path."""
@@ -86,8 +103,10 @@ class Store:
     def list(self) -> list[RunSummary]:
         """One summary per run file, sorted by run id (that is, by creation time).
 
-        Damaged files are listed too, with ``error`` saying what is wrong.
+        Damaged files are listed too, with ``error`` saying what is wrong. Hit journals
+        of dead captures are sealed first (``recover_journals``).
         """
+        self.recover_journals()
         files = [(entry.name, st.st_size, st.st_mtime_ns) for entry, st in self._entries(is_run_file_name)]
         files.sort()
         return cached_summaries(self.path, files, _summary_or_error)
