@@ -10,6 +10,7 @@ import numpy as np
 from daq.store import layout
 from daq.store.errors import StoreError
 from daq.store.h5io import (
+    MAX_HITS,
     get_array,
     get_bool,
     get_float,
@@ -80,7 +81,69 @@ def decode_run(f: h5py.File) -> Run:
     )
 
 
+def _shape(group: h5py.Group, name: str, required: bool = True) -> tuple[int, ...] | None:
+    """The declared shape of dataset ``group/name`` (metadata only; None if absent and optional)."""
+    node = group.get(name)
+    if node is None and not required:
+        return None
+    if not isinstance(node, h5py.Dataset):
+        where = f"{group.name}/{name}"
+        raise StoreError(f"dataset {where} is missing" if node is None else f"{where} should be a dataset")
+    return tuple(int(n) for n in node.shape or ())
+
+
+def _agree(group: h5py.Group, expected: dict[str, tuple[int, ...]], optional: tuple[str, ...] = ()) -> None:
+    for name, want in expected.items():
+        got = _shape(group, name, required=name not in optional)
+        if got is not None and got != want:
+            raise StoreError(f"dataset {group.name}/{name} has shape {got}, the run's counts say {want}")
+
+
+def check_hits_counts(group: h5py.Group) -> int:
+    """n_hits of the hits group, once every dataset's declared shape agrees with it
+    and with n_samples (metadata only: nothing is read before the counts agree)."""
+    records = _shape(group, layout.D_FORCE)
+    if len(records) != 2:
+        raise StoreError(f"dataset {group.name}/{layout.D_FORCE} has shape {records}, expected 2 dimensions")
+    n_hits, n_samples = records
+    if n_hits > MAX_HITS:
+        raise StoreError(f"{group.name} declares {n_hits} hits, more than the limit of {MAX_HITS}; refused")
+    per_hit = (n_hits,)
+    _agree(
+        group,
+        {
+            layout.D_RESPONSE: records,
+            layout.D_TIME: (n_samples,),
+            layout.D_HIT: per_hit,
+            layout.D_ACCEPTED: per_hit,
+            layout.D_REJECT_REASON: per_hit,
+            layout.D_OVERLOAD: (n_hits, 2),
+            layout.D_PEAK_FORCE: per_hit,
+            layout.D_TIMESTAMP: per_hit,
+            layout.D_CHECKS: per_hit,
+        },
+        optional=(layout.D_HIT,),
+    )
+    return n_hits
+
+
+def _check_table_counts(group: h5py.Group, table: str, optional: tuple[str, ...]) -> None:
+    """An FRF or spectra group: (n, n_lines) tables over (n_lines,) frequencies."""
+    lines = _shape(group, layout.D_FREQUENCY)
+    values = _shape(group, table)
+    if len(lines) != 1 or len(values) != 2:
+        raise StoreError(f"{group.name}: frequency {lines} and {table} {values} have the wrong dimensions")
+    n = values[0]
+    # Only the numeric tables: the texts (labels, kinds, units) are counted by the model,
+    # whose messages say which, and their bytes are bounded with every other dataset's.
+    expected = {table: (n, lines[0])}
+    if table == layout.D_FRF:
+        expected[layout.D_COHERENCE] = (n, lines[0])
+    _agree(group, expected, optional=optional)
+
+
 def _decode_hits(group: h5py.Group) -> Hits:
+    check_hits_counts(group)
     force = get_array(group, layout.D_FORCE, "fc", 2)
     response = get_array(group, layout.D_RESPONSE, "fc", 2)
     time_axis = get_array(group, layout.D_TIME, "f", 1)
@@ -115,6 +178,7 @@ def _decode_hits(group: h5py.Group) -> Hits:
 
 
 def _decode_frf(group: h5py.Group) -> MeasuredFrf:
+    _check_table_counts(group, layout.D_FRF, (layout.D_COHERENCE,))
     return _build(
         MeasuredFrf,
         frequency_hz=get_array(group, layout.D_FREQUENCY, "f", 1),
@@ -127,6 +191,7 @@ def _decode_frf(group: h5py.Group) -> MeasuredFrf:
 
 
 def _decode_spectra(group: h5py.Group) -> Spectra:
+    _check_table_counts(group, layout.D_SPECTRUM, ())
     return _build(
         Spectra,
         frequency_hz=get_array(group, layout.D_FREQUENCY, "f", 1),
@@ -135,6 +200,35 @@ def _decode_spectra(group: h5py.Group) -> Spectra:
         units=get_text_array(group, layout.D_UNIT),
         labels=get_text_array(group, layout.D_LABEL),
     )
+
+
+def nonfinite_problems(run: Run) -> list[str]:
+    """One line per array of ``run`` holding NaN or infinity (analysis and replay need
+    finite numbers); the model allows them, so a sealed run may hold them."""
+    arrays: list[tuple[str, np.ndarray | None]] = []
+    if run.hits is not None:
+        arrays += [
+            (layout.HITS + "/" + layout.D_FORCE, run.hits.force_n),
+            (layout.HITS + "/" + layout.D_RESPONSE, run.hits.response_m_s2),
+            (layout.HITS + "/" + layout.D_PEAK_FORCE, run.hits.peak_force_n),
+        ]
+    for where, frf in ((layout.ANALYZER, run.analyzer), (layout.MEASURED_FRF, run.measured_frfs)):
+        if frf is not None:
+            arrays += [(f"{where}/{layout.D_FRF}", frf.frf), (f"{where}/{layout.D_COHERENCE}", frf.coherence)]
+    if run.spectra is not None:
+        arrays.append((f"{layout.SPECTRA}/{layout.D_SPECTRUM}", run.spectra.values))
+    problems = []
+    for where, values in arrays:
+        if values is None:
+            continue
+        bad = ~np.isfinite(values)
+        if bad.any():
+            first = np.unravel_index(int(np.argmax(bad)), values.shape)
+            problems.append(
+                f"dataset /{where} holds {int(bad.sum())} NaN or infinite value(s), first at index "
+                f"{tuple(int(i) for i in first)}: analysis and replay need finite numbers"
+            )
+    return problems
 
 
 def _build(cls: type, **values: object) -> object:

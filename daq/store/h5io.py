@@ -176,6 +176,7 @@ def get_array(
             f"dataset {node.name} has dtype {node.dtype} and {node.ndim} dimensions, "
             f"expected kind {kinds!r} and {ndim} dimensions"
         )
+    check_declared_size(node)  # before the read: memory follows the declared shape
     return node[()]
 
 
@@ -191,20 +192,62 @@ def get_text_array(group: h5py.Group, name: str, required: bool = True) -> list[
 
 _MAX_DEPTH = 8
 
+#: The most the datasets of one file may declare, each and all together, counted as
+#: their size once read (shape x item size: decompressed, fill values included). A real
+#: run is far below: 100 hits x 65,536 complex samples on two channels is 200 MiB.
+MAX_FILE_BYTES = 512 * 2**20
+#: The most one chunk may declare (our writer's chunks are one record row, <= a few MiB).
+MAX_CHUNK_BYTES = 64 * 2**20
+#: Hits in one run: far above any impact test, low enough to list without reading data.
+MAX_HITS = 100_000
+#: Objects (groups and datasets) in one file: ours hold a few dozen.
+MAX_OBJECTS = 10_000
+
 # --- safety -------------------------------------------------------------------------
 
 
-def refuse_outside_references(root: h5py.Group) -> None:
-    """StoreError if any object links or maps to data outside this file.
+def declared_bytes(dset: h5py.Dataset) -> int:
+    """What reading ``dset`` whole costs in memory: shape x item size (Python ints, no overflow)."""
+    total = int(dset.dtype.itemsize)
+    for extent in dset.shape or ():
+        total *= int(extent)
+    return total
+
+
+def check_declared_size(dset: h5py.Dataset, limit: int = MAX_FILE_BYTES) -> int:
+    """StoreError unless ``dset`` and its chunks declare at most ``limit`` / MAX_CHUNK_BYTES
+    bytes; its declared size. Only metadata is read: nothing is allocated for the data."""
+    size = declared_bytes(dset)
+    if size > limit:
+        raise StoreError(
+            f"dataset {dset.name} declares {size} bytes ({tuple(dset.shape or ())} x "
+            f"{dset.dtype.itemsize}), more than the limit of {limit} bytes; refused"
+        )
+    chunk = int(dset.dtype.itemsize)
+    for extent in dset.chunks or ():
+        chunk *= int(extent)
+    if chunk > MAX_CHUNK_BYTES:
+        raise StoreError(
+            f"dataset {dset.name} declares chunks of {chunk} bytes, more than the limit of "
+            f"{MAX_CHUNK_BYTES} bytes; refused"
+        )
+    return size
+
+
+def refuse_outside_references(root: h5py.Group) -> int:
+    """StoreError if any object links or maps to data outside this file, has more than
+    one name, or if the datasets declare more than MAX_FILE_BYTES; the bytes declared.
 
     External links, soft links (which could loop or dangle), virtual datasets and
     datasets with external raw storage are all refused: a run file must be
-    self-contained, and reading one must never open another file.
+    self-contained, and reading one must never open another file. An object with
+    several names (hard links: our writer never makes them) is refused too, and each
+    object is visited once, by its address: otherwise a few groups linking 30 times
+    to the next would make 30**7 paths to walk. Only metadata is read.
     """
-    # Depth-limited rather than tracking visited objects: a hard-link cycle then ends
-    # as "too deep" instead of looping, and no object needs hashing (which itself
-    # fails on damaged metadata with an unhelpful message).
     pending = [(root, 0)]
+    seen: set[tuple[int, int]] = set()
+    total = 0
     while pending:
         group, depth = pending.pop()
         if depth > _MAX_DEPTH:
@@ -213,10 +256,20 @@ def refuse_outside_references(root: h5py.Group) -> None:
             link = group.get(name, getlink=True)
             where = f"{group.name.rstrip('/')}/{name}"
             if isinstance(link, h5py.ExternalLink):
-                raise StoreError(f"{where} is an external link to {link.filename}:{link.path}; refused")
+                target = f"{link.filename}:{link.path}"
+                raise StoreError(f"{where} is an external link (linked to {target}); refused")
             if isinstance(link, h5py.SoftLink):
                 raise StoreError(f"{where} is a soft link to {link.path}; refused")
             node = group[name]  # not .get(): a damaged object must raise, not read as None
+            info = h5py.h5o.get_info(node.id)
+            if info.rc != 1:
+                raise StoreError(f"{where} has {info.rc} names (hard links); refused")
+            key = (int(info.fileno), int(info.addr))
+            if key in seen:  # unreachable with rc == 1, kept so the walk ends whatever HDF5 says
+                raise StoreError(f"{where} is reached twice; refused")
+            seen.add(key)
+            if len(seen) > MAX_OBJECTS:
+                raise StoreError(f"more than {MAX_OBJECTS} objects in the file; refused")
             if isinstance(node, h5py.Group):
                 pending.append((node, depth + 1))
             elif isinstance(node, h5py.Dataset):
@@ -224,5 +277,12 @@ def refuse_outside_references(root: h5py.Group) -> None:
                     raise StoreError(f"{where} is a virtual dataset (maps data from other files); refused")
                 if node.external:
                     raise StoreError(f"{where} stores its data in external raw files; refused")
+                total += check_declared_size(node)
+                if total > MAX_FILE_BYTES:
+                    raise StoreError(
+                        f"the datasets declare more than {MAX_FILE_BYTES} bytes together "
+                        f"(at {where}); refused"
+                    )
             else:
                 raise StoreError(f"{where} is a {type(node).__name__}, not a group or dataset; refused")
+    return total

@@ -19,7 +19,7 @@ from daq.store import layout
 from daq.store.reader import RunSummary
 
 # Bump when the table changes; an index of another version is rebuilt.
-INDEX_VERSION = 1
+INDEX_VERSION = 2  # 2: summaries check links, declared sizes and file names
 _COLUMNS = [f.name for f in fields(RunSummary)]
 _BUSY_TIMEOUT_S = 5.0
 _BUSY_CODES = {sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED}

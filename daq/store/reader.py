@@ -15,7 +15,7 @@ from pathlib import Path
 import h5py
 
 from daq.store import layout
-from daq.store.decode import check_schema, decode_run
+from daq.store.decode import check_hits_counts, check_schema, decode_run, nonfinite_problems
 from daq.store.errors import StoreError
 from daq.store.h5io import get_bool, get_group, get_text, refuse_outside_references
 from daq.store.model import Run
@@ -65,19 +65,36 @@ def open_h5(path: Path | str, whole_file_check: bool = True) -> Iterator[h5py.Fi
         raise StoreError(f"{path}: damaged or not an HDF5 run file ({_short(exc)})") from None
 
 
-def open_run(path: Path | str) -> Run:
-    """The complete run stored at ``path`` (all arrays read; checksums verified)."""
+def open_run(path: Path | str, require_finite: bool = False) -> Run:
+    """The complete run stored at ``path`` (all arrays read; checksums verified).
+
+    require_finite: refuse a run whose records or spectra hold NaN or infinity (what
+    an import of a run file wants: analysis and replay would fail on it later)."""
     with open_h5(path) as f:
-        return decode_run(f)
+        run = decode_run(f)
+    if require_finite:
+        problems = nonfinite_problems(run)
+        if problems:
+            raise StoreError(f"{path}: {problems[0]}")
+    return run
+
+
+def misnamed(path: Path, run_id: str) -> str | None:
+    """Why the run file at ``path`` is misnamed (its name is not ``<run_id>.h5``), or None.
+    Commands find runs by file name, so such a run could be listed but never picked."""
+    if path.name == f"{run_id}{layout.RUN_SUFFIX}":
+        return None
+    return f"misnamed: the file holds run {run_id!r}; rename it to {run_id}{layout.RUN_SUFFIX}"
 
 
 def read_summary(path: Path | str) -> RunSummary:
     """The listing line of the run at ``path``; StoreError if it is unreadable."""
     path = Path(path)
     size = path.stat().st_size if path.exists() else 0
-    # Listing must be quick: only the root, /entry and the accepted flags are read,
-    # so only they are checked for links to outside (not the whole tree).
-    with open_h5(path, whole_file_check=False) as f:
+    # Listing must be quick and small: the whole tree's metadata is checked (links,
+    # declared sizes: no data read), then only the attributes and the accepted flags
+    # (at most MAX_HITS bytes, once every dataset of the hits agrees on their count).
+    with open_h5(path) as f:
         check_schema(f)
         entry = get_group(f, layout.ENTRY)
         n_hits = n_accepted = 0
@@ -95,11 +112,16 @@ def read_summary(path: Path | str) -> RunSummary:
                 raise StoreError(
                     f"dataset {layout.HITS}/{layout.D_ACCEPTED} is missing, linked or malformed; refused"
                 )
+            check_hits_counts(hits)  # at most MAX_HITS flags, agreeing with the records
             values = accepted[()]
             n_hits, n_accepted = int(values.size), int(values.sum())
+        run_id = get_text(entry, "run_id")
+        wrong = misnamed(path, run_id)
+        if wrong is not None:
+            raise StoreError(wrong)
         return RunSummary(
             file_name=path.name,
-            run_id=get_text(entry, "run_id"),
+            run_id=run_id,
             start_time=get_text(entry, "start_time"),
             kind=get_text(entry, "kind"),
             complete=get_bool(entry, "complete"),

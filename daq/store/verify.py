@@ -12,9 +12,10 @@ from pathlib import Path
 
 import h5py
 
-from daq.store.decode import check_schema, decode_run
+from daq.store.decode import check_schema, decode_run, nonfinite_problems
 from daq.store.errors import StoreError
 from daq.store.h5io import refuse_outside_references
+from daq.store.reader import misnamed
 
 _EXPECTED_FILTERS = "gzip + shuffle + fletcher32"
 
@@ -34,13 +35,13 @@ def verify(path: Path | str) -> list[str]:
     problems: list[str] = []
     try:
         with f:
-            _check(f, problems)
+            _check(f, problems, path)
     except Exception as exc:  # closing a damaged file can fail too
         problems.append(f"unreadable: {_short(exc)}")
     return problems
 
 
-def _check(f: h5py.File, problems: list[str]) -> None:
+def _check(f: h5py.File, problems: list[str], path: Path) -> None:
     try:
         refuse_outside_references(f)
     except StoreError as exc:
@@ -58,9 +59,14 @@ def _check(f: h5py.File, problems: list[str]) -> None:
     if problems:
         return  # decoding damaged data would only repeat the same faults less clearly
     try:
-        decode_run(f)
+        run = decode_run(f)
     except Exception as exc:
         problems.append(_short(exc))
+        return
+    problems.extend(nonfinite_problems(run))
+    wrong = misnamed(path, run.run_id)
+    if wrong is not None:
+        problems.append(wrong)
 
 
 def _read_everything(f: h5py.File, problems: list[str]) -> None:
