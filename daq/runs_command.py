@@ -8,6 +8,7 @@ where its location came from on stderr, so that its stdout stays clean for --jso
 from __future__ import annotations
 
 import json
+import re
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -64,7 +65,23 @@ def _note(text: str) -> None:
 
 
 def _dumps(data: Any) -> str:
-    return json.dumps(data, indent=2, ensure_ascii=False, default=_json_default)
+    # JSON escapes C0 controls (ESC is \u001b); C1 ones (U+009B is a CSI to many
+    # terminals) only with ensure_ascii, which would escape every accent too.
+    text = json.dumps(data, indent=2, ensure_ascii=False, default=_json_default)
+    return _C1.sub(lambda m: f"\\u{ord(m.group()):04x}", text)
+
+
+#: Control characters: C0 (ESC, BEL, CR...), DEL and C1 (U+0080..U+009F, CSI among them).
+_CONTROLS = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+_C1 = re.compile(r"[\x7f-\x9f]")
+
+
+def shown(value: Any) -> str:
+    """``value`` as text safe to print: every control character written as a Python
+    escape (ESC as \\x1b, a line break as \\n), so that text from a run file, which
+    may come from anywhere, never drives the terminal that lists it."""
+    text = value if isinstance(value, str) else str(value)
+    return _CONTROLS.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
 
 
 def _json_default(value: Any) -> Any:
@@ -133,17 +150,17 @@ def _print_table(summaries, store_dir: Path) -> None:
     table.add_column("note", overflow="fold")
     for s in summaries:
         if s.error is not None:
-            table.add_row(escape(s.run_id), "", "", "[red]DAMAGED[/]", "", "", "", "see below")
+            table.add_row(escape(shown(s.run_id)), "", "", "[red]DAMAGED[/]", "", "", "", "see below")
             continue
         table.add_row(
-            escape(s.run_id),
-            escape(s.start_time[:19].replace("T", " ")),
-            escape(s.kind),
+            escape(shown(s.run_id)),
+            escape(shown(s.start_time[:19].replace("T", " "))),
+            escape(shown(s.kind)),
             "complete" if s.complete else "[yellow]incomplete[/]",
             str(s.n_hits),
             str(s.n_accepted),
-            escape(s.operator),
-            escape(" ".join(s.note.split())),
+            escape(shown(s.operator)),
+            escape(shown(" ".join(s.note.split()))),
         )
     console = Console()
     if not console.is_terminal:
@@ -154,7 +171,7 @@ def _print_table(summaries, store_dir: Path) -> None:
     for s in damaged:
         # Plain print: a long error must not be wrapped or cut by the table.
         error = s.error.removeprefix(f"{store_dir / s.file_name}: ")
-        print(f"DAMAGED {s.file_name}: {error}")
+        print(f"DAMAGED {shown(s.file_name)}: {shown(error)}")
     if damaged:
         print("('daq runs verify' lists every problem of a file)")
 
@@ -266,7 +283,7 @@ def _print_run(d: dict[str, Any], store: str) -> None:
     from daq.store.model import FRF_FORM_UNITS
 
     def field(name: str, value: Any) -> None:
-        print(f"{name:<14}{value}")
+        print(f"{name:<14}{shown(value)}")  # every value may come from a foreign file
 
     field("run", d["run_id"])
     field("file", f"{d['file']} ({d['size_bytes']} bytes)")
@@ -394,9 +411,9 @@ def verify(
             if not problems:
                 print(f"OK       {run_id}")
                 continue
-            print(f"PROBLEM  {run_id}: {' '.join(problems[0].split())}")
+            print(f"PROBLEM  {shown(run_id)}: {shown(' '.join(problems[0].split()))}")
             for problem in problems[1:]:
-                print(f"         {run_id}: {' '.join(problem.split())}")
+                print(f"         {shown(run_id)}: {shown(' '.join(problem.split()))}")
         if results:
             print(f"{len(results)} run(s) checked: {len(results) - len(bad)} OK, {len(bad)} with problems")
     if not results:
