@@ -7,7 +7,9 @@ them in its thread pool, so the event loop only ever streams events.
 from __future__ import annotations
 
 import asyncio
+import os
 import re
+import stat
 import tempfile
 from importlib import resources
 from pathlib import Path
@@ -16,6 +18,8 @@ from urllib.parse import parse_qs
 
 import numpy as np
 from fastapi import Depends, FastAPI, Header, HTTPException, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.encoders import jsonable_encoder
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response, StreamingResponse
 from fastapi.staticfiles import StaticFiles
@@ -28,7 +32,7 @@ from daq.service.capture_control import MAX_HITS_WANTED, Conflict
 from daq.service.events import plain
 from daq.service.jobs import analysis_result_name
 from daq.service.limits import BodyLimit, LoopbackHost, TokenGate
-from daq.service.service import Service
+from daq.service.service import ReadRefused, Service, is_regular
 from daq.store import StoreError
 from daq.store.ids import RUN_ID_PATTERN
 from drivers.errors import DriverError
@@ -209,20 +213,30 @@ def create_app(service: Service) -> FastAPI:
         return plain(frf)
 
     # ------------------------------------------------------------ runs
-    @app.get("/api/runs", dependencies=reads, summary="Every run of the store, with its results")
-    def runs() -> Response:
-        return _json_bytes(_store_call(service.runs_json, lambda s: _run_row(service, s)))
+    # Every read of a run file goes through service.reads (bounded, with a timeout): a
+    # run that is slow or impossible to read must not take the server's threads.
+    async def read(what: str, rid: str, fn: Any, *args: Any) -> Any:
+        try:
+            return await service.reads.run((what, rid), fn, *args)
+        except ReadRefused as exc:
+            raise HTTPException(503, str(exc), headers={"Retry-After": "5"}) from None
 
-    @app.get("/api/runs/{run_id}", dependencies=reads, summary="One run, its analysis and fits")
-    def run(run_id: str) -> dict[str, Any]:
+    async def resolve(run_id: str) -> str:
+        return await run_in_threadpool(_resolve, service, run_id)
+
+    @app.get("/api/runs", dependencies=reads, summary="Every run of the store, with its results")
+    async def runs() -> Response:
+        row = lambda s: _run_row(service, s)  # noqa: E731
+        return _json_bytes(await read("list", "*", _store_call, service, service.runs_json, row))
+
+    def run_info(rid: str) -> bytes:
         from daq.runs_command import run_dict
 
-        rid = _resolve(service, run_id)
-        info = run_dict(_store_call(service.store.open, rid), service.store.path / f"{rid}.h5")
+        info = run_dict(_store_call(service, service.store.open, rid), service.store.path / f"{rid}.h5")
         info["file"] = f"{rid}.h5"  # not the server's path
         state = service.jobs.state(rid)
         analysis = service.analysis(rid)
-        return plain(
+        return _encode(
             {
                 "run": info,
                 "analysis": None if analysis is None else analysis["summary"],
@@ -232,20 +246,27 @@ def create_app(service: Service) -> FastAPI:
             }
         )
 
-    @app.get("/api/runs/{run_id}/analysis", dependencies=reads, summary="The run's analysis: modes, Table 2")
-    def run_analysis(run_id: str) -> Response:
-        rid = _resolve(service, run_id)
+    @app.get("/api/runs/{run_id}", dependencies=reads, summary="One run, its analysis and fits")
+    async def run(run_id: str) -> Response:
+        rid = await resolve(run_id)
+        return _json_bytes(await read("run", rid, run_info, rid))
+
+    def analysis_json(rid: str) -> bytes:
         data = service.summary_json(rid, analysis_result_name())
         if data is None:
             raise HTTPException(404, f"run {rid} has no analysis yet ({service.jobs.state(rid)['analysis']})")
-        return _json_bytes(data)
+        return data
 
-    @app.get("/api/runs/{run_id}/frf", dependencies=reads, summary="The run's analysed FRF and coherence")
-    def run_frf(run_id: str) -> dict[str, Any]:
-        payload = _analysis(service, run_id)
+    @app.get("/api/runs/{run_id}/analysis", dependencies=reads, summary="The run's analysis: modes, Table 2")
+    async def run_analysis(run_id: str) -> Response:
+        rid = await resolve(run_id)
+        return _json_bytes(await read("analysis", rid, analysis_json, rid))
+
+    def frf_json(rid: str) -> bytes:
+        payload = _analysis(service, rid)
         frf = np.atleast_2d(payload["frf"])[0]
         coherence = payload.get("coherence")
-        return plain(
+        return _encode(
             {
                 "frequency_hz": payload["frequency_hz"],
                 "frf_abs": np.abs(frf),
@@ -254,22 +275,34 @@ def create_app(service: Service) -> FastAPI:
             }
         )
 
+    @app.get("/api/runs/{run_id}/frf", dependencies=reads, summary="The run's analysed FRF and coherence")
+    async def run_frf(run_id: str) -> Response:
+        rid = await resolve(run_id)
+        return _json_bytes(await read("analysis", rid, frf_json, rid))
+
+    def fits_json(rid: str) -> bytes:
+        return _encode({name: p["summary"] for name, p in service.fits(rid).items()})
+
     @app.get("/api/runs/{run_id}/fits", dependencies=reads, summary="The run's damping fits")
-    def run_fits(run_id: str) -> dict[str, Any]:
-        rid = _resolve(service, run_id)
-        return plain({name: p["summary"] for name, p in service.fits(rid).items()})
+    async def run_fits(run_id: str) -> Response:
+        rid = await resolve(run_id)
+        return _json_bytes(await read("fits", rid, fits_json, rid))
 
     @app.get("/api/runs/{run_id}/file", dependencies=reads, summary="The run's HDF5 file")
-    def run_file(run_id: str) -> Response:
-        rid = _resolve(service, run_id)
-        return FileResponse(
-            service.store.path / f"{rid}.h5", media_type="application/x-hdf5", filename=f"{rid}.h5"
+    async def run_file(run_id: str) -> Response:
+        rid = await resolve(run_id)
+        handle, size = await run_in_threadpool(_open_run_file, service, rid)
+        return StreamingResponse(
+            _chunks(handle),
+            media_type="application/x-hdf5",
+            headers={
+                "Content-Length": str(size),
+                "Content-Disposition": f'attachment; filename="{rid}.h5"',
+            },
         )
 
-    @app.get("/api/runs/{run_id}/export", dependencies=reads, summary="The run as CSV or UFF 58")
-    def run_export(run_id: str, format: Annotated[str, Query(pattern="^(csv|uff)$")] = "csv") -> Response:
-        rid = _resolve(service, run_id)
-        the_run = _store_call(service.store.open, rid)
+    def export_file(rid: str, format: str) -> Path:
+        the_run = _store_call(service, service.store.open, rid)
         folder = Path(tempfile.mkdtemp(prefix="daq-export-"))
         target = folder / f"{rid}.{format}"
         try:
@@ -283,11 +316,27 @@ def create_app(service: Service) -> FastAPI:
                 write_uff(the_run, target)
         except (ValueError, OSError) as exc:
             _remove(folder)
-            raise HTTPException(422, f"cannot export run {rid} as {format}: {exc}") from None
+            message = service.public(f"cannot export run {rid} as {format}: {exc}")
+            raise HTTPException(422, message) from None
+        return target
+
+    @app.get("/api/runs/{run_id}/export", dependencies=reads, summary="The run as CSV or UFF 58")
+    async def run_export(
+        run_id: str, format: Annotated[str, Query(pattern="^(csv|uff)$")] = "csv"
+    ) -> Response:
+        rid = await resolve(run_id)
+        # Not shared between requests: each gets its own file, removed once sent.
+        target = await read(f"export-{format}-{id(object())}", rid, export_file, rid, format)
         media = "text/csv" if format == "csv" else "application/octet-stream"
         return FileResponse(
-            target, media_type=media, filename=target.name, background=BackgroundTask(_remove, folder)
+            target, media_type=media, filename=target.name, background=BackgroundTask(_remove, target.parent)
         )
+
+    def report(rid: str) -> str:
+        try:
+            return service.report_html(rid)
+        except (StoreError, ValueError) as exc:
+            raise HTTPException(422, service.public(f"no report for run {rid}: {exc}")) from None
 
     @app.get(
         "/api/runs/{run_id}/report",
@@ -295,13 +344,9 @@ def create_app(service: Service) -> FastAPI:
         response_class=HTMLResponse,
         summary="The run's report",
     )
-    def run_report(run_id: str) -> HTMLResponse:
-        rid = _resolve(service, run_id)
-        try:
-            html = service.report_html(rid)
-        except (StoreError, ValueError) as exc:
-            raise HTTPException(422, f"no report for run {rid}: {' '.join(str(exc).split())}") from None
-        return HTMLResponse(html)
+    async def run_report(run_id: str) -> HTMLResponse:
+        rid = await resolve(run_id)
+        return HTMLResponse(await read("report", rid, report, rid))
 
     # ------------------------------------------------------------ events
     @app.get("/api/events", dependencies=reads, summary="Live events (server-sent events)")
@@ -369,25 +414,65 @@ def _stop(service: Service, how: str) -> dict[str, Any]:
     return {"state": service.capture.state}
 
 
-def _store_call(fn: Any, *args: Any) -> Any:
+def _store_call(service: Service, fn: Any, *args: Any) -> Any:
+    """``fn(*args)``; a StoreError is a 404 whose message does not name the server's folders."""
     try:
         return fn(*args)
     except StoreError as exc:
-        raise HTTPException(404, " ".join(str(exc).split())) from None
+        raise HTTPException(404, service.public(str(exc))) from None
 
 
 def _resolve(service: Service, run_id: str) -> str:
     """The id of the run named by ``run_id`` (an id, a unique prefix, or latest); 404
-    otherwise. Names are checked against the id grammar before any path is formed."""
+    otherwise. Names are checked against the id grammar before any path is formed, and
+    a run file that is not a regular file (a link, a FIFO, a device) is no run."""
     if not run_id or len(run_id) > 64:
         raise HTTPException(404, "no such run")
-    if RUN_ID_PATTERN.fullmatch(run_id) and (service.store.path / f"{run_id}.h5").is_file():
+    if RUN_ID_PATTERN.fullmatch(run_id) and is_regular(service.store.path / f"{run_id}.h5"):
         return run_id  # a whole, well-formed id: no need to scan the store for prefixes
-    return _store_call(service.store.resolve, run_id).stem
+    rid = _store_call(service, service.store.resolve, run_id).stem
+    if not is_regular(service.store.path / f"{rid}.h5"):
+        raise HTTPException(404, f"run {rid} is not a regular file; refused")
+    return rid
 
 
-def _analysis(service: Service, run_id: str) -> dict[str, Any]:
-    rid = _resolve(service, run_id)
+#: The first bytes of an HDF5 file (its superblock's signature, at offset 0 in a run).
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def _open_run_file(service: Service, rid: str) -> tuple[Any, int]:
+    """The run's file, opened without following a link, and its size: only a regular
+    file that starts as HDF5 does (not a hard link to the token file, say)."""
+    path = service.store.path / f"{rid}.h5"
+    try:
+        # O_NONBLOCK: a FIFO put in its place must not hang the open (no effect on files).
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        raise HTTPException(404, f"run {rid} cannot be opened") from None
+    handle = os.fdopen(fd, "rb")
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or handle.read(len(HDF5_SIGNATURE)) != HDF5_SIGNATURE:
+            raise HTTPException(404, f"run {rid} is not a regular HDF5 file; refused")
+        handle.seek(0)
+    except BaseException:
+        handle.close()
+        raise
+    return handle, info.st_size
+
+
+def _chunks(handle: Any, size: int = 256 * 1024):
+    with handle:
+        while chunk := handle.read(size):
+            yield chunk
+
+
+def _encode(value: Any) -> bytes:
+    """``value`` as JSON bytes, as FastAPI would send it."""
+    return JSONResponse(jsonable_encoder(plain(value))).body
+
+
+def _analysis(service: Service, rid: str) -> dict[str, Any]:
     payload = service.analysis(rid)
     if payload is None:
         raise HTTPException(404, f"run {rid} has no analysis yet ({service.jobs.state(rid)['analysis']})")
@@ -399,6 +484,8 @@ def _run_row(service: Service, s: Any) -> dict[str, Any]:
 
     row = summary_dict(s)
     row.pop("file", None)
+    if isinstance(row.get("error"), str):
+        row["error"] = service.public(row["error"])
     row.update(analysis="none", fit="none", frequencies_hz=None, damping_ratios=None, fit_psi=None)
     # Added later (older clients ignore them): what the page must show beside the numbers,
     # so that a result that may mislead is never silent in the listing.

@@ -22,6 +22,8 @@ from pathlib import Path
 from daq.store.config import config_path
 
 TOKEN_BYTES = 32
+#: A token file larger than this is refused (a token is 64 hex digits and a newline).
+MAX_TOKEN_FILE_BYTES = 4096
 
 
 class TokenError(Exception):
@@ -66,14 +68,20 @@ def _read(path: Path) -> str:
     if not stat.S_ISREG(info.st_mode) or info.st_uid != os.getuid():
         os.close(fd)
         raise TokenError(f"token file {path} is not a regular file of ours: refused")
+    if info.st_size > MAX_TOKEN_FILE_BYTES:
+        os.close(fd)
+        raise TokenError(
+            f"token file {path} is {info.st_size} bytes, too large to hold a token: refused; "
+            f"delete it for a new one"
+        )
     with os.fdopen(fd, "r", encoding="ascii", errors="replace") as handle:
         if info.st_mode & (stat.S_IRWXG | stat.S_IRWXO):
             raise TokenError(
                 f"token file {path} is readable by others (mode {stat.S_IMODE(info.st_mode):04o}): "
                 f"refused; chmod 600 {path}, or delete it for a new token"
             )
-        token = handle.read().strip()
-    if len(token) < 32 or not all(c in "0123456789abcdef" for c in token):
+        token = handle.read(MAX_TOKEN_FILE_BYTES + 1).strip()  # it may have grown since
+    if not 32 <= len(token) <= MAX_TOKEN_FILE_BYTES or not all(c in "0123456789abcdef" for c in token):
         raise TokenError(f"token file {path} does not hold a token; delete it for a new one")
     return token
 

@@ -142,7 +142,11 @@ class JobRunner:
             removed = Store(self.store_dir).clean_temporaries()
             if removed:
                 log.warning("removed %d stale temporary files from %s", len(removed), self.store_dir)
-            summaries = Store(self.store_dir).list()
+            # Run files that are regular files only: a link may lead anywhere, a FIFO
+            # would hang the listing (and a worker) for ever.
+            from daq.service.service import list_regular_runs
+
+            summaries = list_regular_runs(Store(self.store_dir))
         except StoreError as exc:
             log.error("cannot list the store for its backlog: %s", exc)
             return
@@ -162,7 +166,9 @@ class JobRunner:
             time.sleep(WATCH_S)
             try:
                 with os.scandir(self.store_dir) as it:
-                    names = [e.name for e in it if is_run_file_name(e.name)]
+                    names = [
+                        e.name for e in it if is_run_file_name(e.name) and e.is_file(follow_symlinks=False)
+                    ]
             except OSError:
                 continue
             for name in names:

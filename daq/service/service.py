@@ -3,10 +3,15 @@ controller, the analysis workers, the event hub, and a cache of stored results."
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import contextlib
 import json
 import os
+import queue
+import stat
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -63,6 +68,7 @@ class Service:
         self._reports_lock = threading.Lock()
         self._listing_lock = threading.Lock()
         self._listing: tuple[Any, bytes] | None = None
+        self.reads = BoundedReads()
 
     def start(self) -> None:
         """Take the instrument (ResourceBusy if someone has it), start the workers and
@@ -94,6 +100,8 @@ class Service:
     def fits(self, run_id: str) -> dict[str, dict[str, Any]]:
         out = {}
         for path in sorted(self.store.path.glob(f"{run_id}.fit-*.h5")):
+            if not is_regular(path):
+                continue
             name = path.name[len(run_id) + 1 : -3]
             payload = self._results.get(run_id, name)
             if payload is not None:
@@ -113,6 +121,9 @@ class Service:
             return tuple((p.name, *_size_mtime_path(p)) for p in files)
 
         before = key()
+        odd = [name for name, *_ in before if not is_regular(self.store.path / name)]
+        if odd:  # the report would read them: a link may lead anywhere, a FIFO hangs the read
+            raise StoreError(f"{odd[0]} is not a regular file; refused")
         with self._reports_lock:
             cached = self._reports.get(run_id)
         if cached is not None and cached[0] == before:
@@ -132,15 +143,178 @@ class Service:
         """GET /api/runs as JSON bytes: ``row(summary)`` for every run, recomputed only
         when a file of the store or a run's job state changed (50 clients polling a
         1,000-run store must not re-read it 50 times)."""
-        with os.scandir(self.store.path) as it:
-            files = sorted((e.name, *_size_mtime(e)) for e in it if e.name.endswith(".h5"))
+        try:
+            with os.scandir(self.store.path) as it:
+                files = sorted((e.name, *_size_mtime(e)) for e in it if e.name.endswith(".h5"))
+        except FileNotFoundError:
+            files = []
         key = (tuple(files), self.jobs.version)
         with self._listing_lock:
             if self._listing is not None and self._listing[0] == key:
                 return self._listing[1]
-            data = json.dumps([row(s) for s in self.store.list()], separators=(",", ":")).encode()
+            data = json.dumps([row(s) for s in self.list_runs()], separators=(",", ":")).encode()
             self._listing = (key, data)
             return data
+
+    def list_runs(self) -> list[Any]:
+        """Store.list(), of the run files that are regular files only."""
+        return list_regular_runs(self.store)
+
+    def public(self, text: str) -> str:
+        """``text`` (an error's message) without the store's path: a client learns
+        nothing of the server's folders."""
+        where = str(self.store.path)
+        return " ".join(text.replace(where + os.sep, "").replace(where, "the store").split())
+
+
+def is_regular(path: Path) -> bool:
+    """True if ``path`` is a regular file itself: not a symbolic link (which may lead
+    anywhere: /etc/passwd, the token file), nor a FIFO or a device (whose reading may
+    never end)."""
+    try:
+        return stat.S_ISREG(os.lstat(path).st_mode)
+    except OSError:
+        return False
+
+
+def regular_run_names(store_dir: Path) -> list[tuple[str, int, int]]:
+    """(name, size, mtime_ns) of the store's run files that are regular files."""
+    from daq.store.store import is_run_file_name
+
+    out = []
+    try:
+        with os.scandir(store_dir) as it:
+            for entry in it:
+                if not is_run_file_name(entry.name):
+                    continue
+                try:
+                    st = entry.stat(follow_symlinks=False)
+                except OSError:
+                    continue
+                if stat.S_ISREG(st.st_mode):
+                    out.append((entry.name, st.st_size, st.st_mtime_ns))
+    except FileNotFoundError:
+        return []
+    except OSError as exc:
+        raise StoreError(f"cannot read the store folder: {os.strerror(exc.errno or 0)}") from None
+    return sorted(out)
+
+
+def list_regular_runs(store: Store) -> list[Any]:
+    """As Store.list(), but a run file that is a link, a FIFO or a device is not
+    listed (Store.list would read it: a FIFO would hang the listing for ever)."""
+    from daq.store.index import cached_summaries
+    from daq.store.store import _summary_or_error
+
+    return cached_summaries(store.path, regular_run_names(store.path), _summary_or_error)
+
+
+# ---------------------------------------------------------------- bounded reads
+#: Threads that read run files for requests, at most: a damaged file whose reading
+#: takes for ever holds one of them, never the server's request threads.
+READ_THREADS = 8
+#: Different reads of one run in progress at most (identical ones are shared).
+READS_PER_RUN = 3
+#: Reads in progress or waiting at most, all runs together.
+MAX_READS = 64
+#: Seconds a request waits for its read before it is answered 503.
+READ_TIMEOUT_S = 60.0
+
+
+class ReadRefused(Exception):
+    """Too many reads, or this one took too long: the request gets 503."""
+
+
+class _Job:
+    __slots__ = ("args", "fn", "future", "waiters")
+
+    def __init__(self, fn: Callable[..., Any], args: tuple) -> None:
+        self.fn = fn
+        self.args = args
+        self.future: concurrent.futures.Future = concurrent.futures.Future()
+        self.waiters = 0
+
+
+class BoundedReads:
+    """Long reads of run files (opening a run, its results, its report, the listing)
+    run here, off the event loop and outside the server's thread pool, so that a file
+    that is slow or impossible to read cannot starve the other requests: at most
+    READ_THREADS threads, at most READS_PER_RUN different reads per run (the same read
+    asked again waits for the one in progress; more wait their turn), a request waits
+    READ_TIMEOUT_S at most. A read that never ends keeps its thread: the process does not wait for it
+    when it stops."""
+
+    def __init__(
+        self,
+        threads: int = READ_THREADS,
+        per_run: int = READS_PER_RUN,
+        max_reads: int = MAX_READS,
+        timeout_s: float = READ_TIMEOUT_S,
+    ) -> None:
+        self.threads = threads
+        self.per_run = per_run
+        self.max_reads = max_reads
+        self.timeout_s = timeout_s
+        self._lock = threading.Lock()
+        self._jobs: dict[tuple[str, str], _Job] = {}
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._started = 0
+        self._running = 0
+
+    async def run(self, key: tuple[str, str], fn: Callable[..., Any], *args: Any) -> Any:
+        """``fn(*args)``'s value, read in one of the threads; ``key`` is (what, run id).
+        ReadRefused if too many reads wait, or this one takes too long."""
+        deadline = time.monotonic() + self.timeout_s
+        while True:
+            with self._lock:
+                job = self._jobs.get(key)
+                if job is None and len(self._jobs) >= self.max_reads:
+                    raise ReadRefused("the service is busy reading runs; try again later")
+                if job is None and sum(1 for k in self._jobs if k[1] == key[1]) < self.per_run:
+                    job = self._jobs[key] = _Job(fn, args)
+                    self._queue.put((key, job))
+                    if self._started < self.threads:
+                        self._started += 1
+                        threading.Thread(target=self._work, name="daq-read", daemon=True).start()
+                if job is not None:
+                    job.waiters += 1
+                    break
+            if time.monotonic() > deadline:  # the run's other reads hold their places
+                raise ReadRefused(f"run {key[1]} is still being read for earlier requests; try again later")
+            await asyncio.sleep(0.05)
+        try:
+            left = max(0.0, deadline - time.monotonic())
+            return await asyncio.wait_for(asyncio.shield(asyncio.wrap_future(job.future)), left)
+        except TimeoutError:
+            raise ReadRefused(f"reading run {key[1]} takes too long; try again later") from None
+        finally:
+            with self._lock:
+                job.waiters -= 1
+                # Nobody waits for it and it has not started: it never will.
+                if job.waiters == 0 and job.future.cancel() and self._jobs.get(key) is job:
+                    del self._jobs[key]
+
+    def busy(self) -> bool:
+        """True while a read is running."""
+        with self._lock:
+            return self._running > 0
+
+    def _work(self) -> None:
+        while True:
+            key, job = self._queue.get()
+            if not job.future.set_running_or_notify_cancel():
+                continue
+            with self._lock:
+                self._running += 1
+            try:
+                job.future.set_result(job.fn(*job.args))
+            except BaseException as exc:  # handed to the requests that wait
+                job.future.set_exception(exc)
+            finally:
+                with self._lock:
+                    self._running -= 1
+                    if self._jobs.get(key) is job:
+                        del self._jobs[key]
 
 
 class _ResultCache:
@@ -174,9 +348,11 @@ class _ResultCache:
         """The result's payload (summary and arrays), or None if absent or unreadable."""
         path = self.store.path / f"{run_id}.{name}.h5"
         try:
-            st = path.stat()
+            st = os.lstat(path)
         except OSError:
             return None
+        if not stat.S_ISREG(st.st_mode):
+            return None  # a link may lead anywhere; a FIFO would hang the read
         version = (st.st_size, st.st_mtime_ns)
         with self._lock:
             hit = self._entries.get((run_id, name))

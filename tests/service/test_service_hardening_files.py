@@ -1,0 +1,121 @@
+"""`daq serve` serves regular run files of its store only, and says nothing of its paths.
+
+A symbolic link named as a run (to /etc/passwd-like secrets, to the service's own
+token file), a hard link to the token file, a FIFO named as a run: every route of a
+run answers 404 at once, the listing leaves them out, nothing of their target is
+served. 404 bodies never name the store's folder. A token file far too large to hold
+a token is refused with one line. Real `daq serve` processes and sockets.
+"""
+
+from __future__ import annotations
+
+import os
+
+import httpx
+import pytest
+from cli_helpers import assert_one_line_error
+from hardening_helpers import run_daq_env
+from service_helpers import service_env, serving
+from test_cli_runs import make_run
+
+from daq.store import seal
+
+pytestmark = pytest.mark.slow
+
+SOUND = "20261123T101503.123Z-0000aaaa"
+LINKED = "20261124T235959.000Z-deadbeef"
+SECRET = "the secret outside the store"
+
+RUN_ROUTES = (
+    "/api/runs/{}",
+    "/api/runs/{}/analysis",
+    "/api/runs/{}/frf",
+    "/api/runs/{}/fits",
+    "/api/runs/{}/file",
+    "/api/runs/{}/export?format=csv",
+    "/api/runs/{}/export?format=uff",
+    "/api/runs/{}/report",
+)
+
+
+def _store_with_a_sound_run(tmp_path):
+    store = tmp_path / "store"
+    seal(make_run(SOUND), store)
+    return store
+
+
+def _assert_refused(client: httpx.Client, run_id: str, secrets: list[str], store) -> None:
+    for route in RUN_ROUTES:
+        for name in (run_id, run_id[:16]):  # the whole id, and a prefix of it
+            response = client.get(route.format(name))
+            assert response.status_code == 404, (route, name, response.status_code, response.text[:300])
+            for secret in secrets:
+                assert secret not in response.text, (route, name, response.text[:300])
+            assert str(store) not in response.text, (route, name, response.text)
+    listing = client.get("/api/runs")
+    assert listing.status_code == 200, listing.text
+    assert [row["run_id"] for row in listing.json()] == [SOUND], listing.text
+
+
+@pytest.mark.parametrize("target", ["a secret file", "the token file"])
+def test_a_symlink_in_the_store_serves_nothing(tmp_path, target):
+    store = _store_with_a_sound_run(tmp_path)
+    secret = tmp_path / "secret.txt"
+    secret.write_text(SECRET + "\n")
+    env = service_env(tmp_path)
+    with serving(tmp_path, "--sim", "--workers", "1", store=store) as served:
+        pointed = secret if target == "a secret file" else env["DAQ_TOKEN_FILE"]
+        os.symlink(pointed, store / f"{LINKED}.h5")
+        with served.client(token=False, timeout=15) as anonymous:
+            _assert_refused(anonymous, LINKED, [SECRET, served.token], store)
+            # The sound run is served as before.
+            file = anonymous.get(f"/api/runs/{SOUND}/file")
+            assert file.status_code == 200, file.text
+            assert file.content.startswith(b"\x89HDF"), file.content[:20]
+
+
+def test_a_hard_link_to_the_token_file_is_not_served(tmp_path):
+    store = _store_with_a_sound_run(tmp_path)
+    env = service_env(tmp_path)
+    with serving(tmp_path, "--sim", "--workers", "1", store=store) as served:
+        os.link(env["DAQ_TOKEN_FILE"], store / f"{LINKED}.h5")
+        with served.client(token=False, timeout=15) as anonymous:
+            response = anonymous.get(f"/api/runs/{LINKED}/file")
+            assert response.status_code == 404, response.text
+            assert served.token not in response.text
+
+
+def test_a_fifo_named_as_a_run_hangs_nothing(tmp_path):
+    """Opening a FIFO waits for a writer for ever: the listing and every route of the
+    run answer at once, and the service stays responsive."""
+    store = _store_with_a_sound_run(tmp_path)
+    with serving(tmp_path, "--sim", "--workers", "1", store=store) as served:
+        os.mkfifo(store / f"{LINKED}.h5")
+        with served.client(token=False, timeout=10) as anonymous:
+            _assert_refused(anonymous, LINKED, [], store)
+            assert anonymous.get("/api/health").status_code == 200
+
+
+def test_404_bodies_do_not_name_the_store_folder(tmp_path):
+    store = _store_with_a_sound_run(tmp_path)
+    with (
+        serving(tmp_path, "--sim", "--workers", "1", store=store) as served,
+        served.client(token=False, timeout=15) as anonymous,
+    ):
+        for name in ("2099", "20261125", "1"):
+            for route in RUN_ROUTES:
+                response = anonymous.get(route.format(name))
+                assert response.status_code == 404, (route, name, response.text)
+                assert str(store) not in response.text, (route, name, response.text)
+                assert str(tmp_path) not in response.text, (route, name, response.text)
+
+
+def test_a_token_file_too_large_to_hold_a_token_is_refused_with_one_line(tmp_path):
+    env = service_env(tmp_path)
+    token_file = tmp_path / "token"
+    fd = os.open(token_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(fd, "w") as handle:
+        handle.write("ab" * (8 * 2**20))  # 16 MiB of hex digits
+    result = run_daq_env(env, "serve", "--show-token", timeout_s=30)
+    assert_one_line_error(result, "token file", "too large")
+    assert len(result.stdout) < 100, len(result.stdout)
