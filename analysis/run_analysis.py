@@ -312,27 +312,30 @@ def _tolerances(result: RunAnalysis) -> np.ndarray:
 
 
 def _zone_fits(result: RunAnalysis, frf: np.ndarray, weights: np.ndarray | None = None):
-    """Per zone holding a mode: the LSCF poles of ``frf`` (n_lines_used,) at the top
-    SCATTER_ORDERS orders of the zone."""
+    """Per zone holding a mode: the LSCF poles of ``frf`` (n_lines_used,) or (n_frf,
+    n_lines_used), all FRFs sharing one denominator, at the top SCATTER_ORDERS orders of
+    the zone."""
     f = result.modal.frequency_hz
+    h = np.atleast_2d(frf)
     wanted = np.array([m.frequency_hz for m in result.modes])
     for zone in result.modal.zones:
         if not np.any((wanted >= zone.low_hz) & (wanted <= zone.high_hz)):
             continue
-        use = (f >= zone.low_hz) & (f <= zone.high_hz) & np.isfinite(frf)
+        use = (f >= zone.low_hz) & (f <= zone.high_hz) & np.all(np.isfinite(h), axis=0)
         top = min(zone.max_order, (int(use.sum()) - 2) // (2 if zone.basis == "real" else 1))
         orders = tuple(range(max(1, top - SCATTER_ORDERS + 1), top + 1))
         w = None if weights is None else weights[use]
         try:
-            fit = lscf_poles(f[use], frf[use][np.newaxis, :], top, orders=orders, basis=zone.basis, weights=w)
+            fit = lscf_poles(f[use], h[:, use], top, orders=orders, basis=zone.basis, weights=w)
         except (ValueError, np.linalg.LinAlgError):
             continue  # a hit too poor to fit alone adds nothing to the scatter
         yield [fit.poles[o - 1] for o in orders]
 
 
 def _estimates(result: RunAnalysis, frf: np.ndarray, decay: float, weights=None) -> np.ndarray:
-    """(n_modes, 2): each mode's (frequency, damping) in ``frf`` alone, the median over
-    the top orders of its zone of the pole nearest it (NaN: not found)."""
+    """(n_modes, 2): each mode's (frequency, damping) in ``frf`` (one FRF, or several
+    sharing their poles), the median over the top orders of its zone of the pole nearest
+    it (NaN: not found)."""
     wanted = np.array([m.frequency_hz for m in result.modes])
     tol = _tolerances(result)
     found = []
@@ -387,7 +390,8 @@ BOOTSTRAP_REPLICATES = 20
 def _bootstrap(result: RunAnalysis, decay: float, only_missing: bool = False) -> None:
     """Standard uncertainty of each mode from one averaged FRF: the FRFs' lines are
     resampled (each line counted a Poisson(1) number of times, a bootstrap over the lines)
-    and each replicate fitted as the hits are in _scatter; the spread over the replicates,
+    and each replicate fitted as the hits are in _scatter (all FRFs together, sharing
+    their poles); the spread over the replicates,
     with the spread over model orders. Seeded: the same run gives the same figures."""
     rng = np.random.default_rng(20261124)
     keep = np.isin(result.frequency_hz, result.modal.frequency_hz)
@@ -396,10 +400,8 @@ def _bootstrap(result: RunAnalysis, decay: float, only_missing: bool = False) ->
     found = []
     for _ in range(BOOTSTRAP_REPLICATES):
         weights = rng.poisson(1.0, n_lines).astype(float)
-        per_frf = np.array([_estimates(result, h, decay, weights) for h in frf])
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            found.append(np.nanmedian(per_frf, axis=0))
+        # All FRFs in one fit, as the run's poles were found: one solve per zone.
+        found.append(_estimates(result, frf, decay, weights))
     found = np.array(found)  # (B, n_modes, 2)
     for k, mode in enumerate(result.modes):
         if only_missing and mode.uncertainty_from:

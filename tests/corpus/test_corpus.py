@@ -49,8 +49,8 @@ def near(f_ours: float, f_ref: float, line_hz: float) -> bool:
 #: and the mark must then go). lvm-2ch is two hits of a LabVIEW log, noisy between 40 and
 #: 150 Hz (coherence 0.1-0.9 in m1).
 KNOWN_SHORT = {
-    ("found", "lvm-2ch-m1"): "70.45 Hz (a clear peak) is stable over too few orders; the peer's 146, 163 "
-    "and 183 Hz stand where m1 shows no peak",
+    ("found", "lvm-2ch-m1"): "the peer's 146 and 183 Hz (2 %, 1.4 %) stand where m1 shows no peak and our "
+    "diagram no stable chain",
     ("found", "lvm-2ch-m2"): "damping of 39.97 Hz: 0.20 % against the peer's 0.09-0.15 %",
     ("spurious", "lvm-2ch-m1"): "8.05 Hz (at the band edge, said in a caution) and 40.03 Hz (a peak m2 "
     "confirms, below the coherence the peak picking asks for)",
