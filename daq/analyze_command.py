@@ -21,7 +21,7 @@ import typer
 
 from daq.dask_batch import failure_reason, run_on_cluster, scheduler_address
 from daq.errors import UserError
-from daq.memory_tuning import keep_freed_memory
+from daq.memory_tuning import worker_setup
 from daq.runs_command import JsonOption, StoreOption
 
 #: --scheduler of `daq analyze` and `daq fit`.
@@ -239,7 +239,9 @@ def run_all(
             for run_id in ids:
                 done(run_id, worker(store_dir, run_id, options, force))
         else:
-            with ProcessPoolExecutor(max_workers=workers, initializer=keep_freed_memory) as pool:
+            # Workers die with this process: killed, it must not leave them running for good.
+            pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_setup, initargs=(os.getpid(),))
+            with pool:
                 futures = {pool.submit(worker, store_dir, r, options, force): r for r in ids}
                 for future in as_completed(futures):
                     done(futures[future], future.result())

@@ -40,3 +40,58 @@ def keep_freed_memory() -> bool:
     return bool(mallopt(_M_MMAP_THRESHOLD, _MMAP_THRESHOLD_BYTES)) and bool(
         mallopt(_M_TRIM_THRESHOLD, _TRIM_THRESHOLD_BYTES)
     )
+
+
+# prctl(2): deliver this signal to the calling process when its parent dies.
+_PR_SET_PDEATHSIG = 1
+#: How often the fallback watchdog looks whether the parent is still there, s.
+WATCHDOG_PERIOD_S = 0.5
+
+
+def die_with_parent(parent_pid: int) -> bool:
+    """End this (worker) process as soon as ``parent_pid``, its parent, is gone.
+
+    Killing `daq analyze --all` (SIGKILL, a closed terminal) used to leave its pool's
+    workers running for good: they wait on a pipe the other workers also hold open.
+    On Linux prctl(PR_SET_PDEATHSIG, SIGKILL) has the kernel kill us with the parent;
+    everywhere, a daemon thread also checks os.getppid() every WATCHDOG_PERIOD_S (the
+    fallback where prctl is missing, and for a parent that died before the prctl).
+    True if the kernel took the request."""
+    import os
+    import signal
+    import threading
+    import time
+
+    def orphaned() -> bool:
+        return os.getppid() != parent_pid
+
+    def kill_self() -> None:
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    armed = False
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+            prctl = libc.prctl
+            prctl.argtypes = (ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong)
+            prctl.restype = ctypes.c_int
+            armed = prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+        except (OSError, AttributeError):
+            armed = False
+    if orphaned():  # the parent died before the request: nobody will signal us
+        kill_self()
+
+    def watch() -> None:
+        while not orphaned():
+            time.sleep(WATCHDOG_PERIOD_S)
+        kill_self()
+
+    threading.Thread(target=watch, name="die-with-parent", daemon=True).start()
+    return armed
+
+
+def worker_setup(parent_pid: int) -> None:
+    """ProcessPoolExecutor initializer of the batch commands' workers: keep freed
+    memory (see above) and die with the parent ``parent_pid``."""
+    keep_freed_memory()
+    die_with_parent(parent_pid)
