@@ -132,11 +132,15 @@ def run_service(
     from daq.service.app import create_app
     from daq.service.auth import is_loopback
     from daq.service.instrument_link import SimSpec
+    from daq.service.limits import ConnectionGuard, connection_cap, raise_fd_limit
     from daq.service.service import Service, ServiceConfig
     from daq.store import StoreError
     from drivers.errors import DriverError
 
     loopback = is_loopback(host)
+    # Idle clients must not take every file descriptor: raise the soft limit, and keep
+    # the connections well below it (ConnectionGuard).
+    guard = ConnectionGuard(connection_cap(raise_fd_limit()))
     # Bind first, so that the port is known (for --port 0) and taken before anything starts.
     try:
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
@@ -177,6 +181,8 @@ def run_service(
                 # that sends on one just then gets "disconnected without a response". Pages
                 # poll and browsers keep connections far longer: keep them a minute.
                 timeout_keep_alive=60,
+                # uvicorn's h11 protocol, with a header timeout and a cap on connections.
+                http=guard.protocol_class(),
             ),
             service,
         )
@@ -185,9 +191,34 @@ def run_service(
     except _Shutdown:
         pass
     finally:
+        # From here on the process ends, whatever hangs: a read stuck in a damaged run
+        # file cannot be interrupted, and the interpreter would wait for it at exit.
+        _exit_after(STOP_DEADLINE_S)
         service.close()
         sock.close()
     sys.stderr.write("daq serve: stopped\n")
+    if service.reads.busy():
+        sys.stderr.flush()
+        sys.stdout.flush()
+        os._exit(0)  # reads still running in their threads: do not wait for them
+
+
+#: Seconds the service may take to stop (seal the capture, end the workers) after a
+#: signal, before the process ends anyway.
+STOP_DEADLINE_S = 30.0
+
+
+def _exit_after(seconds: float) -> None:
+    import threading
+
+    def watchdog() -> None:
+        sys.stderr.write(f"daq serve: not stopped after {seconds:g} s; ending now\n")
+        sys.stderr.flush()
+        os._exit(1)
+
+    timer = threading.Timer(seconds, watchdog)
+    timer.daemon = True
+    timer.start()
 
 
 class _Shutdown(Exception):
