@@ -146,11 +146,15 @@ def test_sigkill_mid_capture_leaves_a_clean_store_and_a_service_that_starts_agai
             wait_for(lambda: served.get("/api/capture").json()["pending"] == 1, 60, "hit 1")
             kill_service(served)  # waits until no process of its group runs
             events.close()
-        # Nothing was being sealed: the store holds the first run and nothing else.
+        # Nothing was being sealed: the store holds the first run, and the killed
+        # capture's hit journal, which the next listing seals as an incomplete run.
         assert sorted(p.name for p in store.glob("*.h5") if p.name.count(".") == 2) == [f"{kept}.h5"]
         assert Store(store).temporaries() == []
         assert not (store / f"{killed}.h5").exists()
-        _verify_clean(service_env(tmp_path), store, 1)
+        _verify_clean(service_env(tmp_path), store, 2)
+        recovered = Store(store).open(killed)
+        assert not recovered.complete
+        assert recovered.hits.accepted.tolist() == [True, False]  # hit 1 was waiting for a decision
         with serving(tmp_path, "--resource", resource, "--workers", "1", store=store) as served:
             health = served.get("/api/health").json()
             assert health["status"] == "ok"
@@ -163,7 +167,7 @@ def test_sigkill_mid_capture_leaves_a_clean_store_and_a_service_that_starts_agai
             ended = events.wait_for_kind("capture_ended", again.json()["run_id"], 60)
             assert ended["outcome"] == "sealed", ended
             events.close()
-            _verify_clean(served.env, store, 2)
+            _verify_clean(served.env, store, 3)
 
 
 def test_sigkill_mid_analysis_kills_the_workers_and_a_restart_analyses_every_run(tmp_path):
