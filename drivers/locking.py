@@ -1,16 +1,28 @@
-"""A lock file per instrument, so that two processes never talk to one at once.
+"""A lock file per instrument, so that two processes never talk to one at once; and
+one per store, so that two services never run on one store.
 
 ``flock`` on a file named after the resource: the kernel releases it when the
 holding process dies, so a crash never leaves an instrument locked.
 
-The files live in a directory of the user's own (``lock_directory``): a directory
-shared by every user, such as ``/tmp/daq-locks``, could be created by another
-user first, who could then plant a symlink named like a lock file and have our
-open truncate the file it points to. So the directory is created 0700, refused
-unless it is ours and writable by nobody else, and lock files are opened without
-following symlinks and without truncating. Two users still cannot drive one
-GPIB bus at once: the bus itself (its device file) is theirs to share through
-group permissions, not through these files.
+Every process of one user on one machine must find the same file, whatever its
+environment: a shell with XDG_RUNTIME_DIR and a service or cron job without it
+once got two directories, so `daq identify` talked to an instrument `daq serve`
+held. So instrument locks live in ``/tmp/daq-locks-<uid>`` (``lock_directory``),
+never in a directory chosen by XDG_RUNTIME_DIR or TMPDIR; only $DAQ_LOCK_DIR (for
+tests, or a site that sets it for every process) overrides it. A directory shared
+by every user, such as ``/tmp/daq-locks``, could be created by another user first,
+who could then plant a symlink named like a lock file and have our open truncate
+the file it points to. So the directory is created 0700, refused unless it is ours
+and writable by nobody else, and lock files are opened without following symlinks
+and without truncating. The store's lock lives in the store itself (``store_lock``),
+so every process using that folder finds it, from any environment and any user.
+
+What these locks cannot see: another user's processes (two users still cannot
+drive one GPIB bus at once: the bus itself, its device file, is theirs to share
+through group permissions, not through these files), processes on another machine
+(the store lock on a network filesystem is only as good as its flock), and a
+process whose /tmp is private (systemd PrivateTmp=yes): give such a service and
+its users one $DAQ_LOCK_DIR.
 """
 
 from __future__ import annotations
@@ -21,20 +33,24 @@ import hashlib
 import os
 import re
 import stat
-import tempfile
 from pathlib import Path
 
 from drivers.errors import ConnectionFailed, ResourceBusy
 
+#: Where instrument locks live unless $DAQ_LOCK_DIR says otherwise: the same for every
+#: process of this user on this machine, whatever its environment (not tempfile's
+#: choice, which follows $TMPDIR; not $XDG_RUNTIME_DIR, which services lack).
+LOCK_ROOT = Path("/tmp")
+#: The store lock's file, in the store folder (hidden: never taken for a run).
+STORE_LOCK_NAME = ".daq-serve.lock"
+
 
 def lock_directory() -> Path:
-    """$DAQ_LOCK_DIR, else $XDG_RUNTIME_DIR/daq-locks, else <tmp>/daq-locks-<uid>:
-    a directory of this user's, never one shared with other users."""
+    """$DAQ_LOCK_DIR, else /tmp/daq-locks-<uid>: a directory of this user's, never one
+    shared with other users, and the same whether or not XDG_RUNTIME_DIR or TMPDIR is set."""
     if os.environ.get("DAQ_LOCK_DIR"):
         return Path(os.environ["DAQ_LOCK_DIR"])
-    if os.environ.get("XDG_RUNTIME_DIR"):
-        return Path(os.environ["XDG_RUNTIME_DIR"]) / "daq-locks"
-    return Path(tempfile.gettempdir()) / f"daq-locks-{os.getuid()}"
+    return LOCK_ROOT / f"daq-locks-{os.getuid()}"
 
 
 def lock_path(resource: str) -> Path:
@@ -70,20 +86,26 @@ def check_lock_directory(directory: Path) -> None:
 class ResourceLock:
     """Held from ``acquire()`` to ``release()``; ResourceBusy if another process holds it."""
 
-    def __init__(self, key: str, label: str | None = None, holder: str = "") -> None:
+    def __init__(
+        self, key: str, label: str | None = None, holder: str = "", path: Path | None = None
+    ) -> None:
         """``key`` names the physical link (the file's name); ``label`` is what
         messages call it (default: the key); ``holder`` says who holds it, for the
-        message another process gets (e.g. "daq serve at http://127.0.0.1:8000")."""
+        message another process gets (e.g. "daq serve at http://127.0.0.1:8000").
+        ``path``: the lock file, when it is not the key's in lock_directory() (the
+        store's lock, see store_lock); its folder is then not checked for ownership."""
         self.key = key
         self.label = label or key
         self.holder = " ".join(holder.split())[:200]
-        self.path = lock_path(key)
+        self._own_directory = path is None
+        self.path = lock_path(key) if path is None else Path(path)
         self._fd: int | None = None
 
     def acquire(self) -> None:
         if self._fd is not None:
             return
-        check_lock_directory(self.path.parent)
+        if self._own_directory:
+            check_lock_directory(self.path.parent)
         try:
             # No O_TRUNC: the holder's pid must survive a refused attempt. O_NOFOLLOW:
             # a symlink in the lock file's place is refused (ELOOP), never followed.
@@ -91,9 +113,13 @@ class ResourceLock:
         except OSError as exc:
             reason = "it is a symlink" if exc.errno == errno.ELOOP else exc.strerror or exc
             raise ConnectionFailed(f"cannot create the lock file {self.path}: {reason}") from None
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or info.st_nlink != 1:
             os.close(fd)
-            raise ConnectionFailed(f"lock file {self.path} is not a regular file: refused")
+            what = (
+                "is not a regular file" if not stat.S_ISREG(info.st_mode) else "has other names (hard links)"
+            )
+            raise ConnectionFailed(f"lock file {self.path} {what}: refused")
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -120,3 +146,11 @@ class ResourceLock:
     @property
     def held(self) -> bool:
         return self._fd is not None
+
+
+def store_lock(store_dir: Path | str, holder: str = "") -> ResourceLock:
+    """The lock of one service per store: a file in the store folder itself, so that
+    every process using the folder (any environment, any user, any machine sharing
+    the folder through a filesystem with working flock) finds the same one."""
+    where = os.path.realpath(store_dir)
+    return ResourceLock(f"STORE::{where}", f"store {where}", holder, path=Path(where) / STORE_LOCK_NAME)
