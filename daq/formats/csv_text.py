@@ -35,6 +35,7 @@ from daq.errors import UserError
 from daq.formats.axis import fit_regular, printed_half_units
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
+    MAX_IMPORT_HITS,
     ImportedData,
     atomic_temp,
     commit_temp,
@@ -408,7 +409,8 @@ class Table:
         return ImportedData(hits=hits, measured_frfs=None, format="csv", details=details)
 
     def _groups(self, data, lines, time, hit_col) -> list[np.ndarray]:
-        """Row indices of each hit, in order of first appearance."""
+        """Row indices of each hit, in order of first appearance; at most MAX_IMPORT_HITS
+        hits, counted with numpy before any per-hit object is made."""
         if hit_col is not None:
             ids = data[:, hit_col]
             bad = np.flatnonzero(ids != np.round(ids))
@@ -417,13 +419,22 @@ class Table:
                     f"{self.name} line {lines[bad[0]]}: hit {float(ids[bad[0]])!r} is not a whole number"
                 )
             _, first, inverse = np.unique(ids, return_index=True, return_inverse=True)
+            self._check_hit_count(first.size)
             rank = np.argsort(np.argsort(first))  # unique value -> order of first appearance
             keys = rank[inverse.ravel()]
             order = np.argsort(keys, kind="stable")
             bounds = np.flatnonzero(np.diff(keys[order])) + 1
             return np.split(order, bounds)
         drops = np.flatnonzero(np.diff(time) < 0) + 1
+        self._check_hit_count(drops.size + 1)
         return np.split(np.arange(data.shape[0]), drops)
+
+    def _check_hit_count(self, n_hits: int) -> None:
+        if n_hits > MAX_IMPORT_HITS:
+            raise UserError(
+                f"{self.name} holds {n_hits} hits, more than the {MAX_IMPORT_HITS} one import may hold; "
+                "split the file"
+            )
 
     def _check_axes(self, time, half, lines, groups):
         """(starts, steps, tolerance) of the hits' time axes, which must all be regular

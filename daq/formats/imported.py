@@ -25,6 +25,10 @@ from daq.store.model import Hits, MeasuredFrf, Spectra
 # 512 MiB: far above any real impact test (100 hits x 65536 samples as text is ~20 MiB),
 # low enough that reading the whole file into memory cannot exhaust a lab PC.
 MAX_IMPORT_BYTES = 512 * 2**20
+#: Hits one import may hold: far above an impact test (tens of hits), low enough that the
+#: per-hit objects of a run (verdicts, stamps, checks) stay small. A legal 30 MB CSV of
+#: 10^6 two-sample hits once took 4.3 GB to import.
+MAX_IMPORT_HITS = 10_000
 
 
 @dataclass
