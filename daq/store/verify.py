@@ -8,10 +8,15 @@ groups and attributes, dtypes and the shapes against each other.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import stat
+import time
 from pathlib import Path
 
 import h5py
 
+from daq.store import layout
 from daq.store.decode import check_schema, decode_run, nonfinite_problems
 from daq.store.errors import StoreError
 from daq.store.h5io import refuse_outside_references
@@ -89,6 +94,47 @@ def _read_everything(f: h5py.File, problems: list[str]) -> None:
             obj[()]
         except Exception as exc:
             problems.append(f"dataset {name} unreadable (checksum mismatch or damaged chunk): {_short(exc)}")
+
+
+#: A temporary untouched this long is a crashed write's (a seal keeps its own fresh).
+STALE_TEMPORARY_S = 3600.0
+
+
+def _is_temporary(name: str) -> bool:
+    # Seals write ".<run_id>.h5.tmp-<pid>-<hex>", exports and imports ".<name>.<random>.tmp".
+    return name.startswith(layout.TMP_PREFIX) and (layout.TMP_MARKER in name or name.endswith(".tmp"))
+
+
+def leftover_temporaries(store_dir: Path | str, older_than_s: float = STALE_TEMPORARY_S) -> list[Path]:
+    """Hidden temporaries of crashed writes in the store folder (regular files untouched
+    for ``older_than_s`` seconds), for `daq runs verify` to report. Never raises."""
+    store_dir = Path(store_dir)
+    now = time.time()
+    found = []
+    try:
+        entries = list(os.scandir(store_dir))
+    except OSError:
+        return []
+    for entry in entries:
+        if not _is_temporary(entry.name):
+            continue
+        try:
+            info = entry.stat(follow_symlinks=False)
+        except OSError:
+            continue
+        if stat.S_ISREG(info.st_mode) and now - info.st_mtime >= older_than_s:
+            found.append(store_dir / entry.name)
+    return sorted(found)
+
+
+def remove_temporaries(store_dir: Path | str, older_than_s: float = STALE_TEMPORARY_S) -> list[Path]:
+    """`daq runs verify --repair`: delete leftover_temporaries(); the paths removed."""
+    removed = []
+    for path in leftover_temporaries(store_dir, older_than_s):
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
+            removed.append(path)
+    return removed
 
 
 def _filters(dset: h5py.Dataset) -> str:

@@ -212,3 +212,19 @@ def test_a_run_under_another_file_name_is_listed_as_misnamed(tmp_path):
     assert summary.file_name == other.name
     assert f"holds run {path.stem!r}" in (summary.error or "")
     assert "misnamed" in verify(other)[0]
+
+
+def test_leftover_temporaries_are_reported_and_repair_removes_them(tmp_path):
+    from daq.store.verify import leftover_temporaries, remove_temporaries
+
+    run = sound_run(tmp_path)
+    crashed = [tmp_path / f".{run.name}.tmp-123-abcd1234", tmp_path / ".export.csv.k3j2.tmp"]
+    fresh = tmp_path / f".{run.name}.tmp-456-00000000"  # a seal in progress
+    for path in [*crashed, fresh]:
+        path.write_bytes(b"partial")
+    for path in crashed:
+        os.utime(path, (time.time() - 7200,) * 2)
+    assert leftover_temporaries(tmp_path) == sorted(crashed)
+    assert remove_temporaries(tmp_path) == sorted(crashed)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([run.name, fresh.name])
+    assert leftover_temporaries(tmp_path) == []
