@@ -140,6 +140,11 @@ def analyze_hits(
     )
     result = _identify(estimate.frequency_hz, frf, coherence, "hits", options, decay, band)
     result.n_averages = estimate.n_averages
+    if estimate.n_averages == 1:
+        result.cautions.append(
+            "one hit: its coherence is 1 by construction and says nothing of the noise; the ± come "
+            "from a bootstrap over lines; take more hits to average"
+        )
     if result.modes:
         if options.per_hit and estimate.n_averages >= 2:
             _scatter(result, per_hit_frf(spectra), options, decay)
@@ -175,6 +180,15 @@ def analyze_frfs(
 def _band(frequency_hz, options: AnalysisOptions, g_ff, coherence) -> BandChoice:
     if options.band_hz is not None:
         low, high = options.band_hz
+        lines = frequency_hz[np.isfinite(frequency_hz) & (frequency_hz > 0)]
+        if lines.size and (low < lines[0] or high > lines[-1]):
+            low, high = max(low, float(lines[0])), min(high, float(lines[-1]))
+            if not low < high:
+                raise ValueError(
+                    f"band {options.band_hz[0]:g}-{options.band_hz[1]:g} Hz holds no line of the run "
+                    f"({lines[0]:g}-{lines[-1]:g} Hz)"
+                )
+            return BandChoice(low, high, f"given with --band, cut to the run's lines ({low:g}-{high:g} Hz)")
         return BandChoice(float(low), float(high), "given with --band")
     return choose_band(frequency_hz, g_ff, coherence)
 

@@ -21,7 +21,7 @@ from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.run_analysis import AnalysisOptions
 from daq.analysis_store import RESULT_NAME as ANALYSIS_RESULT
-from daq.analysis_store import analyze_stored, beam_of
+from daq.analysis_store import analyze_stored, beam_of, stored_options
 from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
 
@@ -598,10 +598,18 @@ def cached_fit(store: Store, run_id: str, options: FitOptions, key: str) -> dict
 
 
 def store_fit(
-    store: Store, run_id: str, options: FitOptions, key: str, summary: dict[str, Any], arrays: dict[str, Any]
+    store: Store,
+    run_id: str,
+    options: FitOptions,
+    key: str,
+    summary: dict[str, Any],
+    arrays: dict[str, Any],
+    analysis_key: str | None = None,
 ) -> Path:
-    """Write (or replace, atomically) the fit result of run ``run_id`` with ``options``."""
-    payload = {"summary": summary, "cache_key": key, **arrays}
+    """Write (or replace, atomically) the fit result of run ``run_id`` with ``options``;
+    ``analysis_key``: the cache key of the analysis it was fitted to (a report says when
+    the stored analysis has changed since)."""
+    payload = {"summary": summary, "cache_key": key, "analysis_key": analysis_key or "", **arrays}
     return store.write_result(run_id, options.result_name, payload, overwrite=True)
 
 
@@ -609,7 +617,8 @@ def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = 
     """Fit run ``run_id`` of the store (or reuse an up-to-date result); its summary."""
     store = Store(store_dir)
     path = store.resolve(run_id)
-    analysis = analyze_stored(store_dir, path.stem, AnalysisOptions())
+    # The analysis the user made (its options kept), not a default one made behind their back.
+    analysis = analyze_stored(store_dir, path.stem, stored_options(store, path.stem) or AnalysisOptions())
     stored_analysis = store.read_result(path.stem, ANALYSIS_RESULT)
     analysis["arrays"] = {k: v for k, v in stored_analysis.items() if isinstance(v, np.ndarray)}
     key = fit_cache_key(path, stored_analysis.get("cache_key"), options)
@@ -619,7 +628,7 @@ def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = 
             return {**stored, "cached": True}
     run = store.open(path.stem)
     summary, arrays = fit_run(run, analysis, options)
-    store_fit(store, run.run_id, options, key, summary, arrays)
+    store_fit(store, run.run_id, options, key, summary, arrays, stored_analysis.get("cache_key"))
     return {**summary, "cached": False}
 
 

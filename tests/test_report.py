@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
@@ -22,6 +23,7 @@ def test_report_of_a_captured_run(tmp_path):
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
     (run,) = Store(store).list()
+    assert invoke_daq("fit", run.run_id, "--store", str(store)).returncode == 0
     out = tmp_path / "report"
     result = invoke_daq("report", run.run_id, "-o", str(out), "--store", str(store))
     assert result.returncode == 0, result.stderr
@@ -31,8 +33,8 @@ def test_report_of_a_captured_run(tmp_path):
         assert png.startswith(PNG_SIGNATURE)
         assert len(png) > 10_000  # a drawn figure, not an empty canvas
     # Self-contained: every image is embedded, nothing is fetched.
-    # The four analysis figures, the measured and model response of the damping fit
-    # (made for the report, none was stored), and its convergence.
+    # The four analysis figures, the measured and model response of the stored damping
+    # fit, and its convergence.
     assert len(re.findall(r'src="data:image/png;base64,', page)) == 6
     assert "Damping matrix" in page
     assert not re.search(r'(src|href)="(https?:|//)', page)
@@ -55,12 +57,40 @@ def test_report_of_an_frf_only_run_has_no_hits_figure(tmp_path):
     assert not (tmp_path / "r" / "hits.png").exists()
     assert not (tmp_path / "r" / "response_fit.png").exists()  # no time records to overlay
     page = (tmp_path / "r" / "index.html").read_text()
-    # FRF, stability, synthesis and the fit's convergence: the default fit takes one Ritz
-    # function per identified mode (one here), and a fit that cannot describe this FRF
-    # (30 Hz is no mode of the beam) says so on the page, as in the terminal.
-    assert page.count("data:image/png;base64,") == 4
-    assert "Damping matrix" in page
-    assert "caution: a poor fit" in page
+    # FRF, stability, synthesis; no damping fit is made behind the user's back: the page
+    # says how to make one.
+    assert page.count("data:image/png;base64,") == 3
+    assert "No damping fit is stored" in page
+    assert not list(tmp_path.glob("*.fit-*.h5"))
+    # Once fitted, the fit and its cautions are on the page (30 Hz is no mode of the beam).
+    assert invoke_daq("fit", run.run_id, "--store", str(tmp_path)).returncode == 0
+    result = invoke_daq("report", run.run_id, "-o", str(tmp_path / "r"), "--force", "--store", str(tmp_path))
+    page = (tmp_path / "r" / "index.html").read_text()
+    assert "Damping matrix" in page and "caution: a poor fit" in page
+
+
+def test_report_draws_the_stored_analysis_with_its_options_and_flags_a_stale_fit(tmp_path):
+    f = np.linspace(0, 200, 801)
+    w = 2 * np.pi * f
+    h = sum(-(w**2) / ((2 * np.pi * r) ** 2 - w**2 + 2j * 0.01 * 2 * np.pi * r * w) for r in (40.0, 120.0))
+    run = make_run(kind="imported", measured=MeasuredFrf(f, h[np.newaxis, :], None, ["H"]))
+    seal(run, tmp_path)
+    fit = ("fit", run.run_id, "--stiffness", "none", "--store", str(tmp_path))  # 40 Hz is no mode of the beam
+    assert invoke_daq(*fit).returncode == 0
+    # Tuned after the fit: only the mode near 120 Hz asked for.
+    tuned = invoke_daq("analyze", run.run_id, "--frequencies", "120", "--store", str(tmp_path))
+    assert tuned.returncode == 0, tuned.stderr
+    result = invoke_daq("report", run.run_id, "-o", str(tmp_path / "r"), "--store", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    page = (tmp_path / "r" / "index.html").read_text()
+    stored = Store(tmp_path).read_result(run.run_id, "analysis")["summary"]
+    assert stored["options"]["frequencies_hz"] == [120.0]  # not re-analysed with defaults
+    assert len(stored["modes"]) == 1
+    assert "caution: this fit was made from an earlier analysis" in page
+    # daq fit now fits the analysis the user made (one mode, one Ritz function).
+    fitted = invoke_daq(*fit, "--json")
+    assert fitted.returncode == 0, fitted.stderr
+    assert json.loads(fitted.stdout)[0]["model"]["ritz_functions"] == 1
 
 
 def test_report_of_an_unknown_run_is_one_line(tmp_path):

@@ -13,8 +13,9 @@ def build_report(store_dir: Path, run_id: str, options: Any = None) -> tuple[str
     The analysis drawn is the stored one, with the options it was made with (brought up
     to date with those same options if the software changed); ``options``
     (AnalysisOptions) analyses with these instead; a run never analysed is analysed
-    with ``options`` or the defaults. The run is fitted (least squares) first when that
-    was not done. StoreError or ValueError when the run cannot be read or analysed."""
+    with ``options`` or the defaults. The damping fits drawn are those `daq fit`
+    stored (none is made here). StoreError or ValueError when the run cannot be read
+    or analysed."""
     from analysis.run_analysis import AnalysisOptions
     from daq.analysis_store import RESULT_NAME, analyze_stored, stored_options
     from daq.fit_store import FitOptions
@@ -45,27 +46,34 @@ def build_report(store_dir: Path, run_id: str, options: Any = None) -> tuple[str
         pngs["response_fit"] = figures.response_fit_figure(the_run, with_response[0])
     if any("history" in f for f in fits.values()):
         pngs["convergence"] = figures.convergence_figure(fits)
-    return page.render(the_run, result, pngs, fits), pngs
+    return page.render(the_run, result, pngs, fits, fit_hint=not fits), pngs
 
 
 def stored_fits(the_store: Any, run_id: str) -> dict[str, dict]:
-    """The damping fits stored beside the run (``<id>.fit-*.h5``), by result name; the
-    least-squares fit is made first when there is none (a report shows the matrix)."""
+    """The damping fits stored beside the run (``<id>.fit-*.h5``), by result name. None
+    is made here: a report draws what `daq fit` stored, and says so when there is none.
+    A fit made from another analysis than the one stored now carries a caution."""
+    from daq.analysis_store import RESULT_NAME
     from daq.store import StoreError
 
+    try:
+        analysis_key = the_store.read_result(run_id, RESULT_NAME).get("cache_key")
+    except StoreError:
+        analysis_key = None
     names = sorted(p.name[len(run_id) + 1 : -3] for p in the_store.path.glob(f"{run_id}.fit-*.h5"))
-    if not names:
-        from daq.fit_store import FitOptions, fit_stored
-
-        try:
-            fit_stored(the_store.path, run_id, FitOptions())
-        except (StoreError, ValueError):
-            return {}  # e.g. an FRF-only run: the report goes without a fit
-        names = [FitOptions().result_name]
     fits = {}
     for name in names:
         try:
-            fits[name] = the_store.read_result(run_id, name)
+            fit = the_store.read_result(run_id, name)
         except StoreError:
             continue
+        if fit.get("analysis_key") != analysis_key:
+            summary = dict(fit["summary"])
+            summary["cautions"] = [
+                f"this fit was made from an earlier analysis of the run than the one shown above: "
+                f"`daq fit {run_id}` fits the analysis as it is now",
+                *summary.get("cautions", []),
+            ]
+            fit = {**fit, "summary": summary}
+        fits[name] = fit
     return fits

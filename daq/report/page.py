@@ -49,10 +49,15 @@ def _img(png: bytes, alt: str) -> str:
 
 
 def render(
-    run: Any, result: dict[str, Any], figures: dict[str, bytes], fits: dict[str, dict] | None = None
+    run: Any,
+    result: dict[str, Any],
+    figures: dict[str, bytes],
+    fits: dict[str, dict] | None = None,
+    fit_hint: bool = False,
 ) -> str:
     """The page for ``run`` with its analysis ``result``, its damping fits (result name
-    -> stored fit) and ``figures`` (name -> PNG)."""
+    -> stored fit) and ``figures`` (name -> PNG); ``fit_hint``: say that no fit is stored
+    and how to make one."""
     s = result["summary"]
     info = [
         ("run", run.run_id), ("kind", run.kind + ("" if run.complete else ", INCOMPLETE")),
@@ -97,7 +102,9 @@ def render(
         )
         + "</p>"
     )
-    parts += _cautions(s.get("cautions", []))
+    windows_from = s.get("windows", {}).get("from", "")
+    unknown_windows = [f"windows {windows_from}"] if str(windows_from).startswith("unknown") else []
+    parts += _cautions([*unknown_windows, *s.get("cautions", [])])
     mode_rows = []
     for k, m in enumerate(s["modes"], 1):
         q = m["quality"]
@@ -140,6 +147,11 @@ def render(
             parts += [f"<h2>{_e(title)}</h2>", _img(figures[name], title)]
     if fits:
         parts += _fit_section(fits, figures)
+    elif fit_hint:
+        parts.append(
+            "<h2>Damping matrix</h2><p class='note'>No damping fit is stored for this run: "
+            f"<code>daq fit {_e(run.run_id)}</code> makes one, then this report shows it.</p>"
+        )
     parts.append("</body></html>")
     return "\n".join(parts)
 
@@ -185,7 +197,9 @@ def _fit_section(fits: dict[str, dict], figures: dict[str, bytes]) -> list[str]:
             for k, m in enumerate(s["modes"], 1)
         ]  # fmt: skip
         parts.append(_table(["mode", "frequency (Hz)", "damping (%)"], mode_rows))
-        parts += _cautions(s.get("cautions", []))
+        windows_from = s.get("windows", {}).get("from", "")
+    unknown_windows = [f"windows {windows_from}"] if str(windows_from).startswith("unknown") else []
+    parts += _cautions([*unknown_windows, *s.get("cautions", [])])
     for key, title in (("response_fit", "Measured and model response"), ("convergence", "Convergence")):
         if key in figures:
             parts += [f"<h2>{_e(title)}</h2>", _img(figures[key], title)]
