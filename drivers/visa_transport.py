@@ -93,9 +93,26 @@ class VisaTransport(Transport):
         try:
             return action(self._session())
         except pyvisa.errors.VisaIOError as exc:
-            raise _translate(exc, self.resource, what) from None
+            error = _translate(exc, self.resource, what)
+            # pyvisa-py reads a socket the instrument closed as a timeout (recv() of
+            # nothing until the deadline): say what it is, a closed connection.
+            if isinstance(error, InstrumentTimeout) and self._peer_closed():
+                error = ConnectionLost(f"{self.resource}: {what} failed (connection closed by the other end)")
+            raise error from None
         except (pyvisa.errors.Error, OSError) as exc:  # an invalid session, a dead socket
             raise ConnectionLost(f"{self.resource}: {what} failed ({_reason(exc)})") from None
+
+    def _peer_closed(self) -> bool:
+        """True if this is a pyvisa-py socket whose other end closed the connection."""
+        if not (self.is_socket and self.backend == "@py" and self._inst is not None):
+            return False
+        try:
+            sock = pyvisa_py_socket(self._inst)
+            return sock.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b""
+        except BlockingIOError:
+            return False  # open, just quiet
+        except (RuntimeError, OSError):
+            return True  # reset or unusable: closed as far as we are concerned
 
     def _write(self, message: bytes) -> None:
         self._call("write", lambda inst: inst.write_raw(message + b"\n"))

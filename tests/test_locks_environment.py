@@ -86,3 +86,35 @@ def test_processes_with_and_without_xdg_runtime_dir_contend_for_one_lock(tmp_pat
         holder.stdin.close()
         holder.wait(timeout=10)
         holder.stdout.close()
+
+
+# --------------------------------------------------- the instrument link (issue item 13)
+# Kept here with the other instrument-link test of this issue; it belongs with
+# tests/drivers/test_transports.py.
+@pytest.mark.timeout(30)
+def test_a_link_the_instrument_closed_is_reported_as_closed_not_as_a_timeout(tmp_path, monkeypatch):
+    import socket
+    import threading
+
+    from drivers.errors import ConnectionLost
+    from drivers.visa_transport import VisaTransport
+
+    monkeypatch.setenv("DAQ_LOCK_DIR", str(tmp_path / "locks"))
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+
+    def hang_up() -> None:
+        peer, _ = server.accept()
+        peer.recv(100)
+        peer.close()
+
+    threading.Thread(target=hang_up, daemon=True).start()
+    link = VisaTransport(f"TCPIP::127.0.0.1::{port}::SOCKET", timeout_s=1.0)
+    link.open()
+    try:
+        link.write(b"*IDN?")
+        with pytest.raises(ConnectionLost, match="connection closed by the other end"):
+            link.read_line()
+    finally:
+        link.close()
+        server.close()
