@@ -269,7 +269,9 @@ def np_errors() -> tuple[type[BaseException], ...]:
 
 def _print(info: dict) -> None:
     cached = " (cached)" if info.get("cached") else ""
-    source = {"hits": f"{info['n_averages']} hits, {info.get('estimator', '')}".rstrip(", ")}.get(
+    n_hits = info.get("n_averages")
+    hits_text = f"{n_hits} hit{'s' * (n_hits != 1)}"  # "1 hit", never "1 hits"
+    source = {"hits": f"{hits_text}, {info.get('estimator', '')}".rstrip(", ")}.get(
         info["source"], info["source"]
     )
     n_modes = len(info["modes"])

@@ -75,3 +75,15 @@ def test_killing_the_batch_command_kills_its_workers(store, command):
         if parent.poll() is None:
             parent.kill()
             parent.wait()
+
+
+def test_one_hit_is_said_in_the_singular(capsys):
+    from daq.analyze_command import _print
+
+    info = {
+        "run_id": "r", "kind": "captured", "source": "hits", "n_averages": 1, "estimator": "h1",
+        "modes": [], "table2": {"rows": [], "beam": "none"},
+    }  # fmt: skip
+    _print(info)
+    out = capsys.readouterr().out
+    assert "(captured, 1 hit, h1)" in out, out
