@@ -374,15 +374,28 @@ def verify(
     ] = None,
     store: StoreOption = None,
     as_json: JsonOption = False,
+    repair: Annotated[
+        bool,
+        typer.Option(
+            "--repair", help="Remove the temporaries crashed writes left (untouched for an hour or more)."
+        ),
+    ] = False,
 ) -> None:
     """Check run files end to end; exit 1 if any has a problem.
 
     Every dataset is read in full, so every checksum is checked, and every run is
-    decoded. Prints OK or the problems of each run.
+    decoded. Prints OK or the problems of each run, and the temporaries crashed writes
+    left behind (--repair removes them).
     """
     from daq.store import verify as verify_file
+    from daq.store.verify import leftover_temporaries, remove_temporaries
 
     the_store, source = _store(store)
+    if repair:
+        for path in remove_temporaries(the_store.path):
+            _note(f"removed {shown(path.name)}: a temporary a crashed write left")
+    for path in leftover_temporaries(the_store.path):
+        _note(f"leftover {shown(path.name)}: a temporary a crashed write left; --repair removes it")
     if runs:
         paths = list(dict.fromkeys(the_store.resolve(name) for name in runs))
     else:

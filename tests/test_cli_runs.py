@@ -209,6 +209,28 @@ def test_verify_good_store(store, env):
     assert "3 run(s) checked: 3 OK, 0 with problems" in result.stdout
 
 
+def test_verify_names_leftover_temporaries_and_repair_removes_them(store, env):
+    import os
+    import time
+
+    old = store / f".{IDS[0]}.h5.abc123.tmp"  # what a write killed before its rename leaves
+    fresh = store / f".{IDS[1]}.h5.def456.tmp"  # a write maybe still under way: left alone
+    old.write_bytes(b"half a run")
+    fresh.write_bytes(b"being written")
+    two_hours_ago = time.time() - 7200
+    os.utime(old, (two_hours_ago, two_hours_ago))
+    result = runs("verify", "--store", str(store), env=env)
+    assert result.returncode == 0, result.stderr
+    assert f"leftover {old.name}" in result.stderr
+    assert fresh.name not in result.stderr
+    assert old.exists()
+    result = runs("verify", "--repair", "--store", str(store), env=env)
+    assert result.returncode == 0, result.stderr
+    assert f"removed {old.name}" in result.stderr
+    assert not old.exists()
+    assert fresh.exists()
+
+
 def test_verify_empty_store_is_fine(tmp_path, env):
     result = runs("verify", "--store", str(tmp_path / "none"), "--json", env=env)
     assert result.returncode == 0

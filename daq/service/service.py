@@ -22,7 +22,7 @@ from daq.service.events import EventHub, plain
 from daq.service.instrument_link import InstrumentLink, SimSpec
 from daq.service.jobs import JobRunner, analysis_result_name, fit_result_name
 from daq.store import Store, StoreError
-from drivers.locking import ResourceLock
+from drivers.locking import store_lock
 
 
 @dataclass
@@ -60,10 +60,8 @@ class Service:
         self.jobs = JobRunner(config.store_dir, self.hub, config.workers, config.scheduler)
         self.capture = CaptureController(self.link, config.store_dir, self.hub, on_sealed=self.jobs.submit)
         self._results = _ResultCache(self.store)
-        where = os.path.realpath(config.store_dir)
-        self._store_lock = ResourceLock(
-            f"STORE::{where}", f"store {where}", holder=f"daq serve at {config.url}"
-        )
+        # The lock lives in the store: every process finds it whatever its environment.
+        self._store_lock = store_lock(config.store_dir, holder=f"daq serve at {config.url}")
         self._reports: dict[str, tuple[Any, str]] = {}
         self._reports_lock = threading.Lock()
         self._listing_lock = threading.Lock()
