@@ -237,6 +237,14 @@ def _stop_on_signals() -> None:
     signal.signal(signal.SIGTERM, _raise_shutdown)
     if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
         signal.signal(signal.SIGINT, _raise_shutdown)
+    # A closed terminal or a dropped ssh session (SIGHUP) stops the service as SIGTERM
+    # does, sealing the capture in progress at once: uvicorn handles SIGTERM, not SIGHUP.
+    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        signal.signal(signal.SIGHUP, _as_sigterm)
+
+
+def _as_sigterm(signum: int, frame: object) -> None:
+    os.kill(os.getpid(), signal.SIGTERM)
 
 
 def _make_server_class():
