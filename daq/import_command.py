@@ -124,6 +124,8 @@ def import_file(
         Store(store_dir).ensure_writable()
     except StoreError as exc:
         raise UserError(str(exc)) from None
+    if format is not ImportFormat.auto and chosen in ("csv", "frf-text"):
+        check_not_uff(file, chosen)
     digest, size = sha256_of(file)
     if chosen == "run":
         parts = _from_run_file(file)
@@ -166,11 +168,12 @@ def import_file(
     what = []
     if run.hits is not None:
         what.append(
-            f"{run.hits.n_hits} hits of {run.hits.n_samples} samples at {run.hits.sample_rate_hz:g} Hz"
+            f"{counted(run.hits.n_hits, 'hit')} of {run.hits.n_samples} samples "
+            f"at {run.hits.sample_rate_hz:g} Hz"
         )
     for frfs in (run.analyzer, run.measured_frfs):
         if frfs is not None:
-            what.append(f"{frfs.n_frf} FRFs of {frfs.n_lines} points, {frfs.form}")
+            what.append(f"{counted(frfs.n_frf, 'FRF')} of {frfs.n_lines} points, {frfs.form}")
     if run.spectra is not None:
         what.append(f"{run.spectra.n_traces} spectra of {run.spectra.n_lines} points")
     typer.echo(f"Imported {show_path(file.name)} ({chosen}: {', '.join(what)}) as run {run.run_id}: {path}")
@@ -180,6 +183,11 @@ def import_file(
         typer.echo(line)
     for warning in unit_warnings(provenance["imported_from"]):
         typer.echo(f"warning: {warning}", err=True)
+
+
+def counted(n: int, one: str, many: str | None = None) -> str:
+    """ "1 hit", "3 hits"; with ``many``, its plural instead of ``one`` + "s"."""
+    return f"{n} {one if n == 1 else (many or one + 's')}"
 
 
 def unit_warnings(details: dict[str, Any]) -> list[str]:
@@ -223,7 +231,7 @@ def detect_format(path: Path) -> tuple[str, str]:
     check_regular_file(path)
     try:
         with open(path, "rb") as handle:
-            head = handle.read(4096)
+            head = handle.read(16384)
     except OSError as exc:
         raise UserError(f"{show_path(path)}: cannot read it ({exc.strerror or exc})") from None
     if head.startswith(HDF5_SIGNATURE):
@@ -231,7 +239,7 @@ def detect_format(path: Path) -> tuple[str, str]:
     if looks_like_sdf(head):
         return "sdf", "an SDF FILE_HDR record at the start"
     suffix = path.suffix.lower()
-    if head.lstrip(b" ").startswith((b"-1\n", b"-1\r")):
+    if looks_like_uff(head):
         return "uff", "it starts with a UFF -1 delimiter line"
     if suffix in UFF_SUFFIXES:
         return "uff", f"the name ends in {suffix}"
@@ -241,6 +249,12 @@ def detect_format(path: Path) -> tuple[str, str]:
         # A NUL in the first two bytes is no text file: a damaged SDF file (HP analyzers
         # name theirs .DAT) gets the SDF reader's reason, not a CSV parse error.
         return "sdf", "it starts with SDF's B and NUL"
+    preamble, names = frf_table_head(head)
+    if names and preamble:
+        return "frf-text", (
+            f"{preamble} preamble line{'s' if preamble > 1 else ''}, then the column names "
+            f"{', '.join(repr(n) for n in names[:4])}{', ...' if len(names) > 4 else ''}, a frequency first"
+        )
     header = text_header(head)
     if header and is_frequency_header(header[0]):
         return "frf-text", f"the header's first column {header[0]!r} is a frequency"
@@ -251,6 +265,49 @@ def detect_format(path: Path) -> tuple[str, str]:
         f"{show_path(path)}: cannot tell its format from its name or content; "
         "give --format csv, frf-text, uff, sdf or run"
     )
+
+
+def looks_like_uff(head: bytes) -> bool:
+    """``head`` (a file's first bytes) starts, after any blank lines, with UFF's "-1"
+    delimiter line ("    -1", right-aligned in 6 columns)."""
+    for line in head.splitlines():
+        if line.strip():
+            return line.strip() == b"-1" and len(line.rstrip()) <= 6
+    return False
+
+
+def check_not_uff(path: Path, chosen: str) -> None:
+    """A UFF file given to a text reader gets one line saying so, not a column count."""
+    from daq.formats.imported import check_regular_file, show_path
+
+    check_regular_file(path)
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(512)
+    except OSError as exc:
+        raise UserError(f"{show_path(path)}: cannot read it ({exc.strerror or exc})") from None
+    if looks_like_uff(head):
+        raise UserError(
+            f"{show_path(path)}: looks like a UFF file (it starts with a UFF -1 delimiter line), "
+            f"not {chosen}; import it with --format uff"
+        )
+
+
+def frf_table_head(head: bytes) -> tuple[int, list[str]]:
+    """(preamble lines, column names) of an FRF table in ``head`` whose column-name row
+    comes after a preamble of metadata lines (daq/formats/frf_text.py, scan_layout);
+    (0, []) when there is none."""
+    from daq.formats.frf_text import decode_line, scan_layout
+
+    if b"\0" in head:
+        return 0, []
+    raw_lines = head.splitlines(keepends=True)
+    if raw_lines and not raw_lines[-1].endswith((b"\n", b"\r")):
+        raw_lines = raw_lines[:-1]  # cut by the read: not a whole line
+    layout = scan_layout([decode_line(raw, k == 0) for k, raw in enumerate(raw_lines)])
+    if layout.header is None:
+        return 0, []
+    return len(layout.preamble), layout.header_cells
 
 
 def text_header(head: bytes) -> list[str]:

@@ -14,20 +14,40 @@ Units in the header decide the form and the SI factor: ``m/N``, ``mm/N`` (recept
 of the linear value in that unit) or linear; phase in ``deg`` (the default) or ``rad``.
 ``frf_form`` (``--frf-form``) wins over the header; without either, accelerance in SI
 units is assumed, and the details say so.
+
+Exports of analyzer software put a preamble before the table and the units in a row of
+their own (DataPhysics SignalCalc ASCII, CRLF, tabs, Latin-1)::
+
+    Units: Ratio
+    Ref Chan:Resp Chan<TAB>0-Z:0-Z
+    Channel Name<TAB> :
+
+    Frequency<TAB> Real<TAB> Imaginary
+
+    Units:
+    Hz<TAB>(m/s²)(N)<TAB>
+    0.0000000000000e+000<TAB>      -0.1504349<TAB>               0
+
+:func:`scan_layout` finds the preamble (``key: value`` and ``key<TAB>value`` lines, blank
+lines, comments), the column-name row and an optional units row (after an optional
+``Units:`` line). The units row fills the units the column names lack; a unit in it that is
+no FRF unit ("Ratio") leaves the default, accelerance, and the details say so.
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 
 from daq.errors import UserError
-from daq.formats.csv_text import Table, is_frequency_name
-from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, open_checked, show_path
-from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit
+from daq.formats.csv_text import COMMENT_MARKS, Table, header_name_unit, is_frequency_name
+from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
+from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
 from daq.store.model import FRF_FORMS
 
 _KINDS = {
@@ -58,6 +78,183 @@ _PHASE_UNITS = {
     "radian": 180.0 / np.pi,
 }
 _TOKEN = re.compile(r"[A-Za-z0-9]+")
+#: How far the preamble scan looks: lines, and bytes of one line.
+HEAD_LINES = 200
+HEAD_LINE_BYTES = 4096
+#: Preamble lines at most, and what of them the provenance keeps.
+MAX_PREAMBLE_LINES = 64
+MAX_PREAMBLE_KEY = 60
+MAX_PREAMBLE_VALUE = 200
+
+
+@dataclass
+class Layout:
+    """Where the parts of a text table are, by 0-based line index (see scan_layout)."""
+
+    preamble: list[int] = field(default_factory=list)  # metadata lines before the column names
+    metadata: list[tuple[str, str]] = field(default_factory=list)  # their (key, value)
+    header: int | None = None  # the column-name row
+    header_cells: list[str] = field(default_factory=list)
+    marker: int | None = None  # a "Units:" line before the units row
+    units: int | None = None  # the units row
+    unit_cells: list[str] = field(default_factory=list)
+    first_data: int | None = None  # the first all-number row seen
+    data_cells: list[str] = field(default_factory=list)
+
+    @property
+    def skipped(self) -> set[int]:
+        """Lines the table reader must not see (they are read here)."""
+        return {*self.preamble, *(i for i in (self.marker, self.units) if i is not None)}
+
+
+def decode_line(raw: bytes, first: bool = False) -> str:
+    """A line of a text export: UTF-8 (a BOM on the first line dropped), else Latin-1, which
+    SignalCalc and other Windows programs write ("m/s²" with the byte 0xB2)."""
+    try:
+        text = raw.decode("utf-8-sig" if first else "utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    return text.rstrip("\r\n")
+
+
+def split_cells(line: str, delimiter: str | None = None) -> tuple[list[str], str | None]:
+    """(cells, delimiter) of a line: ";", tab or "," (found in the line when not given),
+    else runs of whitespace; cells stripped."""
+    if delimiter is None:
+        delimiter = next((d for d in (";", "\t", ",") if d in line), None)
+        if (
+            delimiter == ","
+            and all(_DECIMAL_COMMA.fullmatch(c) for c in line.split())
+            and len(line.split()) > 1
+        ):
+            delimiter = None  # "0,5 1,0 2,0": decimal commas between runs of spaces
+    cells = line.split(delimiter) if delimiter else line.split()
+    return [c.strip() for c in cells], delimiter
+
+
+_DECIMAL_COMMA = re.compile(r"[-+]?[0-9]*,[0-9]+(?:[eE][-+]?[0-9]+)?")
+
+
+def is_number_text(cell: str) -> bool:
+    """A cell that any writer means as a number: quotes, a decimal comma, a Unicode minus
+    or a Fortran D exponent allowed (the table reader may still refuse it as written)."""
+    text = cell.strip().strip("\"'").replace("\u2212", "-")
+    if text.count(",") == 1:
+        text = text.replace(",", ".")
+    text = re.sub(r"(?<=[0-9.])[dD](?=[-+]?[0-9])", "e", text)
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def all_numbers(cells: list[str]) -> bool:
+    """Every cell a number, but for empty cells after the last (a trailing delimiter)."""
+    while cells and not cells[-1]:
+        cells = cells[:-1]
+    return bool(cells) and all(is_number_text(c) for c in cells)
+
+
+def _metadata(line: str) -> tuple[str, str] | None:
+    """(key, value) of a preamble line "key: value" or "key<TAB>value", else None."""
+    if "\t" in line:
+        cells = [c.strip() for c in line.split("\t")]
+        if len([c for c in cells if c]) <= 2 and cells[0]:
+            value = " ".join(c for c in cells[1:] if c)
+            return cells[0].rstrip(":").strip(), value.removeprefix(":").strip()
+        return None
+    key, colon, value = line.partition(":")
+    if colon and key.strip():
+        return key.strip(), value.strip()
+    return None
+
+
+def _is_units_marker(line: str) -> bool:
+    return line.strip().rstrip(":").strip().lower() in ("units", "unit") and line.strip().endswith(":")
+
+
+def scan_layout(lines: list[str]) -> Layout:
+    """Where the preamble, column names, units row and data begin in a table's first lines.
+
+    Before the column-name row only blank lines, comments and metadata lines
+    ("key: value", "key<TAB>value") may come. The column-name row's first cell names a
+    frequency; with a preamble before it, it needs three cells at least (frequency and a
+    pair). After it, blank lines, an optional "Units:" line and one units row, then data.
+    A row of numbers (quotes, decimal commas, a trailing delimiter allowed) is always data:
+    when one comes first, there is no header. When a line fits none of these before the
+    column names (a time-record header, prose), the layout is empty: the table reader
+    alone decides.
+    """
+    layout = Layout()
+    candidates: list[tuple[int, tuple[str, str]]] = []
+    start = len(lines)
+    for index, line in enumerate(lines):
+        stripped = line.strip()
+        if not stripped or stripped.startswith(COMMENT_MARKS):
+            continue
+        cells, _ = split_cells(stripped)
+        if all_numbers(cells):
+            layout.first_data, layout.data_cells = index, cells
+            break
+        first = header_name_unit(cells[0].strip("\"'"))
+        if is_frequency_name(*first) and (len(cells) >= 3 or not candidates):
+            layout.header, layout.header_cells = index, cells
+            start = index + 1
+            break
+        meta = _metadata(line.strip(" \r\n"))  # "key<TAB>" keeps its tab
+        if meta is None or len(candidates) >= MAX_PREAMBLE_LINES:
+            return Layout()
+        candidates.append((index, meta))
+    if layout.header is None:
+        if layout.first_data is not None and candidates:
+            # A preamble, then numbers without column names: a table without a header.
+            layout.preamble = [i for i, _ in candidates]
+            layout.metadata = [m for _, m in candidates]
+        return layout
+    layout.preamble = [i for i, _ in candidates]
+    layout.metadata = [m for _, m in candidates]
+    _, delimiter = split_cells(lines[layout.header].strip())
+    for index in range(start, len(lines)):
+        stripped = lines[index].strip()
+        if not stripped or stripped.startswith(COMMENT_MARKS):
+            continue
+        cells, _ = split_cells(lines[index].strip(" "), delimiter)
+        if all_numbers(cells):
+            layout.first_data, layout.data_cells = index, cells
+            break
+        if _is_units_marker(stripped) and layout.marker is None and layout.units is None:
+            layout.marker = index
+            continue
+        if layout.units is None:
+            layout.units, layout.unit_cells = index, cells
+            continue
+        break  # a second non-number row: the table reader says what is wrong with it
+    return layout
+
+
+def _head_lines(handle: IO[bytes]) -> tuple[list[bytes], bool]:
+    """The first HEAD_LINES raw lines (each complete), and whether the file ended among them."""
+    head: list[bytes] = []
+    for _ in range(HEAD_LINES):
+        raw = handle.readline(HEAD_LINE_BYTES)
+        if not raw:
+            return head, True
+        if not raw.endswith(b"\n"):
+            raw += handle.readline()  # complete a long line: line numbers must stay right
+            head.append(raw)
+            return head, False
+        head.append(raw)
+    return head, False
+
+
+def _fed_lines(head: list[bytes], texts: list[str], layout: Layout, handle: IO[bytes]) -> Iterator[bytes]:
+    """The lines the table reader sees: the head as UTF-8, with the preamble and units rows
+    blank (so that every line keeps its number), then the rest of the file as it is."""
+    skipped = layout.skipped
+    for index, text in enumerate(texts):
+        yield b"\n" if index in skipped else text.encode("utf-8") + b"\n"
+    yield from handle
 
 
 def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
@@ -72,8 +269,12 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     if frf_form is not None and frf_form not in FRF_FORMS:
         raise UserError(f"FRF form {frf_form!r} is not one of {', '.join(FRF_FORMS)}")
     with open_checked(path, max_bytes) as (handle, _):
+        head, _ = _head_lines(handle)
+        texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
+        layout = scan_layout(texts)
+        _check_first_data(name, layout)
         table = Table(name)
-        table.read(handle, max_bytes)
+        table.read(_fed_lines(head, texts, layout, handle), max_bytes)
     data = table.data()
     lines = np.frombuffer(table.lines, dtype=np.int64)
     if table.header is None:
@@ -95,7 +296,17 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
                 )
             kinds.append(kind)
             labels_of.append(label)
-        units = table.units
+        units = list(table.units)
+    from_row: set[int] = set()
+    if layout.units is not None:
+        if len(layout.unit_cells) > table.n_cols and any(layout.unit_cells[table.n_cols :]):
+            raise UserError(
+                f"{name} line {layout.units + 1}: {len(layout.unit_cells)} units for {table.n_cols} columns"
+            )
+        for col, cell in enumerate(layout.unit_cells[: table.n_cols]):
+            if units[col] is None and cell.strip("[]()\"' "):
+                units[col] = cell if "/" in cell or ")(" in cell else clean_label(cell)
+                from_row.add(col)
     if kinds.count("freq") != 1 or kinds[0] != "freq":
         raise UserError(f"{name}: an FRF table needs exactly one frequency column, the first")
     freq_unit = units[0] or "Hz"
@@ -143,7 +354,10 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
             col += 1
         elif col < table.n_cols and kinds[col] not in ("re", "mag"):
             raise UserError(f"{name}: column {col + 1} ({_label(table, col)}) follows no FRF")
-    form, factor, said = _form(name, [u for u in frf_units if u and "/" in u], frf_form)
+    row_units = {units[c] for c in from_row}
+    form, factor, said = _form(
+        name, [u for u in frf_units if u and ("/" in u or ")(" in u or u in row_units)], frf_form, row_units
+    )
     frf = np.stack(frfs) * factor if factor != 1.0 else np.stack(frfs)
     coh = np.stack(coherence) if coherence and len(coherence) == len(frfs) else None
     details: dict[str, Any] = {
@@ -158,6 +372,10 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         "form": form,
         "form_from": said,
     }
+    if layout.units is not None:
+        details["units_row"] = [one_line(c)[:40] for c in layout.unit_cells[:32]]
+    if layout.metadata:
+        details["preamble"] = _kept_preamble(layout.metadata)
     if coherence and coh is None:
         details["notes"] = [f"{len(coherence)} coherence columns for {len(frfs)} FRFs: coherence ignored"]
     measured = make_frfs(path, freq, frf, coh, labels, form)
@@ -182,24 +400,69 @@ def _label(table: Table, col: int) -> str:
     return repr(table.header[col]) if table.header else f"index {col}"
 
 
-def _form(name: str, units: list[str], option: str | None) -> tuple[str, float, str]:
-    """(form, SI factor, where from) of the table's FRFs."""
-    parsed = []
+def _form(
+    name: str, units: list[str], option: str | None, row_units: set[str] | None = None
+) -> tuple[str, float, str]:
+    """(form, SI factor, where from) of the table's FRFs. A unit of the units row
+    (``row_units``) that is no FRF unit ("Ratio") is passed over: accelerance by default."""
+    row_units = row_units or set()
+    parsed, unknown = [], []
     for unit in dict.fromkeys(units):
         try:
             parsed.append((unit, *frf_unit(unit)))
         except UserError:
-            if option is None:
+            if unit in row_units:
+                unknown.append(unit)
+            elif option is None:
                 raise UserError(f"{name}: {frf_unit_error(unit)}; or give --frf-form") from None
     if len({(form, factor) for _, form, factor in parsed}) > 1:
-        raise UserError(f"{name}: the FRF columns have different units ({', '.join(u for u, *_ in parsed)})")
+        shown = ", ".join(frf_unit_text(u) for u, *_ in parsed)
+        raise UserError(f"{name}: the FRF columns have different units ({shown})")
+    where = "units row" if parsed and parsed[0][0] in row_units else "header"
     if option is not None:
+        said = f"option (the {where} says {frf_unit_text(parsed[0][0])})" if parsed else "option"
         same = [factor for _, form, factor in parsed if form == option]
-        said = f"option (the header says {parsed[0][0]})" if parsed else "option"
         return option, same[0] if same else 1.0, said
     if parsed:
-        return parsed[0][1], parsed[0][2], f"header ({parsed[0][0]})"
+        return parsed[0][1], parsed[0][2], f"{where} ({frf_unit_text(parsed[0][0])})"
+    if unknown:
+        return (
+            "accelerance",
+            1.0,
+            (f"default: the units row says {one_line(unknown[0])[:40]!r}, no FRF unit; (m/s^2)/N assumed"),
+        )
     return "accelerance", 1.0, "default: nothing in the file says; (m/s^2)/N assumed"
+
+
+def _check_first_data(name: str, layout: Layout) -> None:
+    """A first row of numbers is data: refuse it in one line when the table reader would
+    take it for a header (a cell it cannot read as written, or a trailing delimiter)."""
+    if layout.header is not None or layout.first_data is None:
+        return
+    where = f"{name} line {layout.first_data + 1}: a row of numbers, so data, not a header"
+    for cell in layout.data_cells:
+        if not cell:
+            raise UserError(f"{where}, but it has an empty cell (a delimiter too many at its end?)")
+        try:
+            float(cell.replace(",", ".", 1) if cell.count(",") == 1 else cell)
+        except ValueError:
+            raise UserError(
+                f"{where}, but {one_line(cell)[:40]!r} is not a number as written "
+                "(write plain numbers, e.g. 1.5 or -0.25)"
+            ) from None
+
+
+def _kept_preamble(metadata: list[tuple[str, str]]) -> dict[str, str]:
+    """The preamble's key/values as text for the provenance: at most MAX_PREAMBLE_LINES
+    entries, keys and values cut short; a key seen again keeps its first value."""
+    kept: dict[str, str] = {}
+    for key, value in metadata[:MAX_PREAMBLE_LINES]:
+        key = one_line(key)[:MAX_PREAMBLE_KEY]
+        value = one_line(value)
+        kept.setdefault(
+            key, value if len(value) <= MAX_PREAMBLE_VALUE else value[:MAX_PREAMBLE_VALUE] + "..."
+        )
+    return kept
 
 
 def frf_unit_error(unit: str) -> str:

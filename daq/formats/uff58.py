@@ -87,6 +87,7 @@ def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     path = Path(path)
     name = show_path(path)
     info = check_regular_file(path, max_bytes)
+    _check_starts_as_uff(path, name)
     _check_ends_whole(path, name)
     records = [_record(d, k, name) for k, d in enumerate(read_uff_sets(path, name))]
     details: dict[str, Any] = {"n_datasets_58": len(records), "notes": []}
@@ -101,6 +102,23 @@ def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     if hits is None and frfs is None:
         raise UserError(f"{name}: no force/acceleration time records and no FRFs among its datasets 58")
     return ImportedData(hits=hits, measured_frfs=frfs, format="uff", details=details)
+
+
+def _check_starts_as_uff(path: Path, name: str) -> None:
+    """Every UFF file starts with a "    -1" delimiter line (after blank lines, if any): a
+    file that does not (a CSV given --format uff) is no UFF, not a truncated one."""
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(512)
+    except OSError as exc:
+        raise UserError(f"{name}: cannot read it ({exc.strerror or exc})") from None
+    first = next((line for line in head.splitlines() if line.strip()), b"")
+    if first.strip() != b"-1":
+        shown = first[:30].decode("utf-8", errors="replace").strip()
+        raise UserError(
+            f"{name}: does not look like a UFF file: its first line is not a UFF -1 delimiter line"
+            + (f" but {shown!r}" if shown and shown.isprintable() else "")
+        )
 
 
 def _check_ends_whole(path: Path, name: str) -> None:

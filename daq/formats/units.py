@@ -132,22 +132,49 @@ def clean_label(unit: str) -> str:
     return text
 
 
+# "(m/s²)(N)": numerator and denominator each in parentheses, no slash between them
+# (DataPhysics SignalCalc); also after clean_label has taken the outer parentheses off.
+_PAREN_PAIR = re.compile(r"\(?\s*([^()]+?)\s*\)\s*\(\s*([^()]+?)\s*\)?")
+
+
+def _frf_parts(unit: str) -> tuple[str, str] | None:
+    """(numerator, force) of an FRF unit in parse_unit's spelling, or None."""
+    text = unit.strip()
+    pair = _PAREN_PAIR.fullmatch(text)
+    if pair is not None:
+        text = f"({pair.group(1)})/{pair.group(2)}"
+    text = clean_label(text)
+    top, slash, bottom = text.rpartition("/")
+    numerator = top.strip().removeprefix("(").removesuffix(")").strip()
+    if not slash or bottom not in _PHYSICAL["force"] or numerator not in _FRF_NUMERATORS:
+        return None
+    return numerator, bottom
+
+
 def frf_unit(unit: str) -> tuple[str, float]:
-    """(form, SI factor) of an FRF unit such as "(m/s^2)/N", "g/N", "m/N", "mm/s/N", "m/s/N".
+    """(form, SI factor) of an FRF unit such as "(m/s^2)/N", "g/N", "m/N", "mm/s/N", "m/s/N",
+    or SignalCalc's "(m/s²)(N)".
 
     form: "receptance", "mobility" or "accelerance". UserError (one line) otherwise.
     """
-    text = clean_label(unit)
-    top, slash, bottom = text.rpartition("/")
-    force = _PHYSICAL["force"].get(bottom) if slash else None
-    numerator = top.strip().removeprefix("(").removesuffix(")").strip()
-    if force is None or numerator not in _FRF_NUMERATORS:
+    parts = _frf_parts(unit)
+    if parts is None:
         raise UserError(
             f"unknown FRF unit {_show(unit)}: use a displacement, velocity or acceleration over a force, "
             "e.g. m/N, (m/s)/N, (m/s^2)/N, g/N, mm/N"
         )
-    form, factor = _FRF_NUMERATORS[numerator]
-    return form, factor / force
+    form, factor = _FRF_NUMERATORS[parts[0]]
+    return form, factor / _PHYSICAL["force"][parts[1]]
+
+
+def frf_unit_text(unit: str) -> str:
+    """An FRF unit as the messages print it: "(m/s^2)/N" for "(m/s²)(N)" or "m/s^2)/N" (what
+    clean_label leaves of "[(m/s^2)/N]"), "m/N" for "m/N"; the text itself if unknown."""
+    parts = _frf_parts(unit)
+    if parts is None:
+        return unit.strip()
+    numerator, force = parts
+    return f"({numerator})/{force}" if "/" in numerator else f"{numerator}/{force}"
 
 
 def response_form(unit: str) -> tuple[str, float] | None:
