@@ -403,7 +403,7 @@ def _from_run_file(file: Path) -> dict[str, Any]:
 
     check_regular_file(file)
     try:
-        other = open_run(file)
+        other = open_run(file, require_finite=True)  # NaN would fail analyze or replay later
     except StoreError as exc:
         raise UserError(str(exc)) from None
     return {

@@ -218,6 +218,20 @@ def test_a_run_file_from_another_store_is_imported_with_its_origin(tmp_path):
     assert_same_hits(run.hits, other.hits)
 
 
+def test_a_run_file_holding_nan_is_refused_on_import(tmp_path):
+    # Analysis and replay would fail on it later ("non-finite value"): refused at the door.
+    path = seal(make_run(kind="captured"), tmp_path / "other")
+    with h5py.File(path, "r+") as f:
+        data = f["entry/hits/force"]
+        values = data[...]
+        values[0, 0] = np.nan
+        data[...] = values
+    result = daq_in(tmp_path / "store", "import", str(path))
+    assert_one_line_error(result)
+    assert "finite" in result.stderr or "NaN" in result.stderr
+    assert Store(tmp_path / "store").list() == []
+
+
 def test_a_run_file_with_an_external_link_is_refused_on_import(tmp_path):
     path = seal(make_run(), tmp_path / "other")
     outside = tmp_path / "outside.h5"
