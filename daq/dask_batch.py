@@ -432,7 +432,7 @@ def _plan_fit(store: Any, run_id: str, options: Any, force: bool) -> dict | _Tas
         if cached is not None:
             return {**cached, "cached": True}
         summary, arrays = result["fit"]
-        store_fit(store, summary["run_id"], options, key, summary, arrays)
+        store_fit(store, summary["run_id"], options, key, summary, arrays, analysis_key)
         return {**summary, "cached": False}
 
     args = (data, str(path), options, analysis, cached is None, _software())

@@ -22,7 +22,9 @@ pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="ne
 @pytest.fixture(scope="module")
 def store(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("store")
-    for seed in (1, 2, 3):
+    # Enough runs that the batch is still at work when it is killed (one run analyses in
+    # well under a second).
+    for seed in range(1, 9):
         capture_sim(folder, "realistic", seed, hits=5)
     return folder
 
@@ -59,7 +61,7 @@ def test_killing_the_batch_command_kills_its_workers(store, command):
             assert parent.poll() is None, "the command ended before its workers started"
             assert time.monotonic() < deadline, "no workers started"
             time.sleep(0.05)
-        time.sleep(0.5)  # the workers are at work now
+        time.sleep(0.1)  # the workers are at work now
         assert parent.poll() is None, "the command ended before it could be killed"
         workers = set(_session(parent.pid)) - {parent.pid}
         os.kill(parent.pid, signal.SIGKILL)

@@ -183,12 +183,16 @@ def unexpected_store_entries(store: Path) -> list[str]:
     present, nor the index cache, nor hidden temporaries (which the store never lists
     and `Store.clean_temporaries` removes)."""
     from daq.store.store import is_run_file_name, is_temporary_name
+    from drivers.locking import STORE_LOCK_NAME
 
     names = sorted(os.listdir(store))
     runs = {n[:-3] for n in names if is_run_file_name(n)}
     odd = []
     for name in names:
+        # The store's lock (drivers/locking.store_lock) lives in the store by design.
         if is_run_file_name(name) or is_temporary_name(name) or name.startswith(".index.sqlite"):
+            continue
+        if name == STORE_LOCK_NAME:
             continue
         if name.endswith(".h5") and name[:29] in runs and name[29:30] == ".":
             continue  # <run_id>.<result name>.h5
