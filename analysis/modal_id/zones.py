@@ -42,6 +42,8 @@ PEAK_PROMINENCE_DB = 10.0
 PEAKS_PER_ZONE = 4
 #: A zone's core spans at least this many lines.
 MIN_CORE_LINES = 200
+#: At most about this many zones over a band (their cores widen on a long band).
+MAX_ZONES = 24
 #: A zone reaches at least this fraction of its core's width beyond it on each side.
 EXTEND_FRACTION = 0.25
 #: Orders a zone gets beyond two per peak: room for the noise and the modes just outside.
@@ -111,7 +113,11 @@ def plan_zones(
     mif = mode_indicator(frf)
     peaks = indicator_peaks(mif)
     f_lo, f_hi = float(f[0]), float(f[-1])
-    if peaks.size <= peaks_per_zone + 2 or f.size < 2 * MIN_CORE_LINES:
+    # A core spans MIN_CORE_LINES lines, or 1/MAX_ZONES of the band if more: a noisy FRF
+    # of 51,201 lines counts peaks of noise by the hundred, and 95 zones of order 60
+    # cost more than they find.
+    min_core = max(MIN_CORE_LINES, f.size // MAX_ZONES)
+    if peaks.size <= peaks_per_zone + 2 or f.size < 2 * min_core:
         return [_zone(f_lo, f_hi, f_lo, f_hi, peaks.size, max_order)]
     # Cores of `peaks_per_zone` peaks and at least MIN_CORE_LINES lines: a noisy FRF has
     # peaks of noise a few lines apart, and a zone a few lines wide cannot hold a
@@ -119,10 +125,10 @@ def plan_zones(
     groups: list[list[int]] = [[]]
     for p in peaks:
         g = groups[-1]
-        if len(g) >= peaks_per_zone and p - g[0] >= MIN_CORE_LINES:
+        if len(g) >= peaks_per_zone and p - g[0] >= min_core:
             groups.append([])
         groups[-1].append(int(p))
-    if len(groups) > 1 and (f.size - 1 - groups[-1][0]) < MIN_CORE_LINES:
+    if len(groups) > 1 and (f.size - 1 - groups[-1][0]) < min_core:
         last = groups.pop()  # the last core too narrow: join it to the one before
         groups[-1] += last
     if len(groups) == 1:

@@ -50,7 +50,7 @@ def near(f_ours: float, f_ref: float, line_hz: float) -> bool:
 #: 150 Hz (coherence 0.1-0.9 in m1).
 KNOWN_SHORT = {
     ("found", "lvm-2ch-m1"): "the peer's 146 and 183 Hz (2 %, 1.4 %) stand where m1 shows no peak and our "
-    "diagram no stable chain",
+    "diagram no stable chain; 163 Hz, beside 160.4 Hz, is stable over too few orders",
     ("found", "lvm-2ch-m2"): "damping of 39.97 Hz: 0.20 % against the peer's 0.09-0.15 %",
     ("spurious", "lvm-2ch-m1"): "8.05 Hz (at the band edge, said in a caution) and 40.03 Hz (a peak m2 "
     "confirms, below the coherence the peak picking asks for)",
