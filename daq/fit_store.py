@@ -399,6 +399,19 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
             + (f" (largest relative miss {miss:.2g})" if miss is not None else "")
             + ": no R of this model has them (noise or a stiffness error); prefer --method ls"
         )
+    unc = summary.get("uncertainty") or {}
+    determined = unc.get("determined") or []
+    if determined and not all(determined):
+        names = [name for name, ok in zip(unc.get("names", []), determined, strict=False) if not ok]
+        which = (
+            "no single term of R is determined"
+            if len(names) == len(determined)
+            else f"{', '.join(names)} {'is' if len(names) == 1 else 'are'} not determined"
+        )
+        out.append(
+            f"{which} by these data (marked ?): only the combinations the data fix are (the modal "
+            "dampings above); more measurement points or fewer --functions determine more"
+        )
     return out
 
 

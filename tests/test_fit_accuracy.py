@@ -52,7 +52,9 @@ def test_the_seed_ga_is_reproducible_and_reported_as_it_comes_out(seed_run):
 def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(tmp_path):
     """The defaults (one Ritz function per identified mode, R = L L^T, each mode at its
     identified frequency) on the realistic beam: all four modes in the 200 Hz band, Psi
-    at the noise floor, R positive semi-definite, no caution."""
+    at the noise floor, R positive semi-definite, and no caution but the one saying
+    that one tip measurement leaves terms of a 4 x 4 R undetermined (only the modal
+    dampings are fixed: docs/damping.md)."""
     run_id = capture_sim(tmp_path, "realistic", seed=6)
     (info,) = fit_json(tmp_path, run_id)
     assert info["model"]["ritz_functions"] == 4
@@ -64,7 +66,8 @@ def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(tmp_path
     assert info["psd"]
     assert min(info["damping_eigenvalues"]) >= -1e-9 * max(info["damping_eigenvalues"])
     assert all(row[i] > 0 for i, row in enumerate(info["damping_matrix"]))
-    assert info["cautions"] == []
+    (caution,) = info["cautions"]
+    assert "not determined by these data" in caution
     assert info["stiffness"]["mode_frequencies"]["applied"]
 
 

@@ -90,6 +90,11 @@ def test_cautions_say_what_is_wrong_and_what_to_try():
     assert any("not positive semi-definite" in c for c in raw)
     (poor,) = fit_cautions(_summary(psi_noise_floor=None, relative_residual=0.4))
     assert poor.startswith("a poor fit: the model leaves 40 % of the data unexplained")
+    names = ["R11", "R12", "R22"]
+    (some,) = fit_cautions(_summary(uncertainty={"names": names, "determined": [True, False, True]}))
+    assert some.startswith("R12 is not determined by these data")
+    (none,) = fit_cautions(_summary(uncertainty={"names": names, "determined": [False] * 3}))
+    assert none.startswith("no single term of R is determined by these data")
 
 
 @pytest.fixture(scope="module")
