@@ -31,7 +31,7 @@ Half-power: the peak of |H| (sum over FRFs of |H|^2, square-rooted) nearest the 
 
 Usage::
 
-    python bench/corpus_reference.py --corpus /work/corpus [-o tests/data/corpus_reference.json]
+    python bench/corpus_reference.py --corpus CORPUS_DIR [-o tests/data/corpus_reference.json]
 
 Output: JSON with one entry per set (band, method settings, peer modes, half-power values,
 published values where the source publishes any). Numbers only, no data.
