@@ -172,24 +172,13 @@ def _get(served: Served, path: str, timeout: float) -> int | str:
         return type(exc).__name__
 
 
-def _hard_link_bomb(store: Path, fan_out: int = 30, depth: int = 7) -> Path:
-    """A sound run whose root then holds groups of ``fan_out`` hard links each to the
-    next, ``depth`` levels deep: 30**7 paths through a handful of objects."""
-    import h5py
-    from store.store_helpers import make_run
+def _hard_link_bomb(store: Path) -> Path:
+    """A sound run of the service's store turned into the issue's hard-link bomb."""
+    from store.store_helpers import add_hard_link_bomb, make_run
 
     from daq.store import seal
 
-    path = seal(make_run(run_id="20261124T235958.000Z-0badf11e"), store)
-    with h5py.File(path, "r+") as f:
-        level = f
-        for k in range(depth):
-            child = f.create_group(f"level{k}")
-            for j in range(fan_out):
-                level[f"n{j}"] = child
-            del f[f"level{k}"]
-            level = child
-    return path
+    return add_hard_link_bomb(seal(make_run(run_id="20261124T235958.000Z-0badf11e"), store))
 
 
 @pytest.mark.parametrize("target", ["a FIFO named as a run", "a hard-link bomb"])

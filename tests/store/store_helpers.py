@@ -149,3 +149,20 @@ def assert_same_run(got: Run, want: Run) -> None:
         assert_same_array(g.coherence, w.coherence)
         assert g.labels == w.labels
         assert g.form == w.form
+
+
+def add_hard_link_bomb(path, fan_out: int = 30, depth: int = 7):
+    """Turn the sealed run at ``path`` into the issue's hostile file: its root then holds
+    groups of ``fan_out`` hard links each to the next, ``depth`` levels deep, so a walk
+    that follows every name visits fan_out**depth paths through a handful of objects."""
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        level = f
+        for k in range(depth):
+            child = f.create_group(f"level{k}")
+            for j in range(fan_out):
+                level[f"n{j}"] = child
+            del f[f"level{k}"]
+            level = child
+    return path

@@ -21,7 +21,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from store_helpers import make_run
+from store_helpers import add_hard_link_bomb, make_run
 
 from daq.store import Store, open_run, seal, verify
 from daq.store.h5io import refuse_outside_references
@@ -36,18 +36,8 @@ def sound_run(store: Path, n_hits: int = 3, n_samples: int = 64) -> Path:
 
 
 def hard_link_bomb(store: Path, fan_out: int = 30, depth: int = 7) -> Path:
-    """The root and then groups holding ``fan_out`` hard links each to the next, ``depth``
-    levels deep: fan_out**depth paths through a handful of objects, none too deep."""
-    path = sound_run(store)
-    with h5py.File(path, "r+") as f:
-        level = f
-        for k in range(depth):
-            child = f.create_group(f"level{k}")
-            for j in range(fan_out):
-                level[f"n{j}"] = child
-            del f[f"level{k}"]
-            level = child
-    return path
+    """A sound run turned into the hard-link bomb (store_helpers.add_hard_link_bomb)."""
+    return add_hard_link_bomb(sound_run(store), fan_out, depth)
 
 
 def _filtered(group: h5py.Group, name: str, shape: tuple[int, ...], dtype, chunks: tuple[int, ...]):
