@@ -11,6 +11,7 @@ from daq.store import layout
 from daq.store.errors import StoreError
 from daq.store.h5io import (
     MAX_HITS,
+    dataset,
     get_array,
     get_bool,
     get_float,
@@ -83,13 +84,8 @@ def decode_run(f: h5py.File) -> Run:
 
 def _shape(group: h5py.Group, name: str, required: bool = True) -> tuple[int, ...] | None:
     """The declared shape of dataset ``group/name`` (metadata only; None if absent and optional)."""
-    node = group.get(name)
-    if node is None and not required:
-        return None
-    if not isinstance(node, h5py.Dataset):
-        where = f"{group.name}/{name}"
-        raise StoreError(f"dataset {where} is missing" if node is None else f"{where} should be a dataset")
-    return tuple(int(n) for n in node.shape or ())
+    node = dataset(group, name, required)
+    return None if node is None else tuple(int(n) for n in node.shape or ())
 
 
 def _agree(group: h5py.Group, expected: dict[str, tuple[int, ...]], optional: tuple[str, ...] = ()) -> None:

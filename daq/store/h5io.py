@@ -159,16 +159,25 @@ def get_group(parent: h5py.Group, path: str, required: bool = True) -> h5py.Grou
     return node
 
 
-def get_array(
-    group: h5py.Group, name: str, kinds: str, ndim: int, required: bool = True
-) -> np.ndarray | None:
-    """The whole dataset ``group/name`` (HDF5 checks its fletcher32 sums on this read)."""
+def dataset(group: h5py.Group, name: str, required: bool = True) -> h5py.Dataset | None:
+    """The dataset ``group/name`` (nothing read), None if absent and optional; StoreError
+    if it is missing or is not a dataset."""
     node = group.get(name)
     if node is None and not required:
         return None
     if not isinstance(node, h5py.Dataset):
         where = f"{group.name}/{name}"
         raise StoreError(f"dataset {where} is missing" if node is None else f"{where} should be a dataset")
+    return node
+
+
+def get_array(
+    group: h5py.Group, name: str, kinds: str, ndim: int, required: bool = True
+) -> np.ndarray | None:
+    """The whole dataset ``group/name`` (HDF5 checks its fletcher32 sums on this read)."""
+    node = dataset(group, name, required)
+    if node is None:
+        return None
     if not node.fletcher32:
         raise StoreError(f"dataset {node.name} has no fletcher32 checksum; refused as not written by us")
     if node.dtype.kind not in kinds or node.ndim != ndim:
