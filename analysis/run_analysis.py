@@ -2,7 +2,7 @@
 found from the stability diagram, the damping the exponential window adds taken out,
 the scatter of each mode over the hits, and the seed's Table 2 beside the result.
 
-Pure: arrays and small dataclasses in, results out. daq/analysis_store.py reads runs,
+Pure: arrays and small dataclasses in, results out. daq/workflows/analysis.py reads runs,
 calls this and stores what it returns beside the run.
 """
 

@@ -15,15 +15,15 @@ import tempfile
 import time
 from pathlib import Path
 
-# As `daq` itself does (daq/cli.py), before numpy loads: one BLAS thread per process.
+# As `daq` itself does (daq/cli/app.py), before numpy loads: one BLAS thread per process.
 for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 from analysis.run_analysis import AnalysisOptions
-from daq.analysis_store import analyze
-from daq.analyze_command import run_all
-from daq.cli import main
+from daq.cli.app import main
+from daq.cli.commands.analyze import run_all
 from daq.store import Store, new_run_id
+from daq.workflows.analysis import analyze
 
 
 def main_bench(n_runs: int = 200) -> None:

@@ -22,7 +22,7 @@ import time
 import warnings
 from pathlib import Path
 
-# As `daq` itself does (daq/cli.py), before numpy loads: one BLAS thread per process.
+# As `daq` itself does (daq/cli/app.py), before numpy loads: one BLAS thread per process.
 for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
@@ -32,7 +32,7 @@ CAPTURES = 4
 
 def make_store(store_dir: Path, n_runs: int) -> None:
     """Top ``store_dir`` up to ``n_runs`` runs: captures first, then copies of them."""
-    from daq.cli import main
+    from daq.cli.app import main
     from daq.store import Store, new_run_id
 
     store = Store(store_dir)
@@ -60,9 +60,9 @@ def clear_results(store_dir: Path) -> None:
 def batch(store_dir: Path, ids: list[str], jobs: int | None, scheduler: str | None) -> tuple[float, float]:
     """Seconds of (analyse all, then fit all) from a store without results."""
     from analysis.run_analysis import AnalysisOptions
-    from daq.analyze_command import analyze_one, run_all
-    from daq.fit_command import fit_one
-    from daq.fit_store import FitOptions
+    from daq.cli.commands.analyze import analyze_one, run_all
+    from daq.cli.commands.fit import fit_one
+    from daq.workflows.fit import FitOptions
 
     clear_results(store_dir)
     times = []
@@ -81,9 +81,9 @@ def batch(store_dir: Path, ids: list[str], jobs: int | None, scheduler: str | No
 def cached(store_dir: Path, ids: list[str], scheduler: str | None) -> float:
     """Seconds of both passes again, every result up to date (nothing computed)."""
     from analysis.run_analysis import AnalysisOptions
-    from daq.analyze_command import analyze_one, run_all
-    from daq.fit_command import fit_one
-    from daq.fit_store import FitOptions
+    from daq.cli.commands.analyze import analyze_one, run_all
+    from daq.cli.commands.fit import fit_one
+    from daq.workflows.fit import FitOptions
 
     start = time.perf_counter()
     for worker, options in ((analyze_one, AnalysisOptions()), (fit_one, FitOptions())):

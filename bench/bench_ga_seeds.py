@@ -8,15 +8,15 @@ import os
 import tempfile
 from pathlib import Path
 
-# As `daq` itself does (daq/cli.py): one BLAS thread per process, set before numpy loads.
+# As `daq` itself does (daq/cli/app.py): one BLAS thread per process, set before numpy loads.
 for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 import numpy as np
 
-from daq.cli import main
-from daq.fit_store import FitOptions, fit_stored
+from daq.cli.app import main
 from daq.store import Store
+from daq.workflows.fit import FitOptions, fit_stored
 
 TRUTH = (0.036058, 0.203226, 0.161986)  # eq (18), docs/method.md
 

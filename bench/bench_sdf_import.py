@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from daq.cli import main
+from daq.cli.app import main
 from daq.formats.sdf import read_sdf, read_sdf_run, write_sdf_run
 from daq.store import Hits, MeasuredFrf, Run, new_run_id
 

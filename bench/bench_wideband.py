@@ -33,7 +33,7 @@ within 0.2 % of no true mode.
 Figures: wall time, best of 3; tracemalloc peak of one more run (numpy buffers, not
 BLAS/LAPACK workspace); the process max RSS (resource.getrusage) of a subprocess that
 builds the data and runs one tool only, beside its RSS before the tool ran.
-OMP/OPENBLAS/MKL threads are set to 1 before numpy loads (as daq/cli.py does): one core.
+OMP/OPENBLAS/MKL threads are set to 1 before numpy loads (as daq/cli/app.py does): one core.
 
 Run: .venv/bin/python bench/bench_wideband.py [--csv FILE] [--json]
 With --json the table goes to stderr and the figures, as JSON, to stdout.
@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import os
 
-# As `daq` itself does (daq/cli.py), before numpy loads: one BLAS thread, one core.
+# As `daq` itself does (daq/cli/app.py), before numpy loads: one BLAS thread, one core.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")

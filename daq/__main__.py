@@ -1,3 +1,3 @@
-from daq.cli import main
+from daq.cli.app import main
 
 raise SystemExit(main())

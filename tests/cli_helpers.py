@@ -1,4 +1,4 @@
-"""Run `daq` as a user does: in-process through daq.cli.main, or as the real
+"""Run `daq` as a user does: in-process through daq.cli.app.main, or as the real
 console script in a subprocess.
 
 In-process is the default for tests: a subprocess pays about a second of
@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 from unittest import mock
 
-from daq.cli import main
+from daq.cli.app import main
 
 DAQ = Path(sys.executable).with_name("daq")
 
@@ -36,7 +36,7 @@ def run_daq(*args: str, timeout: float = 60, **kwargs) -> subprocess.CompletedPr
 
 
 def invoke_daq(*args: str, env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess[str]:
-    """daq.cli.main(args) in this process, with stdout and stderr captured.
+    """daq.cli.app.main(args) in this process, with stdout and stderr captured.
 
     ``env`` adds variables, or removes those given as None, for this call only.
     Fails the test if the call leaves logging or the environment changed.

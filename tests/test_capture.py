@@ -7,9 +7,9 @@ import tomllib
 import numpy as np
 import pytest
 
-from daq import capture_command
-from daq.capture import Capture, CaptureError, HitArrived
+from daq.cli.commands import capture as capture_command
 from daq.store import Store
+from daq.workflows.capture import Capture, CaptureError, HitArrived
 from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
 from sims.instrument import Analyzer

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 from cli_helpers import DAQ, ENV, invoke_daq
 
-from daq.capture import check_plain_text, table1_sample, utc_now
 from daq.store import Store, new_run_id, open_run, verify
 from daq.store.journal import Journal, is_journal_name, read_journal, recover
+from daq.workflows.capture import check_plain_text, table1_sample, utc_now
 
 N = 64
 

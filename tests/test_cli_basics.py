@@ -15,7 +15,7 @@ import typer
 from cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq, run_daq
 
 from daq import __version__
-from daq.cli import app, help_hint
+from daq.cli.app import app, help_hint
 
 #: Every command and group, as typed after `daq`.
 COMMANDS = [(), ("model",), ("sim",), ("sim", "serve"), ("sim", "commands"), ("instruments",)]
@@ -111,7 +111,7 @@ def test_unknown_command_is_one_line():
 
 def test_usage_errors_point_at_the_commands_help():
     """Fails loudly if typer stops giving its usage errors the command's context
-    (daq.cli.help_hint reads it through getattr, typer exporting no UsageError)."""
+    (daq.cli.app.help_hint reads it through getattr, typer exporting no UsageError)."""
     result = invoke_daq("sim", "serve", "--bogus")
     assert_one_line_error(result, "--bogus", "(see 'daq sim serve --help')")
     assert result.returncode == 2

@@ -1,4 +1,4 @@
-"""`daq model` as a technician runs it, in-process (daq.cli.main); tests/test_cli_basics.py
+"""`daq model` as a technician runs it, in-process (daq.cli.app.main); tests/test_cli_basics.py
 runs the real console script."""
 
 import json

@@ -5,7 +5,7 @@ from pathlib import Path
 
 from cli_helpers import invoke_daq
 
-from daq.cli_reference import REGENERATE, reference
+from daq.cli.reference import REGENERATE, reference
 
 CLI_MD = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 SECTION = re.compile(r"^## (daq[a-z ]*)\n\n```text\n(.*?)\n```$", re.MULTILINE | re.DOTALL)

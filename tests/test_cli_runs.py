@@ -9,10 +9,12 @@ import numpy as np
 import pytest
 from cli_helpers import assert_one_line_error, invoke_daq
 
-from daq import cli, config_command, runs_command
+from daq.cli import app as cli
+from daq.cli.commands import config as config_command
+from daq.cli.commands import runs as runs_command
 from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, seal
 
-# Until daq/cli.py registers them itself; register() does nothing the second time.
+# Until daq/cli/app.py registers them itself; register() does nothing the second time.
 runs_command.register(cli.app)
 config_command.register(cli.app)
 

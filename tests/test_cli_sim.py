@@ -1,7 +1,7 @@
 """`daq sim serve` and `daq sim commands` as a user runs them. A server that
 serves is the real console script in a subprocess (it must outlive the call and
 take signals), reached through pyvisa-py and pyserial on loopback; what fails
-before serving, and `daq sim commands`, run in-process (daq.cli.main)."""
+before serving, and `daq sim commands`, run in-process (daq.cli.app.main)."""
 
 from __future__ import annotations
 

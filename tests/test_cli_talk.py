@@ -1,5 +1,5 @@
 """daq instruments / identify / send / query, as a technician runs them, in-process
-(daq.cli.main); tests/test_cli_sim.py runs `daq sim serve` as a real process and
+(daq.cli.app.main); tests/test_cli_sim.py runs `daq sim serve` as a real process and
 reaches it the same way these tests reach the simulator here."""
 
 import json

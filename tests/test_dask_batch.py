@@ -22,7 +22,7 @@ import pytest
 from cli_helpers import assert_one_line_error, capture_sim, invoke_daq, run_daq
 from store.store_helpers import make_frf, make_run
 
-from daq import dask_batch
+from daq.batch import dask_backend as dask_batch
 from daq.store import Run, Store, seal
 from daq.store.ids import RUN_ID_LENGTH
 
@@ -170,7 +170,7 @@ def test_daq_scheduler_gives_the_address_and_an_explicit_jobs_wins(cluster, stor
         calls.append(address)
         return dask_batch.run_on_cluster(address, *args)
 
-    with mock.patch("daq.analyze_command.run_on_cluster", side_effect=spy):
+    with mock.patch("daq.cli.commands.analyze.run_on_cluster", side_effect=spy):
         (first, *_) = batch("analyze", remote, env=env)
         assert calls == [cluster.scheduler_address]
         assert first["cached"] is False

@@ -1,4 +1,4 @@
-"""daq.memory_tuning: glibc's malloc takes the settings that keep a fit's freed
+"""daq.batch.memory_tuning: glibc's malloc takes the settings that keep a fit's freed
 temporaries in the process (docs/damping.md, Speed)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from daq.memory_tuning import keep_freed_memory
+from daq.batch.memory_tuning import keep_freed_memory
 
 
 @pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="mallopt is glibc's")
@@ -19,7 +19,7 @@ def test_glibc_accepts_the_settings():
 
 _FIT_LOOP = """
 import resource, sys
-from daq.memory_tuning import keep_freed_memory
+from daq.batch.memory_tuning import keep_freed_memory
 if sys.argv[1] == "tuned":
     keep_freed_memory()
 import numpy as np

@@ -80,7 +80,7 @@ def test_killing_the_batch_command_kills_its_workers(store, command):
 
 
 def test_one_hit_is_said_in_the_singular(capsys):
-    from daq.analyze_command import _print
+    from daq.cli.commands.analyze import _print
 
     info = {
         "run_id": "r", "kind": "captured", "source": "hits", "n_averages": 1, "estimator": "h1",

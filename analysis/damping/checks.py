@@ -1,6 +1,6 @@
 """Checks on a fitted damping matrix: the Jacobian behind its uncertainty, refits to
 each hit alone (the uncertainty checked another way), and random starts (is the
-optimum global?). Pure numerics, used by daq/fit_store.py."""
+optimum global?). Pure numerics, used by daq/workflows/fit.py."""
 
 from __future__ import annotations
 

@@ -17,10 +17,10 @@ def build_report(store_dir: Path, run_id: str, options: Any = None) -> tuple[str
     stored (none is made here). StoreError or ValueError when the run cannot be read
     or analysed."""
     from analysis.run_analysis import AnalysisOptions
-    from daq.analysis_store import RESULT_NAME, analyze_stored, stored_options
-    from daq.fit_store import FitOptions
     from daq.report import figures, page
     from daq.store import Store
+    from daq.workflows.analysis import RESULT_NAME, analyze_stored, stored_options
+    from daq.workflows.fit import FitOptions
 
     the_store = Store(store_dir)
     if options is None:
@@ -53,8 +53,8 @@ def stored_fits(the_store: Any, run_id: str) -> dict[str, dict]:
     """The damping fits stored beside the run (``<id>.fit-*.h5``), by result name. None
     is made here: a report draws what `daq fit` stored, and says so when there is none.
     A fit made from another analysis than the one stored now carries a caution."""
-    from daq.analysis_store import RESULT_NAME
     from daq.store import StoreError
+    from daq.workflows.analysis import RESULT_NAME
 
     try:
         analysis_key = the_store.read_result(run_id, RESULT_NAME).get("cache_key")

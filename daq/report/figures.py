@@ -1,6 +1,6 @@
 """The report's figures, drawn with matplotlib's Agg backend (no screen needed), each
 returned as PNG bytes. Inputs are a Run and the stored analysis payload
-(daq/analysis_store.py): nothing is computed here but what a plot needs."""
+(daq/workflows/analysis.py): nothing is computed here but what a plot needs."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """One capture at a time, run in a thread of the service, decided from the web page.
 
-The workflow is daq.capture.Capture, the same as ``daq capture``: the same checks,
+The workflow is daq.workflows.capture.Capture, the same as ``daq capture``: the same checks,
 the same runs. What differs is who decides each hit: the page or the API
 (``decide``), or the checks when the capture was started with ``auto``. Every step
 is published as an event (daq/service/events.py). However the capture ends, the
@@ -24,7 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from daq.capture import (
+from daq.service.events import EventHub
+from daq.service.instrument_link import InstrumentLink
+from daq.store import Run, StoreError
+from daq.workflows.capture import (
     Capture,
     CaptureError,
     Configured,
@@ -34,9 +37,6 @@ from daq.capture import (
     HitDecided,
     settings_as_dict,
 )
-from daq.service.events import EventHub
-from daq.service.instrument_link import InstrumentLink
-from daq.store import Run, StoreError
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings
 
@@ -377,7 +377,7 @@ def live_frf(
     """H1 and coherence over the accepted hits so far, with the windows the analysis
     will use (the analyzer's settings). records: [(force_n, response_m_s2)] each (n,)."""
     from analysis.spectra import frf_estimate, linear_spectra
-    from daq.analysis_store import window_specs
+    from daq.workflows.analysis import window_specs
 
     force_window, response_window, _ = window_specs(
         SimpleNamespace(instrument=SimpleNamespace(settings=settings))

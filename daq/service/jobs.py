@@ -8,7 +8,7 @@ worker leaves no half result, only a run to do again at the next start.
 
 Workers are separate processes (``spawn``: the service's threads must not be
 forked), so a long fit never stalls serving. With a Dask scheduler the work goes to
-the cluster instead (daq/dask_batch.py).
+the cluster instead (daq/batch/dask_backend.py).
 """
 
 from __future__ import annotations
@@ -35,13 +35,13 @@ WATCH_S = 2.0
 
 
 def analysis_result_name() -> str:
-    from daq.analysis_store import RESULT_NAME
+    from daq.workflows.analysis import RESULT_NAME
 
     return RESULT_NAME
 
 
 def fit_result_name() -> str:
-    from daq.fit_store import FitOptions
+    from daq.workflows.fit import FitOptions
 
     return FitOptions().result_name
 
@@ -49,27 +49,27 @@ def fit_result_name() -> str:
 def analyse_in_worker(store_dir: Path, run_id: str) -> dict[str, Any] | str:
     """The run's analysis summary, or a one-line reason (runs in a worker process)."""
     from analysis.run_analysis import AnalysisOptions
-    from daq.analyze_command import analyze_one
+    from daq.cli.commands.analyze import analyze_one
 
     return analyze_one(store_dir, run_id, AnalysisOptions(), False)
 
 
 def fit_in_worker(store_dir: Path, run_id: str) -> dict[str, Any] | str:
     """The run's default damping fit summary, or a one-line reason."""
-    from daq.fit_command import fit_one
-    from daq.fit_store import FitOptions
+    from daq.cli.commands.fit import fit_one
+    from daq.workflows.fit import FitOptions
 
     return fit_one(store_dir, run_id, FitOptions(), False)
 
 
 def on_cluster(address: str, store_dir: Path, run_id: str, kind: str) -> dict[str, Any] | str:
     """Analyse ("analyze") or fit ("fit") one run on the Dask cluster at ``address``
-    (daq/dask_batch.py: the run's bytes go to a worker, the result comes back and is
+    (daq/batch/dask_backend.py: the run's bytes go to a worker, the result comes back and is
     stored here); the summary or a one-line reason."""
     from analysis.run_analysis import AnalysisOptions
-    from daq.dask_batch import run_on_cluster
+    from daq.batch.dask_backend import run_on_cluster
     from daq.errors import UserError
-    from daq.fit_store import FitOptions
+    from daq.workflows.fit import FitOptions
 
     outcomes: dict[str, dict[str, Any] | str] = {}
     options = AnalysisOptions() if kind == "analyze" else FitOptions()
@@ -81,7 +81,7 @@ def on_cluster(address: str, store_dir: Path, run_id: str, kind: str) -> dict[st
 
 
 def _init_worker() -> None:
-    from daq.memory_tuning import keep_freed_memory
+    from daq.batch.memory_tuning import keep_freed_memory
 
     keep_freed_memory()
     threading.Thread(target=_exit_with_parent, args=(os.getppid(),), name="parent-watch", daemon=True).start()

@@ -13,7 +13,7 @@ from analysis.damping import pilkey_inman, undamped_modes, update_mode_frequenci
 from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.seed import eq18_damping_matrix
-from daq.fit_store import FitOptions, fit_cautions, resolve_functions
+from daq.workflows.fit import FitOptions, fit_cautions, resolve_functions
 
 
 def test_the_default_options_and_their_result_names():

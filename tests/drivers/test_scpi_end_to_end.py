@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from daq.capture import Capture, Finished, HitArrived
+from daq.workflows.capture import Capture, Finished, HitArrived
 from drivers.analyzer import SignalAnalyzer
 from drivers.dialects import HP3562A, SCPI
 from drivers.errors import InstrumentError
@@ -283,7 +283,7 @@ def test_check_errors_raises_a_queued_scpi_error(driver: ScpiAnalyzer, bench: Be
 
 @pytest.mark.timeout(30)
 def test_the_capture_workflow_runs_on_the_scpi_driver(driver: ScpiAnalyzer, bench: Bench) -> None:
-    """daq/capture.py as the application drives it: preview, every hit accepted."""
+    """daq/workflows/capture.py as the application drives it: preview, every hit accepted."""
     capture = Capture(driver, _settings(), hits_wanted=2, policy=lambda hit: (True, ""), hit_timeout_s=5.0)
     events = list(capture)
     hits = [e for e in events if isinstance(e, HitArrived)]

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from cli_helpers import assert_one_line_error, invoke_daq
 
+from daq.cli.commands.import_file import detect_format
 from daq.errors import UserError
 from daq.formats.frf_text import read_frf_text, scan_layout
-from daq.import_command import detect_format
 from daq.store import Store
 
 FREQ = np.arange(6) * 0.01953125

@@ -12,8 +12,8 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from daq.cli.commands.import_file import detect_format
 from daq.formats.frf_text import read_frf_text
-from daq.import_command import detect_format
 
 SETTINGS = settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 WORK = Path(tempfile.mkdtemp(prefix="frf-preamble-"))

@@ -10,9 +10,9 @@ import struct
 import pytest
 from cli_helpers import assert_one_line_error, invoke_daq
 
+from daq.cli.commands.import_file import guess_format
 from daq.errors import UserError
 from daq.formats.sdf import parse_sdf, read_sdf
-from daq.import_command import guess_format
 from daq.store import Store
 from formats.test_sdf_builder import (
     assemble,

@@ -1,5 +1,5 @@
 """Replay mode: the simulated analyzer serving recorded hits (sims.sources.ReplaySource),
-the HDF5 reader behind ``daq sim serve --replay`` (daq.recorded_hits) and the two
+the HDF5 reader behind ``daq sim serve --replay`` (daq.workflows.recorded_hits) and the two
 together in a real subprocess.
 
 The hits are made here; what the analyzer must return is computed here with numpy
@@ -25,7 +25,7 @@ from cli_helpers import DAQ, assert_one_line_error, run_daq
 from wire import HEADER_LENGTH, decode_trace
 
 from daq.errors import UserError
-from daq.recorded_hits import load_recorded_hits
+from daq.workflows.recorded_hits import load_recorded_hits
 from sims.command_table import ERRORS
 from sims.inprocess import InProcessConnection
 from sims.instrument import Analyzer

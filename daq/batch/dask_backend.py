@@ -5,8 +5,8 @@ The workers of a real cluster run on other machines and cannot see the store fol
 So this process, the client, does everything that touches the store: it resolves
 the runs, checks the caches, reads each run file's bytes and sends them with the
 options; a worker decodes the run in memory (refusing what daq.store.reader refuses
-in a file on disk), computes it (daq.analysis_store.compute_analysis,
-daq.fit_store.fit_run) and sends back the summary and arrays; the client writes them
+in a file on disk), computes it (daq.workflows.analysis.compute_analysis,
+daq.workflows.fit.fit_run) and sends back the summary and arrays; the client writes them
 beside the run with the cache key, file name and content the local pool would
 write, so that a later local run is a cache hit. A fit whose run has no up-to-date
 analysis (default options) gets it computed in the same task, first, and the client
@@ -161,10 +161,10 @@ def _prepare_worker(expected: str) -> str | None:
     """Ready this worker process for a task: None, or why it must not run it (it
     runs another version of daq than the client, ``expected``).
 
-    As daq's own worker processes do, it keeps freed memory (daq/memory_tuning.py):
+    As daq's own worker processes do, it keeps freed memory (daq/batch/memory_tuning.py):
     Dask's workers ask glibc for the opposite (MALLOC_TRIM_THRESHOLD_=65536), and
     every fit then faults its temporaries in again page by page, twice the time."""
-    from daq.memory_tuning import keep_freed_memory
+    from daq.batch.memory_tuning import keep_freed_memory
 
     keep_freed_memory()
     here = _software()
@@ -175,7 +175,7 @@ def _prepare_worker(expected: str) -> str | None:
 
 def _analyze_task(data: bytes, name: str, options: Any, software: str) -> tuple[dict, dict] | str:
     """(summary, arrays) of the analysis of the run file ``data``, or why not."""
-    from daq.analysis_store import compute_analysis
+    from daq.workflows.analysis import compute_analysis
 
     wrong = _prepare_worker(software)
     if wrong:
@@ -197,8 +197,8 @@ def _fit_task(
     given; "fit": (summary, arrays) or None; "failure": why the run failed or None}.
     ``fit`` False: only the analysis (the fit's result is up to date)."""
     from analysis.run_analysis import AnalysisOptions
-    from daq.analysis_store import compute_analysis
-    from daq.fit_store import fit_run
+    from daq.workflows.analysis import compute_analysis
+    from daq.workflows.fit import fit_run
 
     wrong = _prepare_worker(software)
     if wrong:
@@ -379,7 +379,7 @@ def _read(path: Path) -> bytes:
 
 def _plan_analysis(store: Any, run_id: str, options: Any, force: bool) -> dict | _Task:
     """The cached summary, or the task that analyses the run (as analyze_stored)."""
-    from daq.analysis_store import cache_key, cached_analysis, store_analysis
+    from daq.workflows.analysis import cache_key, cached_analysis, store_analysis
 
     path = _resolve(store, run_id)
     key = cache_key(path, options)
@@ -405,8 +405,8 @@ def _plan_fit(store: Any, run_id: str, options: Any, force: bool) -> dict | _Tas
     import numpy as np
 
     from analysis.run_analysis import AnalysisOptions
-    from daq.analysis_store import cache_key, cached_analysis, store_analysis
-    from daq.fit_store import cached_fit, fit_cache_key, store_fit
+    from daq.workflows.analysis import cache_key, cached_analysis, store_analysis
+    from daq.workflows.fit import cached_fit, fit_cache_key, store_fit
 
     path = _resolve(store, run_id)
     analysis_key = cache_key(path, AnalysisOptions())

@@ -1,7 +1,7 @@
 """Fitting the damping matrix of stored runs: the model of the run's beam, the data it
 is fitted to, the method, and the result file beside the run (``<run_id>.fit-<method>.h5``).
 
-The run's analysis (daq/analysis_store.py) comes first: its identified modes give
+The run's analysis (daq/workflows/analysis.py) comes first: its identified modes give
 the stiffness update and the modal starting point. The run file is only read.
 """
 
@@ -20,10 +20,10 @@ from analysis.damping.checks import central_jacobian, multi_start_check, per_hit
 from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.run_analysis import AnalysisOptions
-from daq.analysis_store import RESULT_NAME as ANALYSIS_RESULT
-from daq.analysis_store import analyze_stored, beam_of, stored_options
 from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
+from daq.workflows.analysis import RESULT_NAME as ANALYSIS_RESULT
+from daq.workflows.analysis import analyze_stored, beam_of, stored_options
 
 METHODS = ("modal", "ls", "ga", "de", "pilkey-inman")
 STIFFNESS = ("modes", "scale", "none")
@@ -583,9 +583,9 @@ def _jsonable(value: Any) -> Any:
     return clean(plain)
 
 
-# Like the analysis (daq/analysis_store.py), the fit in two steps: fit_run computes in
+# Like the analysis (daq/workflows/analysis.py), the fit in two steps: fit_run computes in
 # memory (a run and its analysis in, summary and arrays out); fit_cache_key,
-# cached_fit and store_fit are the store's side. daq/dask_batch.py runs fit_run on a
+# cached_fit and store_fit are the store's side. daq/batch/dask_backend.py runs fit_run on a
 # Dask worker and the other three beside the store.
 
 

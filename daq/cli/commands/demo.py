@@ -12,8 +12,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.commands.sim import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
 from daq.errors import UserError
-from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
 
 
 def demo(

@@ -4,7 +4,7 @@ With --sim the built-in simulator serves on 127.0.0.1 (a real TCP socket) and th
 line says so; without --sim an analyzer must be configured (--resource, $DAQ_RESOURCE,
 the config file's ``resource``). Before the first hit the operator and note are checked,
 and the store must be writable with room for the whole run. The workflow itself lives
-in daq/capture.py; every hit is journaled in the store as it is taken.
+in daq/workflows/capture.py; every hit is journaled in the store as it is taken.
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from typing import Annotated, Any
 
 import typer
 
+from daq.cli.commands.sim import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+from daq.cli.commands.talk import DialectOption, check_dialect
 from daq.errors import UserError
-from daq.instrument import SimModel, configured_resource
-from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
-from daq.talk_command import DialectOption, check_dialect
+from daq.workflows.connect import SimModel, configured_resource
 from drivers.settings import ChannelSetup, ImpactSettings
 
 #: Keys of a setup file: top level, and of each [hammer] / [accelerometer] table.
@@ -240,7 +240,7 @@ def capture(
 def check_operator_and_note(operator: str, note: str) -> None:
     """UserError (exit 2) unless --operator is one line and --note is text, both valid
     UTF-8 without control characters: the rule the service applies to its requests."""
-    from daq.capture import check_plain_text
+    from daq.workflows.capture import check_plain_text
 
     try:
         check_plain_text(operator, "--operator", one_line=True)
@@ -269,9 +269,9 @@ def run_capture(
     capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
     from rich.console import Console
 
-    from daq.capture import Capture
-    from daq.capture_session import drive, open_analyzer, serve_simulator
     from daq.store import Store, StoreError, resolve_store_dir
+    from daq.workflows.capture import Capture
+    from daq.workflows.capture_session import drive, open_analyzer, serve_simulator
 
     console = Console(highlight=False, soft_wrap=True)
     store_dir, _ = resolve_store_dir(store)

@@ -24,28 +24,46 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import typer
 
-from daq.memory_tuning import keep_freed_memory
+from daq.batch.memory_tuning import keep_freed_memory
 
 keep_freed_memory()
 
-from daq import (
-    __version__,
-    analyze_command,
-    capture_command,
-    config_command,
-    export_command,
-    fit_command,
-    import_command,
-    replay_command,
-    report_command,
-    runs_command,
-    serve_command,
+from daq import __version__
+from daq.cli.commands import (
+    analyze as analyze_command,
 )
-from daq import talk_command as talk
-from daq.demo_command import demo
+from daq.cli.commands import (
+    capture as capture_command,
+)
+from daq.cli.commands import (
+    config as config_command,
+)
+from daq.cli.commands import (
+    export as export_command,
+)
+from daq.cli.commands import (
+    fit as fit_command,
+)
+from daq.cli.commands import (
+    import_file as import_command,
+)
+from daq.cli.commands import (
+    replay as replay_command,
+)
+from daq.cli.commands import (
+    report as report_command,
+)
+from daq.cli.commands import (
+    runs as runs_command,
+)
+from daq.cli.commands import (
+    serve as serve_command,
+)
+from daq.cli.commands import talk
+from daq.cli.commands.demo import demo
+from daq.cli.commands.model import model
+from daq.cli.commands.sim import sim_app
 from daq.errors import UserError
-from daq.model_command import model
-from daq.sim_command import sim_app
 from drivers.errors import DriverError
 
 app = typer.Typer(

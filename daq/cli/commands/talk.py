@@ -53,7 +53,7 @@ def check_dialect(dialect: str | None) -> str | None:
 
 
 def _open(resource: str | None, timeout: float, dialect: str | None = None, retries: int = 2):
-    from daq.instrument import configured_resource, open_analyzer
+    from daq.workflows.connect import configured_resource, open_analyzer
 
     dialect = check_dialect(dialect)
     resource = configured_resource(resource)
@@ -102,7 +102,7 @@ def identify(
     Without --dialect the analyzer is asked *IDN? (a SCPI 35665A/35670A answers it),
     then ID? (HP35660A, HP3562A); with it, only that dialect's identity query.
     """
-    from daq.instrument import configured_resource
+    from daq.workflows.connect import configured_resource
 
     with _open(resource, timeout, dialect) as dsa:
         identification = dsa.identify()  # first: with a forced dialect it checks the reply

@@ -1,4 +1,4 @@
-"""`daq fit RUN... | --all`: the damping matrix of stored runs (daq/fit_store.py), each
+"""`daq fit RUN... | --all`: the damping matrix of stored runs (daq/workflows/fit.py), each
 result beside its run, in worker processes (or on a Dask cluster with --scheduler)
 with a progress bar."""
 
@@ -9,9 +9,9 @@ from typing import Annotated, Any
 
 import typer
 
-from daq.analyze_command import SchedulerOption
+from daq.cli.commands.analyze import SchedulerOption
+from daq.cli.commands.runs import JsonOption, StoreOption
 from daq.errors import UserError
-from daq.runs_command import JsonOption, StoreOption
 
 #: FitOptions' field names as the options a user types.
 OPTION_NAMES = (
@@ -93,8 +93,8 @@ def fit(
     beside the noise floor, and the uncertainty of every term of R, naming the
     combinations the data does not determine.
     """
-    from daq.analyze_command import run_batch
-    from daq.fit_store import FitOptions
+    from daq.cli.commands.analyze import run_batch
+    from daq.workflows.fit import FitOptions
 
     if bool(runs) == all_runs:
         raise UserError("name the runs to fit, or give --all", exit_code=2)
@@ -122,8 +122,8 @@ def fit_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | s
     """The summary of one run's fit, or a one-line reason it failed (picklable)."""
     import numpy as np
 
-    from daq.fit_store import fit_stored
     from daq.store import StoreError
+    from daq.workflows.fit import fit_stored
 
     try:
         return fit_stored(store_dir, run_id, options, force)

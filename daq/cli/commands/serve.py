@@ -14,11 +14,11 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.commands.runs import StoreOption
+from daq.cli.commands.sim import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+from daq.cli.commands.talk import DialectOption, check_dialect
 from daq.errors import UserError
-from daq.instrument import SimModel
-from daq.runs_command import StoreOption
-from daq.sim_command import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
-from daq.talk_command import DialectOption, check_dialect
+from daq.workflows.connect import SimModel
 
 
 def register(app: typer.Typer) -> None:
@@ -70,9 +70,9 @@ def serve(
     into the store, then analysed and fitted in worker processes. Ctrl-C stops the
     service; a capture in progress is sealed as an incomplete run.
     """
-    from daq.instrument import configured_resource
     from daq.service.auth import TokenError, load_or_create_token, token_path
     from daq.store import resolve_store_dir
+    from daq.workflows.connect import configured_resource
 
     path = token_path()
     try:
@@ -116,7 +116,7 @@ def serve(
 def _scheduler(option: str | None) -> str | None:
     if option is None and not os.environ.get("DAQ_SCHEDULER"):
         return None
-    from daq.dask_batch import scheduler_address
+    from daq.batch.dask_backend import scheduler_address
 
     return scheduler_address(option)
 

@@ -55,7 +55,7 @@ def open_analyzer(stack: contextlib.ExitStack, resource: str, dialect: str | Non
 
 
 def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
-    """Run ``job`` (a daq.capture.Capture) to its end with a display, seal the run and
+    """Run ``job`` (a daq.workflows.capture.Capture) to its end with a display, seal the run and
     return it. With ``ask`` the operator decides each hit at the keyboard, else the
     job's policy does. Every hit is journaled in the store as it is taken. Ctrl-C,
     SIGTERM, SIGHUP, a dropped link, an instrument error or no answer seal the hits so
@@ -139,8 +139,8 @@ def _one_interrupt():
 
 
 def _follow(console: Any, job: Any, store_dir: Path, ask: bool, hits_wanted: int, seal_partial: Any) -> Run:
-    from daq.capture import CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
     from daq.store import StoreError
+    from daq.workflows.capture import CaptureError, Configured, Connected, Finished, HitArrived, HitDecided
     from drivers.errors import DriverError
 
     try:

@@ -19,8 +19,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.commands.runs import StoreOption
 from daq.errors import UserError
-from daq.runs_command import StoreOption
 
 
 class ExportFormat(enum.StrEnum):

@@ -1,6 +1,6 @@
 """`daq analyze RUN... | --all`: FRFs, modes and Table 2 of stored runs, kept beside each
-run (daq/analysis_store.py), in parallel over the cores, or on a Dask cluster with
---scheduler (daq/dask_batch.py), with a progress bar.
+run (daq/workflows/analysis.py), in parallel over the cores, or on a Dask cluster with
+--scheduler (daq/batch/dask_backend.py), with a progress bar.
 
 Without --json it prints each run's modes; with --json a list with one object per
 run (``run_id``, ``modes`` sorted by frequency, ``table2``, ...). A run that cannot
@@ -19,10 +19,10 @@ from typing import Annotated, Any
 
 import typer
 
-from daq.dask_batch import failure_reason, run_on_cluster, scheduler_address
+from daq.batch.dask_backend import failure_reason, run_on_cluster, scheduler_address
+from daq.batch.memory_tuning import worker_setup
+from daq.cli.commands.runs import JsonOption, StoreOption
 from daq.errors import UserError
-from daq.memory_tuning import worker_setup
-from daq.runs_command import JsonOption, StoreOption
 
 #: --scheduler of `daq analyze` and `daq fit`.
 SchedulerOption = Annotated[
@@ -207,7 +207,7 @@ def run_all(
 
     skip_empty: a run with nothing to analyse (analysis_store.nothing_to_identify) is
     reported as skipped, even when ``quiet``, and is not among the failures."""
-    from daq.analysis_store import nothing_to_identify
+    from daq.workflows.analysis import nothing_to_identify
 
     worker = worker or analyze_one
     command = "fit" if worker is not analyze_one else "analyze"
@@ -250,7 +250,7 @@ def run_all(
 
 def analyze_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:
     """The summary of one run's analysis, or a one-line reason it failed (picklable)."""
-    from daq.analysis_store import analyze_stored
+    from daq.workflows.analysis import analyze_stored
 
     try:
         return analyze_stored(store_dir, run_id, options, force)

@@ -9,8 +9,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.commands.runs import StoreOption
 from daq.errors import UserError
-from daq.runs_command import StoreOption
 
 
 def register(app: typer.Typer) -> None:
@@ -89,7 +89,7 @@ def _options(band: str | None, frequencies: str | None, max_order: int | None, e
     if band is None and frequencies is None and max_order is None and estimator is None:
         return None
     from analysis.run_analysis import AnalysisOptions
-    from daq.analyze_command import parse_band, parse_frequencies
+    from daq.cli.commands.analyze import parse_band, parse_frequencies
 
     try:
         return AnalysisOptions(

@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 
 from daq.errors import UserError
-from daq.inputs import MAX_FUNCTIONS
+from daq.workflows.model_inputs import MAX_FUNCTIONS
 
 
 class Section(StrEnum):
@@ -71,8 +71,8 @@ def model(
 
     from analysis.beam import TABLE_1
     from analysis.seed import eq18_damping_matrix
-    from daq.inputs import read_beam, read_damping_matrix
-    from daq.model_report import build_report, render
+    from daq.workflows.model_inputs import read_beam, read_damping_matrix
+    from daq.workflows.model_report import build_report, render
 
     beam = TABLE_1 if beam_file is None else read_beam(beam_file)
     if damping is None:

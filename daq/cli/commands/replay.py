@@ -20,8 +20,8 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
+from daq.cli.commands.runs import StoreOption
 from daq.errors import UserError
-from daq.runs_command import StoreOption
 from drivers.dialects import HP3562A, HP35660A, SAMPLE_RATE_PER_SPAN, SCPI, Dialect
 
 #: The simulated models a replay may use, the first whose records fit the run's: a run
@@ -102,10 +102,10 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
     """Replay the run file at ``path`` into ``the_store``; the new Run."""
     from rich.console import Console
 
-    from daq.capture import Capture, settings_from_dict
-    from daq.capture_session import drive, open_analyzer, serve_simulator
-    from daq.recorded_hits import recorded_hits
     from daq.store import StoreError, open_run
+    from daq.workflows.capture import Capture, settings_from_dict
+    from daq.workflows.capture_session import drive, open_analyzer, serve_simulator
+    from daq.workflows.recorded_hits import recorded_hits
     from sims.sources import ReplaySource
 
     try:

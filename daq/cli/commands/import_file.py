@@ -17,8 +17,8 @@ from typing import Annotated, Any
 
 import typer
 
+from daq.cli.commands.runs import StoreOption
 from daq.errors import UserError
-from daq.runs_command import StoreOption
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 SDF_SUFFIXES = (".sdf",)
@@ -103,10 +103,10 @@ def import_file(
     linear, cross, coherence alone), kept as the run's spectra, not FRFs. Nothing is
     written unless the whole file reads cleanly.
     """
-    from daq.capture import utc_now
-    from daq.capture_command import check_operator_and_note
+    from daq.cli.commands.capture import check_operator_and_note
     from daq.formats.imported import show_path
     from daq.store import Run, Store, StoreError, new_run_id, resolve_store_dir
+    from daq.workflows.capture import utc_now
 
     check_operator_and_note(operator, note)  # before the file is even read
     if format is ImportFormat.auto:

@@ -146,7 +146,7 @@ def serve(
 
     console = Console(stderr=True)
     if replay is not None:
-        from daq.recorded_hits import load_recorded_hits
+        from daq.workflows.recorded_hits import load_recorded_hits
 
         hits = load_recorded_hits(replay)
         try:

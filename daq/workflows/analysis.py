@@ -234,7 +234,7 @@ def payload(result: RunAnalysis, info: dict[str, Any], key: str) -> dict[str, An
 
 
 # The analysis in two steps, so that the computing can happen where the store is not
-# (a Dask worker, daq/dask_batch.py) and the storing where it is: compute_analysis
+# (a Dask worker, daq/batch/dask_backend.py) and the storing where it is: compute_analysis
 # takes a run in memory and touches no file; cached_analysis and store_analysis are
 # the store's side, with the cache key computed beside the run file.
 

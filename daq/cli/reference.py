@@ -1,6 +1,6 @@
 """Write docs/cli.md, the `daq` command reference, from the typer application.
 
-    .venv/bin/python -m daq.cli_reference > docs/cli.md
+    .venv/bin/python -m daq.cli.reference > docs/cli.md
 
 Each command's section is its `--help` exactly as a terminal 80 columns wide or
 wider shows it, so that the page and the program cannot tell different stories;
@@ -17,9 +17,9 @@ from typing import Any
 
 import typer
 
-from daq.cli import app
+from daq.cli.app import app
 
-REGENERATE = ".venv/bin/python -m daq.cli_reference > docs/cli.md"
+REGENERATE = ".venv/bin/python -m daq.cli.reference > docs/cli.md"
 
 #: Click's help formatter uses the terminal width less 2, at most 80 - 2.
 HELP_WIDTH = 78
