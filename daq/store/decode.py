@@ -8,7 +8,7 @@ import h5py
 import numpy as np
 
 from daq.store import layout
-from daq.store.errors import StoreError
+from daq.store.errors import NotARunError, StoreError
 from daq.store.h5io import (
     MAX_HITS,
     dataset,
@@ -27,7 +27,7 @@ from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample, Spectra
 def check_schema(f: h5py.File) -> int:
     """The file's schema version; StoreError unless it is a run this code can read."""
     if layout.ATTR_SCHEMA not in f.attrs:
-        raise StoreError("not a run file (no schema attribute on the root)")
+        raise NotARunError("not a run file (no schema attribute on the root)")
     schema = get_text(f, layout.ATTR_SCHEMA)
     if schema != layout.SCHEMA_NAME:
         raise StoreError(f"not a run file (schema {schema!r}, expected {layout.SCHEMA_NAME!r})")

@@ -20,3 +20,9 @@ class StoreError(UserError):
 
 class ConfigError(StoreError):
     """The configuration file exists but cannot be used (bad TOML, wrong type)."""
+
+
+class NotARunError(StoreError):
+    """An HDF5 file that is not a run of the store at all (no ``schema`` attribute on
+    its root), as opposed to a run that is damaged: a caller that also reads other
+    HDF5 layouts (replay's minimal files) tells the two apart by this class."""

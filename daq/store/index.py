@@ -12,7 +12,7 @@ from __future__ import annotations
 import contextlib
 import sqlite3
 from collections.abc import Callable
-from dataclasses import astuple, fields
+from dataclasses import fields
 from pathlib import Path
 
 from daq.store import layout
@@ -61,7 +61,7 @@ def _with_index(path: Path, store_dir: Path, files: list[FileKey], read: Callabl
                 continue
             summary = read(store_dir / name)
             out.append(summary)
-            fresh.append((size, mtime_ns, *astuple(summary)))
+            fresh.append((size, mtime_ns, *(getattr(summary, c) for c in _COLUMNS)))
         vanished = set(keyed) - {name for name, _, _ in files}
         if fresh or vanished:
             db.execute("BEGIN IMMEDIATE")

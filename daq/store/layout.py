@@ -46,6 +46,10 @@ ATTR_SCHEMA = "schema"
 ATTR_SCHEMA_VERSION = "schema_version"
 ATTR_CREATOR = "creator"
 ATTR_DEFAULT = "default"
+# The listing line of the run as one JSON object (daq/store/summary.py), written at
+# seal so that a listing reads one attribute instead of the tree; absent from runs
+# sealed before it existed, which are listed from their data as before.
+ATTR_SUMMARY = "summary_json"
 ATTR_NX_CLASS = "NX_class"
 ATTR_SIGNAL = "signal"
 ATTR_AXES = "axes"

@@ -3,7 +3,9 @@
 verify() reads every dataset completely, which makes HDF5 check each chunk's
 fletcher32 sum, and every attribute, whose object headers carry their own HDF5
 metadata checksums; then it decodes the run, which checks the schema, the required
-groups and attributes, dtypes and the shapes against each other.
+groups and attributes, dtypes and the shapes against each other; last, that the
+summary attribute listings read (daq/store/summary.py), if the run has one, agrees
+with the data and with the file's size.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from daq.store.decode import check_schema, decode_run, nonfinite_problems
 from daq.store.errors import StoreError
 from daq.store.h5io import refuse_outside_references
 from daq.store.reader import misnamed
+from daq.store.summary import summary_problems
 
 _EXPECTED_FILTERS = "gzip + shuffle + fletcher32"
 
@@ -72,6 +75,10 @@ def _check(f: h5py.File, problems: list[str], path: Path) -> None:
     wrong = misnamed(path, run.run_id)
     if wrong is not None:
         problems.append(wrong)
+    try:
+        problems.extend(summary_problems(f, run, path.stat().st_size))
+    except Exception as exc:
+        problems.append(f"attribute /@{layout.ATTR_SUMMARY} unreadable: {_short(exc)}")
 
 
 def _read_everything(f: h5py.File, problems: list[str]) -> None:

@@ -34,6 +34,7 @@ from daq.store.encode import encode_run
 from daq.store.errors import StoreError
 from daq.store.ids import validate_run_id
 from daq.store.model import Run
+from daq.store.summary import write_summary
 
 READ_ONLY_MODE = 0o444
 # Filesystems without hard links (FAT, some network shares) answer link() with these.
@@ -56,7 +57,11 @@ def seal(run: Run, store_dir: Path | str) -> Path:
     store_dir = Path(store_dir)
     final = run_path(store_dir, run.run_id)
 
-    image = build_image(lambda f: encode_run(f, run), what=f"run {run.run_id}")
+    def fill(f: h5py.File) -> None:
+        encode_run(f, run)
+        write_summary(f, run)  # last: it records the size of the finished file
+
+    image = build_image(fill, what=f"run {run.run_id}")
     return write_atomically(store_dir, final, image, what=f"run {run.run_id}")
 
 
