@@ -1,8 +1,9 @@
 """The `daq` command line.
 
 Every failure ends as one line on stderr and a non-zero exit status: 2 for bad
-usage, 1 for everything else the user can fix, 70 for a bug (with the traceback
-only when DAQ_DEBUG=1), 130 for Ctrl-C.
+usage, 1 for everything else the user can fix (each layer's error and its status:
+daq/cli/errors.py), 70 for a bug (with the traceback only when DAQ_DEBUG=1), 130
+for Ctrl-C.
 
 Only typer's public API is used (typer.TyperException, Exit, Abort, Context):
 typer vendors click as the private typer._click, whose names may move in any
@@ -63,8 +64,7 @@ from daq.cli.commands import talk
 from daq.cli.commands.demo import demo
 from daq.cli.commands.model import model
 from daq.cli.commands.sim import sim_app
-from daq.errors import UserError
-from drivers.errors import DriverError
+from daq.cli.errors import exit_code_and_message
 
 app = typer.Typer(
     name="daq",
@@ -179,10 +179,6 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(exc.format_message() + (help_hint(exc) if code == 2 else ""), code)
     except typer.Abort:
         return _fail("aborted", 130)
-    except UserError as exc:
-        return _fail(str(exc), exc.exit_code)
-    except DriverError as exc:
-        return _fail(str(exc), 1)
     except KeyboardInterrupt:
         return _fail("interrupted", 130)
     except BrokenPipeError:
@@ -190,6 +186,12 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
     except Exception as exc:
+        # The layers' own errors (formats, store, workflows, drivers) and UserError:
+        # one line and their exit status (daq/cli/errors.py). Anything else is a bug.
+        known = exit_code_and_message(exc)
+        if known is not None:
+            code, message = known
+            return _fail(message, code)
         if os.environ.get("DAQ_DEBUG"):
             raise
         return _fail(f"internal error: {type(exc).__name__}: {exc} (set DAQ_DEBUG=1 for a traceback)", 70)
