@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from daq.errors import UserError
 from daq.formats.axis import fit_regular, printed_half_units
+from daq.formats.errors import FormatError
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
     MAX_IMPORT_HITS,
@@ -74,7 +74,7 @@ def read_csv(
     force_unit, response_unit: units of those columns (see :mod:`daq.formats.units`); None
         takes the header's unit (``Force [N]``), else N and m/s^2. Given, they win over
         the header. details["units_from"] says which was used.
-    Returns ImportedData with hits of shape (n_hits, n_samples). Any problem: UserError.
+    Returns ImportedData with hits of shape (n_hits, n_samples). Any problem: FormatError.
     """
     path = Path(path)
     name = show_path(path)
@@ -82,8 +82,8 @@ def read_csv(
         for unit, quantity in ((force_unit, "force"), (response_unit, "response")):
             if unit is not None:
                 parse_unit(unit, quantity)
-    except UserError as exc:
-        raise UserError(f"{name}: {exc}") from None
+    except FormatError as exc:
+        raise FormatError(f"{name}: {exc}") from None
     with open_checked(path, max_bytes) as (handle, info):
         table = Table(name, columns=columns, keep_time_text=True)
         table.read(handle, max_bytes)
@@ -135,11 +135,11 @@ class Table:
         for number, raw in enumerate(handle, start=1):
             total += len(raw)
             if total > max_bytes:  # the file grew after it was checked
-                raise UserError(f"{self.name} is more than the import limit of {max_bytes} bytes")
+                raise FormatError(f"{self.name} is more than the import limit of {max_bytes} bytes")
             try:
                 line = raw.decode("utf-8-sig" if number == 1 else "utf-8")
             except UnicodeDecodeError:
-                raise UserError(f"{self.name} line {number}: not UTF-8 text") from None
+                raise FormatError(f"{self.name} line {number}: not UTF-8 text") from None
             line = line.rstrip("\r\n")
             stripped = line.strip()
             if not stripped:
@@ -150,7 +150,7 @@ class Table:
                 continue
             self._row(line, number)
         if not self.lines:
-            raise UserError(f"{self.name} holds no data rows")
+            raise FormatError(f"{self.name} holds no data rows")
 
     def _comment(self, text: str) -> None:
         # "# rejected hit <k>: <reason>" (write_csv), "# key = value" or "# key: value";
@@ -203,7 +203,7 @@ class Table:
                 return
         cells = self._split(line)
         if len(cells) != self.n_cols:
-            raise UserError(f"{self.name} line {number}: {len(cells)} columns, expected {self.n_cols}")
+            raise FormatError(f"{self.name} line {number}: {len(cells)} columns, expected {self.n_cols}")
         if self.keep_time_text and self.picked is None:
             self.complex_mode = self.columns is None and all(
                 self.find(n) is not None for n in COMPLEX_COLUMNS
@@ -213,11 +213,11 @@ class Table:
             try:
                 value = self._number(cell)
             except ValueError:
-                raise UserError(
+                raise FormatError(
                     f"{self.name} line {number} column {col + 1}: {_show(cell)} is not a number"
                 ) from None
             if not math.isfinite(value):
-                raise UserError(f"{self.name} line {number} column {col + 1}: {_show(cell)} is not finite")
+                raise FormatError(f"{self.name} line {number} column {col + 1}: {_show(cell)} is not finite")
             self.values.append(value)
         if self.picked is not None:
             self.time_texts.append(cells[self.picked[0]])
@@ -253,7 +253,7 @@ class Table:
         hit = self.find("hit")
         picked, hit = self._pick_columns(columns, complex_mode, hit)
         if self.header is not None and is_frequency_name(self.names[picked[0]], self.units[picked[0]]):
-            raise UserError(
+            raise FormatError(
                 f"{self.name}: column {_show(header[picked[0]])} holds frequencies: this is a table of "
                 "FRFs, not time records; import it with --format frf-text"
             )
@@ -267,16 +267,18 @@ class Table:
                 rest = [i for i in range(self.n_cols) if i not in wanted and i != hit]
                 time = self.find("time")
                 if time is None and not rest:
-                    raise UserError(f"{self.name} has complex columns but no time column")
+                    raise FormatError(f"{self.name} has complex columns but no time column")
                 return [time if time is not None else rest[0], *wanted], hit  # type: ignore[list-item]
             rest = [i for i in range(self.n_cols) if i != hit]
             if len(rest) < 3:
-                raise UserError(f"{self.name} has {len(rest)} data column(s); need time, force and response")
+                raise FormatError(
+                    f"{self.name} has {len(rest)} data column(s); need time, force and response"
+                )
             named = [self.find(n) for n in ("time", "force", "response")]
             return (named if None not in named else rest[:3]), hit  # type: ignore[return-value]
         items = [item.strip() for item in columns.split(",")]
         if len(items) != 3 or not all(items):
-            raise UserError(
+            raise FormatError(
                 f"{self.name}: columns {_show(columns)} must name three columns "
                 "(time, force, response), e.g. t,F,a or 0,2,1"
             )
@@ -287,22 +289,24 @@ class Table:
                 # string raises, and no file has a million columns).
                 index = int(item) if item.isascii() and len(item) <= 6 else 10**6
                 if index >= self.n_cols:
-                    raise UserError(
+                    raise FormatError(
                         f"{self.name}: column index {index if index < 10**6 else _show(item)} "
                         f"is out of range (the file has "
                         f"{self.n_cols} columns, 0..{self.n_cols - 1})"
                     )
             else:
                 if self.header is None:
-                    raise UserError(f"{self.name} has no header row, so column {_show(item)} cannot be found")
+                    raise FormatError(
+                        f"{self.name} has no header row, so column {_show(item)} cannot be found"
+                    )
                 index = self.find(item)
                 if index is None:
-                    raise UserError(
+                    raise FormatError(
                         f"{self.name}: no column {_show(item)} in the header ({', '.join(header)})"
                     )
             picked.append(index)
         if len(set(picked)) != 3:
-            raise UserError(f"{self.name}: columns {_show(columns)} must be three different columns")
+            raise FormatError(f"{self.name}: columns {_show(columns)} must be three different columns")
         if hit in picked:
             hit = None  # the user chose to read it as data
         return picked, hit
@@ -318,14 +322,14 @@ class Table:
         flag = "--force-unit" if quantity == "force" else "--response-unit"
         if header_unit in ("V", "mV"):
             example = "mV@2.25mV/N" if quantity == "force" else "mV@10.2mV/g"
-            raise UserError(
+            raise FormatError(
                 f"{self.name}: column {_show(self.header[col])} is in {header_unit}: give the sensor's "  # type: ignore[index]
                 f"sensitivity, e.g. {flag} {header_unit}{example[example.index('@') :]}"
             )
         try:
             return header_unit, parse_unit(header_unit, quantity), "header"
-        except UserError:
-            raise UserError(
+        except FormatError:
+            raise FormatError(
                 f"{self.name}: column {_show(self.header[col])}: unknown {quantity} unit "  # type: ignore[index]
                 f"{_show(header_unit)} in the header; use {accepted_forms(quantity)}, or give {flag}"
             ) from None
@@ -335,7 +339,7 @@ class Table:
         if unit is None:
             return "s", 1.0
         if unit not in TIME_UNITS:
-            raise UserError(
+            raise FormatError(
                 f"{self.name}: column {_show(self.header[col])}: unknown time unit {_show(unit)}; "  # type: ignore[index]
                 f"use {', '.join(TIME_UNITS)}"
             )
@@ -370,17 +374,19 @@ class Table:
             notes["ignored_start_s"] = self.comments["start_s"]
         center = _comment_float(self.comments, "center_hz")
         if "center_hz" in self.comments and center is None:
-            raise UserError(f"{self.name}: center_hz {_show(self.comments['center_hz'])} is not a number")
+            raise FormatError(f"{self.name}: center_hz {_show(self.comments['center_hz'])} is not a number")
         order = np.concatenate(groups)
         if complex_mode:
             if center is None:
-                raise UserError(f"{self.name} has complex (zoom) columns but no '# center_hz = ...' comment")
+                raise FormatError(
+                    f"{self.name} has complex (zoom) columns but no '# center_hz = ...' comment"
+                )
             cols = data[order][:, picked[1:]].reshape(len(groups), n, 4)
             force_n = _complex(cols[..., 0], cols[..., 1], factors[0])
             response_m_s2 = _complex(cols[..., 2], cols[..., 3], factors[1])
         else:
             if center not in (None, 0.0):
-                raise UserError(
+                raise FormatError(
                     f"{self.name}: center_hz = {center} but the records are real; zoom records "
                     f"need columns {', '.join(COMPLEX_COLUMNS)}"
                 )
@@ -415,7 +421,7 @@ class Table:
             ids = data[:, hit_col]
             bad = np.flatnonzero(ids != np.round(ids))
             if bad.size:
-                raise UserError(
+                raise FormatError(
                     f"{self.name} line {lines[bad[0]]}: hit {float(ids[bad[0]])!r} is not a whole number"
                 )
             _, first, inverse = np.unique(ids, return_index=True, return_inverse=True)
@@ -431,7 +437,7 @@ class Table:
 
     def _check_hit_count(self, n_hits: int) -> None:
         if n_hits > MAX_IMPORT_HITS:
-            raise UserError(
+            raise FormatError(
                 f"{self.name} holds {n_hits} hits, more than the {MAX_IMPORT_HITS} one import may hold; "
                 "split the file"
             )
@@ -444,20 +450,20 @@ class Table:
         for k, rows in enumerate(groups):
             t = time[rows]
             if t.size < 2:
-                raise UserError(f"{self.name}: hit {k} (line {lines[rows[0]]}) has fewer than 2 samples")
+                raise FormatError(f"{self.name}: hit {k} (line {lines[rows[0]]}) has fewer than 2 samples")
             d = np.diff(t)
             bad = np.flatnonzero(d <= 0)
             if bad.size:
-                raise UserError(f"{self.name} line {lines[rows[bad[0] + 1]]}: time does not increase")
+                raise FormatError(f"{self.name} line {lines[rows[bad[0] + 1]]}: time does not increase")
             if k and t.size != groups[0].size:
-                raise UserError(f"{self.name}: hit {k} has {t.size} samples, hit 0 has {groups[0].size}")
+                raise FormatError(f"{self.name}: hit {k} has {t.size} samples, hit 0 has {groups[0].size}")
             if k and np.array_equal(t, first_t):  # the same printed axis again (our exports)
                 starts.append(starts[0])
                 steps.append(steps[0])
                 continue
             fit = fit_regular(t, half[rows])
             if fit.bad is not None:
-                raise UserError(
+                raise FormatError(
                     f"{self.name} line {lines[rows[fit.bad]]}: uneven time step (the time column is "
                     f"not a straight line within its printed precision or 1 % of the step "
                     f"{float(np.median(d)):g} s, whichever is larger)"
@@ -466,7 +472,7 @@ class Table:
             if k:
                 drift = abs(fit.step - steps[0]) * (t.size - 1)
                 if abs(fit.start - starts[0]) > tolerance or drift > tolerance:
-                    raise UserError(
+                    raise FormatError(
                         f"{self.name}: hit {k} (line {lines[rows[0]]}) has a different time axis from hit 0"
                     )
             else:
@@ -480,14 +486,14 @@ def write_csv(run: Run, path: Path) -> None:
     """Write every hit (accepted and rejected) of ``run`` as text, atomically.
 
     Columns: hit (0-based), time (s), force (N), response (m/s^2); zoom runs have
-    force_re, force_im, response_re, response_im instead. UserError if the run has no hits.
+    force_re, force_im, response_re, response_im instead. FormatError if the run has no hits.
     """
     path = Path(path)
     hits = run.hits
     if hits is None:
-        raise UserError(f"run {run.run_id} has no time records; export FRFs as UFF")
+        raise FormatError(f"run {run.run_id} has no time records; export FRFs as UFF")
     if not (np.all(np.isfinite(hits.force_n)) and np.all(np.isfinite(hits.response_m_s2))):
-        raise UserError(f"run {run.run_id} has non-finite samples; they cannot be exported as CSV")
+        raise FormatError(f"run {run.run_id} has non-finite samples; they cannot be exported as CSV")
     rejected = [i for i in range(hits.n_hits) if not hits.accepted[i]]
     head = [
         "# cantilever-daq time records",
@@ -523,7 +529,7 @@ def write_csv(run: Run, path: Path) -> None:
         commit_temp(temp, path)
     except OSError as exc:
         discard_temp(temp)
-        raise UserError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
+        raise FormatError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
     except BaseException:
         discard_temp(temp)
         raise

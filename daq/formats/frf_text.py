@@ -44,8 +44,8 @@ from typing import IO, Any
 
 import numpy as np
 
-from daq.errors import UserError
 from daq.formats.csv_text import COMMENT_MARKS, Table, header_name_unit, is_frequency_name
+from daq.formats.errors import FormatError
 from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
 from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
 from daq.store.model import FRF_FORMS
@@ -262,12 +262,12 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
 
     frf_form: "receptance", "mobility" or "accelerance" to say what the values are (wins
         over the header's units); None: the header's unit decides, else accelerance.
-    Returns ImportedData with measured_frfs in SI units of their form. Any problem: UserError.
+    Returns ImportedData with measured_frfs in SI units of their form. Any problem: FormatError.
     """
     path = Path(path)
     name = show_path(path)
     if frf_form is not None and frf_form not in FRF_FORMS:
-        raise UserError(f"FRF form {frf_form!r} is not one of {', '.join(FRF_FORMS)}")
+        raise FormatError(f"FRF form {frf_form!r} is not one of {', '.join(FRF_FORMS)}")
     with open_checked(path, max_bytes) as (handle, _):
         head, _ = _head_lines(handle)
         texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
@@ -280,7 +280,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     if table.header is None:
         kinds = ["freq"] + ["re", "im"] * ((table.n_cols - 1) // 2)
         if table.n_cols < 3 or (table.n_cols - 1) % 2:
-            raise UserError(
+            raise FormatError(
                 f"{name}: {table.n_cols} columns without a header; an FRF table needs frequency, "
                 "then Re, Im for each FRF (or a header naming the columns)"
             )
@@ -291,7 +291,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         for i, (cell_name, unit) in enumerate(zip(table.names, table.units, strict=True)):
             kind, label = _kind(cell_name, unit, i == 0)
             if kind is None:
-                raise UserError(
+                raise FormatError(
                     f"{name}: column {table.header[i]!r} is not frequency, re, im, mag, phase or coherence"
                 )
             kinds.append(kind)
@@ -300,7 +300,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     from_row: set[int] = set()
     if layout.units is not None:
         if len(layout.unit_cells) > table.n_cols and any(layout.unit_cells[table.n_cols :]):
-            raise UserError(
+            raise FormatError(
                 f"{name} line {layout.units + 1}: {len(layout.unit_cells)} units for {table.n_cols} columns"
             )
         for col, cell in enumerate(layout.unit_cells[: table.n_cols]):
@@ -308,20 +308,20 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
                 units[col] = cell if "/" in cell or ")(" in cell else clean_label(cell)
                 from_row.add(col)
     if kinds.count("freq") != 1 or kinds[0] != "freq":
-        raise UserError(f"{name}: an FRF table needs exactly one frequency column, the first")
+        raise FormatError(f"{name}: an FRF table needs exactly one frequency column, the first")
     freq_unit = units[0] or "Hz"
     if freq_unit not in FREQUENCY_UNITS:
-        raise UserError(f"{name}: unknown frequency unit {freq_unit!r}; use Hz or kHz")
+        raise FormatError(f"{name}: unknown frequency unit {freq_unit!r}; use Hz or kHz")
     freq = data[:, 0] * FREQUENCY_UNITS[freq_unit]
     bad = np.flatnonzero(np.diff(freq) <= 0)
     if bad.size:
-        raise UserError(f"{name} line {lines[bad[0] + 1]}: frequency does not increase")
+        raise FormatError(f"{name} line {lines[bad[0] + 1]}: frequency does not increase")
     frfs, labels, coherence, frf_units, layouts = [], [], [], [], set()
     col = 1
     while col < table.n_cols:
         pair = tuple(kinds[col : col + 2])
         if pair not in (("re", "im"), ("mag", "phase")):
-            raise UserError(
+            raise FormatError(
                 f"{name}: column {col + 1} ({_label(table, col)}) starts no FRF: each FRF is a "
                 "re, im or a mag, phase pair (optionally followed by its coherence)"
             )
@@ -336,10 +336,12 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
             magnitude = 10.0 ** (first / 20.0) if db else first
             if not db and np.any(first < 0):
                 row = int(np.flatnonzero(first < 0)[0])
-                raise UserError(f"{name} line {lines[row]}: negative magnitude {first[row]!r} (dB? say [dB])")
+                raise FormatError(
+                    f"{name} line {lines[row]}: negative magnitude {first[row]!r} (dB? say [dB])"
+                )
             phase_unit = (units[col + 1] or "deg").lower()
             if phase_unit not in _PHASE_UNITS:
-                raise UserError(f"{name}: unknown phase unit {phase_unit!r}; use deg or rad")
+                raise FormatError(f"{name}: unknown phase unit {phase_unit!r}; use deg or rad")
             values = magnitude * np.exp(1j * np.deg2rad(second * _PHASE_UNITS[phase_unit]))
             unit_text = re.sub(r"(?i)db|re\s*1", "", mag_unit).strip() or None
             frf_units.append(f"phase {'deg' if _PHASE_UNITS[phase_unit] == 1.0 else 'rad'}")
@@ -353,7 +355,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
             coherence.append(data[:, col])
             col += 1
         elif col < table.n_cols and kinds[col] not in ("re", "mag"):
-            raise UserError(f"{name}: column {col + 1} ({_label(table, col)}) follows no FRF")
+            raise FormatError(f"{name}: column {col + 1} ({_label(table, col)}) follows no FRF")
     row_units = {units[c] for c in from_row}
     form, factor, said = _form(
         name, [u for u in frf_units if u and ("/" in u or ")(" in u or u in row_units)], frf_form, row_units
@@ -410,14 +412,14 @@ def _form(
     for unit in dict.fromkeys(units):
         try:
             parsed.append((unit, *frf_unit(unit)))
-        except UserError:
+        except FormatError:
             if unit in row_units:
                 unknown.append(unit)
             elif option is None:
-                raise UserError(f"{name}: {frf_unit_error(unit)}; or give --frf-form") from None
+                raise FormatError(f"{name}: {frf_unit_error(unit)}; or give --frf-form") from None
     if len({(form, factor) for _, form, factor in parsed}) > 1:
         shown = ", ".join(frf_unit_text(u) for u, *_ in parsed)
-        raise UserError(f"{name}: the FRF columns have different units ({shown})")
+        raise FormatError(f"{name}: the FRF columns have different units ({shown})")
     where = "units row" if parsed and parsed[0][0] in row_units else "header"
     if option is not None:
         said = f"option (the {where} says {frf_unit_text(parsed[0][0])})" if parsed else "option"
@@ -442,11 +444,11 @@ def _check_first_data(name: str, layout: Layout) -> None:
     where = f"{name} line {layout.first_data + 1}: a row of numbers, so data, not a header"
     for cell in layout.data_cells:
         if not cell:
-            raise UserError(f"{where}, but it has an empty cell (a delimiter too many at its end?)")
+            raise FormatError(f"{where}, but it has an empty cell (a delimiter too many at its end?)")
         try:
             float(cell.replace(",", ".", 1) if cell.count(",") == 1 else cell)
         except ValueError:
-            raise UserError(
+            raise FormatError(
                 f"{where}, but {one_line(cell)[:40]!r} is not a number as written "
                 "(write plain numbers, e.g. 1.5 or -0.25)"
             ) from None
@@ -468,6 +470,6 @@ def _kept_preamble(metadata: list[tuple[str, str]]) -> dict[str, str]:
 def frf_unit_error(unit: str) -> str:
     try:
         frf_unit(unit)
-    except UserError as exc:
+    except FormatError as exc:
         return str(exc)
     return ""

@@ -2,7 +2,7 @@
 
 Readers refuse anything that is not a plain, non-empty file of bounded size BEFORE
 opening it (a FIFO or a device would block or never end), and every error they raise
-is a one-line :class:`~daq.errors.UserError` naming the file.
+is a one-line :class:`~daq.formats.errors.FormatError` naming the file.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.store.model import Hits, MeasuredFrf, Spectra
 
 # 512 MiB: far above any real impact test (100 hits x 65536 samples as text is ~20 MiB),
@@ -62,7 +62,7 @@ def show_path(path: Path | str) -> str:
 
 
 def check_regular_file(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> os.stat_result:
-    """stat() ``path`` and refuse a non-regular, empty or too large file (UserError).
+    """stat() ``path`` and refuse a non-regular, empty or too large file (FormatError).
 
     Uses only os.stat, never open(), so a FIFO or a tape device is refused without blocking.
     """
@@ -70,9 +70,9 @@ def check_regular_file(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> os.stat
     try:
         info = os.stat(path)
     except FileNotFoundError:
-        raise UserError(f"{name}: no such file") from None
+        raise FormatError(f"{name}: no such file") from None
     except OSError as exc:
-        raise UserError(f"{name}: cannot read: {exc.strerror or exc}") from None
+        raise FormatError(f"{name}: cannot read: {exc.strerror or exc}") from None
     if not stat.S_ISREG(info.st_mode):
         kind = (
             "a directory"
@@ -81,11 +81,11 @@ def check_regular_file(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> os.stat
             if stat.S_ISFIFO(info.st_mode)
             else "a device or socket"
         )
-        raise UserError(f"{name} is {kind}, not a regular file")
+        raise FormatError(f"{name} is {kind}, not a regular file")
     if info.st_size == 0:
-        raise UserError(f"{name} is empty")
+        raise FormatError(f"{name} is empty")
     if info.st_size > max_bytes:
-        raise UserError(f"{name} is {info.st_size} bytes, more than the import limit of {max_bytes} bytes")
+        raise FormatError(f"{name} is {info.st_size} bytes, more than the import limit of {max_bytes} bytes")
     return info
 
 
@@ -101,11 +101,11 @@ def open_checked(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> Iterator[tupl
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as exc:
-        raise UserError(f"{name}: cannot open: {exc.strerror or exc}") from None
+        raise FormatError(f"{name}: cannot open: {exc.strerror or exc}") from None
     try:
         now = os.fstat(fd)
         if not stat.S_ISREG(now.st_mode):
-            raise UserError(f"{name} is not a regular file")
+            raise FormatError(f"{name} is not a regular file")
         handle = os.fdopen(fd, "rb")
     except BaseException:
         os.close(fd)
@@ -130,7 +130,7 @@ def make_hits(
     timestamp_utc: str,
     rejected: dict[int, str] | None = None,
 ) -> Hits:
-    """Hits for imported records (n_hits, n_samples), model errors -> UserError.
+    """Hits for imported records (n_hits, n_samples), model errors -> FormatError.
 
     rejected : {hit index: reason} for hits the source file marks as rejected (our own
         exports do, so that export then import keeps every verdict); the others are accepted.
@@ -154,7 +154,7 @@ def make_hits(
             checks=[{} for _ in range(n_hits)],
         )
     except ValueError as exc:
-        raise UserError(f"{show_path(path)}: {one_line(str(exc))}") from None
+        raise FormatError(f"{show_path(path)}: {one_line(str(exc))}") from None
 
 
 def make_frfs(
@@ -165,11 +165,11 @@ def make_frfs(
     labels: list[str],
     form: str = "accelerance",
 ) -> MeasuredFrf:
-    """MeasuredFrf from imported arrays; the model's ValueError becomes a UserError naming the file."""
+    """MeasuredFrf from imported arrays; the model's ValueError becomes a FormatError naming the file."""
     try:
         return MeasuredFrf(frequency_hz=frequency_hz, frf=frf, coherence=coherence, labels=labels, form=form)
     except ValueError as exc:
-        raise UserError(f"{show_path(path)}: {one_line(str(exc))}") from None
+        raise FormatError(f"{show_path(path)}: {one_line(str(exc))}") from None
 
 
 def one_line(text: str) -> str:
@@ -182,7 +182,7 @@ def atomic_temp(path: Path) -> Path:
     try:
         fd, temp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     except OSError as exc:
-        raise UserError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
+        raise FormatError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
     os.close(fd)
     # mkstemp makes the file 0600; an exported file is for colleagues and other
     # tools, so it gets the mode a plain open() would give it (0666 less the umask).
@@ -207,7 +207,7 @@ def commit_temp(temp: Path, path: Path) -> None:
             finally:
                 os.close(dir_fd)
     except OSError as exc:
-        raise UserError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
+        raise FormatError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
 
 
 def discard_temp(temp: Path) -> None:

@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 import pyuff
 
-from daq.errors import UserError
 from daq.formats.axis import fit_regular
+from daq.formats.errors import FormatError
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
     ImportedData,
@@ -82,7 +82,7 @@ class _Record:
 def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     """Read dataset 58 records: time records as hits (N, m/s^2) and FRFs (SI units of their form).
 
-    Any problem, including whatever pyuff raises on a damaged file: one-line UserError.
+    Any problem, including whatever pyuff raises on a damaged file: one-line FormatError.
     """
     path = Path(path)
     name = show_path(path)
@@ -100,7 +100,7 @@ def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     hits = _hits(path, name, by_func.get(FUNC_TIME, []), mtime_utc(info), details)
     frfs = _frfs(path, name, by_func.get(FUNC_FRF, []), by_func.get(FUNC_COHERENCE, []), details)
     if hits is None and frfs is None:
-        raise UserError(f"{name}: no force/acceleration time records and no FRFs among its datasets 58")
+        raise FormatError(f"{name}: no force/acceleration time records and no FRFs among its datasets 58")
     return ImportedData(hits=hits, measured_frfs=frfs, format="uff", details=details)
 
 
@@ -111,11 +111,11 @@ def _check_starts_as_uff(path: Path, name: str) -> None:
         with open(path, "rb") as handle:
             head = handle.read(512)
     except OSError as exc:
-        raise UserError(f"{name}: cannot read it ({exc.strerror or exc})") from None
+        raise FormatError(f"{name}: cannot read it ({exc.strerror or exc})") from None
     first = next((line for line in head.splitlines() if line.strip()), b"")
     if first.strip() != b"-1":
         shown = first[:30].decode("utf-8", errors="replace").strip()
-        raise UserError(
+        raise FormatError(
             f"{name}: does not look like a UFF file: its first line is not a UFF -1 delimiter line"
             + (f" but {shown!r}" if shown and shown.isprintable() else "")
         )
@@ -129,10 +129,10 @@ def _check_ends_whole(path: Path, name: str) -> None:
             handle.seek(max(0, handle.seek(0, 2) - 256))
             tail = handle.read()
     except OSError as exc:
-        raise UserError(f"{name}: cannot read it ({exc.strerror or exc})") from None
+        raise FormatError(f"{name}: cannot read it ({exc.strerror or exc})") from None
     # "    -1" in columns 1-6; after binary data (58b) it follows the last value directly.
     if not tail.rstrip(b" \t\r\n").endswith(b"    -1"):
-        raise UserError(f"{name}: truncated UFF file (it does not end with a -1 delimiter line)")
+        raise FormatError(f"{name}: truncated UFF file (it does not end with a -1 delimiter line)")
 
 
 def read_uff_sets(path: Path, name: str) -> list[dict]:
@@ -154,31 +154,31 @@ def read_uff_sets(path: Path, name: str) -> list[dict]:
             # here, where its ResourceWarning is silenced, not in some later test or call.
             gc.collect()
     if failure:
-        raise UserError(f"{name}: not a readable UFF file ({failure})")
+        raise FormatError(f"{name}: not a readable UFF file ({failure})")
     if not wanted:
-        raise UserError(f"no dataset 58 in {name}")
+        raise FormatError(f"no dataset 58 in {name}")
     return [sets] if isinstance(sets, dict) else list(sets)
 
 
 def _record(d: Any, k: int, name: str) -> _Record:
     """Check one pyuff dict and keep what the import needs."""
     if not isinstance(d, dict):
-        raise UserError(f"{name}: dataset 58 #{k} could not be read")
+        raise FormatError(f"{name}: dataset 58 #{k} could not be read")
     data = np.asarray(d.get("data"))
     x = np.asarray(d.get("x"))
     if data.ndim != 1 or data.dtype.kind not in "fc" or data.size == 0:
-        raise UserError(f"{name}: dataset 58 #{k} has no data values")
+        raise FormatError(f"{name}: dataset 58 #{k} has no data values")
     if x.shape != data.shape or x.dtype.kind not in "fi":
-        raise UserError(f"{name}: dataset 58 #{k} has {x.size} abscissa values for {data.size} data values")
+        raise FormatError(f"{name}: dataset 58 #{k} has {x.size} abscissa values for {data.size} data values")
     declared = _int(d.get("num_pts"), data.size)
     if declared != data.size:
-        raise UserError(
+        raise FormatError(
             f"{name}: dataset 58 #{k} declares {declared} values but holds {data.size}: truncated or damaged"
         )
     data = data.astype(np.complex128 if data.dtype.kind == "c" else np.float64)
     x = x.astype(np.float64)
     if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
-        raise UserError(f"{name}: dataset 58 #{k} holds NaN or infinite values")
+        raise FormatError(f"{name}: dataset 58 #{k} holds NaN or infinite values")
     ids = [str(d.get(f"id{i}", "")).strip() for i in range(1, 6)]
     keys = dict(match for text in ids for match in _KEY_VALUE.findall(text))
     return _Record(
@@ -208,32 +208,36 @@ def _hits(path: Path, name: str, records: list[_Record], stamp: str, details: di
     if not forces and not responses:
         return None
     if len(forces) != len(responses):
-        raise UserError(
+        raise FormatError(
             f"{name}: {len(forces)} force and {len(responses)} acceleration time records; "
             "they must pair up (k-th force with k-th response)"
         )
     first = forces[0]
     n = first.data.size
     if n < 2:
-        raise UserError(f"{name}: time record #{first.index} has fewer than 2 samples")
+        raise FormatError(f"{name}: time record #{first.index} has fewer than 2 samples")
     start, step = _time_axis(name, first)
     for rec in forces + responses:
         if rec.data.size != n:
-            raise UserError(
+            raise FormatError(
                 f"{name}: time record #{rec.index} has {rec.data.size} samples, #{first.index} has {n}"
             )
         if rec.data.dtype != first.data.dtype:
-            raise UserError(f"{name}: time records #{first.index} and #{rec.index} mix real and complex data")
+            raise FormatError(
+                f"{name}: time records #{first.index} and #{rec.index} mix real and complex data"
+            )
         s0, d0 = _time_axis(name, rec)
         if abs(s0 - start) > AXIS_TOLERANCE * step or abs(d0 - step) > AXIS_TOLERANCE * step:
-            raise UserError(f"{name}: time record #{rec.index} has a different time axis from #{first.index}")
+            raise FormatError(
+                f"{name}: time record #{rec.index} has a different time axis from #{first.index}"
+            )
     rate, start = _exact_axis(first, start, step, details)
     center = 0.0
     if first.data.dtype == np.complex128:
         text = first.keys.get("center_hz")
         center = _float(text)
         if text is None or not math.isfinite(center):
-            raise UserError(f"{name}: complex (zoom) time records need 'center_hz=...' in an ID line")
+            raise FormatError(f"{name}: complex (zoom) time records need 'center_hz=...' in an ID line")
     units = {}
     force = np.stack([_to_si(r, "force", units) for r in forces])
     response = np.stack([_to_si(r, "response", units) for r in responses])
@@ -253,18 +257,18 @@ def _time_axis(name: str, rec: _Record) -> tuple[float, float]:
     else:
         d = np.diff(rec.x)
         if np.any(d <= 0):
-            raise UserError(f"{name}: time record #{rec.index} has non-increasing time steps")
+            raise FormatError(f"{name}: time record #{rec.index} has non-increasing time steps")
         # ASCII 58 prints x with %13.5e (6 significant digits): half a unit of the last is
         # at most 5e-6 of the value; binary 58 holds doubles (1 % of the step then decides).
         fit = fit_regular(rec.x, 5e-6 * np.abs(rec.x))
         if fit.bad is not None:
-            raise UserError(
+            raise FormatError(
                 f"{name}: time record #{rec.index} has uneven time steps (from sample {fit.bad}: "
                 "no straight line within the printed precision or 1 % of the step)"
             )
         start, step = fit.start, fit.step
     if not (math.isfinite(start) and math.isfinite(step) and step > 0):
-        raise UserError(f"{name}: time record #{rec.index} has no usable time axis (step {step!r} s)")
+        raise FormatError(f"{name}: time record #{rec.index} has no usable time axis (step {step!r} s)")
     return start, step
 
 
@@ -289,7 +293,7 @@ def _to_si(rec: _Record, quantity: str, units: dict) -> np.ndarray:
         try:
             factor = parse_unit(rec.unit, quantity)
             units.setdefault(quantity, rec.unit)
-        except UserError:
+        except FormatError:
             units.setdefault(quantity, f"unknown label {rec.unit!r}, values kept")
     return _scaled(rec.data, factor)
 
@@ -312,14 +316,14 @@ def _frfs(path: Path, name: str, frf_recs: list[_Record], coh_recs: list[_Record
     freq = frf_recs[0].x
     for rec in frf_recs:
         if not np.array_equal(rec.x, freq):
-            raise UserError(
+            raise FormatError(
                 f"{name}: FRF record #{rec.index} has a different frequency axis from #{frf_recs[0].index}"
             )
     units: list[str] = []
     forms = [_frf_form(name, rec) for rec in frf_recs]
     other = next((k for k, form in enumerate(forms) if form != forms[0]), None)
     if other is not None:
-        raise UserError(
+        raise FormatError(
             f"{name}: FRF records #{frf_recs[0].index} ({forms[0]}) and #{frf_recs[other].index} "
             f"({forms[other]}) are of different forms; one run holds FRFs of one form"
         )
@@ -352,7 +356,7 @@ def _unit_form(rec: _Record) -> str | None:
     num = rec.unit
     try:
         return frf_unit(num)[0]  # the whole unit in the numerator label, e.g. "m/N"
-    except UserError:
+    except FormatError:
         pass
     found = response_form(num) if num not in _NO_UNIT else None
     return found[0] if found else None
@@ -360,25 +364,25 @@ def _unit_form(rec: _Record) -> str | None:
 
 def _frf_form(name: str, rec: _Record) -> str:
     """receptance, mobility or accelerance: the ordinate's data type (8, 11, 12) and its
-    unit labels decide; an unknown type, a non-force denominator or a disagreement: UserError."""
+    unit labels decide; an unknown type, a non-force denominator or a disagreement: FormatError."""
     by_unit = _unit_form(rec)
     if rec.kind in FRF_FORM_OF_TYPE:
         form = FRF_FORM_OF_TYPE[rec.kind]
         if by_unit is not None and by_unit != form:
-            raise UserError(
+            raise FormatError(
                 f"{name}: FRF record #{rec.index} has ordinate data type {rec.kind} ({form}) but unit "
                 f"{rec.unit!r} ({by_unit}); which is it?"
             )
     elif rec.kind in UNKNOWN_TYPES and by_unit is not None:
         form = by_unit
     else:
-        raise UserError(
+        raise FormatError(
             f"{name}: FRF record #{rec.index} has ordinate data type {rec.kind} and unit "
             f"{rec.unit or 'none'!r}: only displacement (8), velocity (11) or acceleration (12) over "
             "force can be imported"
         )
     if rec.denominator_kind not in FORCE_DENOMINATOR_TYPES:
-        raise UserError(
+        raise FormatError(
             f"{name}: FRF record #{rec.index} has denominator data type {rec.denominator_kind}, "
             "not a force (13 or 9)"
         )
@@ -398,9 +402,9 @@ def _frf_factor(rec: _Record, units: list[str]) -> float:
         try:
             found = response_form(top)
             if found is None:
-                raise UserError(f"unknown unit {top!r}")
+                raise FormatError(f"unknown unit {top!r}")
             factor = found[1] / parse_unit(bottom, "force")
-        except UserError:
+        except FormatError:
             continue
         units.append(f"{top}/{bottom}")
         return factor

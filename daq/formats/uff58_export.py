@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pyuff
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.imported import atomic_temp, commit_temp, discard_temp, one_line, show_path
 from daq.formats.uff58 import FUNC_COHERENCE, FUNC_FRF, FUNC_TIME, read_uff_sets
 from daq.store.model import Run
@@ -26,17 +26,17 @@ def write_uff(run: Run, path: Path) -> None:
     """Write ``run``'s hits, analyzer FRF and measured FRFs as binary UFF 58, atomically.
 
     The written file is read back with pyuff before it replaces ``path``: every value
-    must come back bit for bit, else UserError and ``path`` is left untouched.
+    must come back bit for bit, else FormatError and ``path`` is left untouched.
     """
     path = Path(path)
     name = show_path(path)
     sets = _time_sets(run) + _frf_sets(run)
     for dset in sets:
         if dset["data"].size < 2:
-            raise UserError(f"cannot write {name}: UFF 58 records need at least 2 points")
+            raise FormatError(f"cannot write {name}: UFF 58 records need at least 2 points")
         if not np.all(np.isfinite(dset["data"])):
             # pyuff would silently write NaN and inf as numbers (nan_to_num).
-            raise UserError(f"cannot write {name}: run {run.run_id} holds non-finite values")
+            raise FormatError(f"cannot write {name}: run {run.run_id} holds non-finite values")
     expected = [(d["data"].copy(), d["x"].copy(), d["abscissa_spacing"]) for d in sets]
     temp = atomic_temp(path)
     try:
@@ -51,13 +51,13 @@ def write_uff(run: Run, path: Path) -> None:
                 del exc
             gc.collect()  # close what pyuff left open while its warning is silenced
         if failure:
-            raise UserError(f"cannot write {name}: {failure}")
+            raise FormatError(f"cannot write {name}: {failure}")
         back = read_uff_sets(temp, name)
         if len(back) != len(expected) or not all(
             _equal(b.get("data"), data) and (not _exact_x(spacing, b) or _equal(b.get("x"), x))
             for b, (data, x, spacing) in zip(back, expected, strict=False)
         ):
-            raise UserError(f"cannot write {name} exactly: pyuff read back different values")
+            raise FormatError(f"cannot write {name} exactly: pyuff read back different values")
         commit_temp(temp, path)
     except BaseException:
         discard_temp(temp)

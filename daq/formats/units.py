@@ -17,7 +17,7 @@ import re
 
 import numpy as np
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 
 STANDARD_GRAVITY_M_S2 = 9.80665  # exact by definition (CGPM 1901)
 POUND_FORCE_N = 0.45359237 * STANDARD_GRAVITY_M_S2  # exact: international pound x standard gravity
@@ -49,20 +49,20 @@ def accepted_forms(quantity: str) -> str:
 def parse_unit(unit: str, quantity: str) -> float:
     """The factor that turns values in ``unit`` into SI (N or m/s^2) for ``quantity``.
 
-    quantity: "force" or "response". Raises UserError (one line) for an unknown unit or a
+    quantity: "force" or "response". Raises FormatError (one line) for an unknown unit or a
     sensitivity that is not a positive finite number.
     """
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}, got {quantity!r}")
     if not isinstance(unit, str):
-        raise UserError(f"{quantity} unit must be text, got {type(unit).__name__}")
+        raise FormatError(f"{quantity} unit must be text, got {type(unit).__name__}")
     text = unit.strip()
     table = _PHYSICAL[quantity]
     if text in table:
         return table[text]
     if "@" in text:
         return _voltage_factor(text, quantity)
-    raise UserError(f"unknown {quantity} unit {_show(unit)}: use {accepted_forms(quantity)}")
+    raise FormatError(f"unknown {quantity} unit {_show(unit)}: use {accepted_forms(quantity)}")
 
 
 def to_si(values: np.ndarray, unit: str, quantity: str) -> np.ndarray:
@@ -81,13 +81,13 @@ def _voltage_factor(text: str, quantity: str) -> float:
     column, _, sensitivity = text.partition("@")
     column = column.strip()
     if column not in _VOLTS:
-        raise UserError(
+        raise FormatError(
             f"{quantity} unit {_show(text)}: the column unit before '@' must be V or mV, "
             f"e.g. {accepted_forms(quantity).split('such as ')[-1]}"
         )
     number = _NUMBER.match(sensitivity.strip())
     if number is None:
-        raise UserError(
+        raise FormatError(
             f"{quantity} unit {_show(text)}: sensitivity must be a number with mV/<unit> or V/<unit> "
             f"after '@'; use {accepted_forms(quantity)}"
         )
@@ -95,10 +95,10 @@ def _voltage_factor(text: str, quantity: str) -> float:
     volts, slash, physical = rest.partition("/")
     volts, physical = volts.strip(), physical.strip()
     if not slash or volts not in _VOLTS or physical not in _PHYSICAL[quantity]:
-        raise UserError(f"unknown {quantity} unit {_show(text)}: use {accepted_forms(quantity)}")
+        raise FormatError(f"unknown {quantity} unit {_show(text)}: use {accepted_forms(quantity)}")
     value = float(number.group(0))
     if not math.isfinite(value) or value <= 0:
-        raise UserError(f"{quantity} unit {_show(text)}: sensitivity must be positive and finite")
+        raise FormatError(f"{quantity} unit {_show(text)}: sensitivity must be positive and finite")
     # column volts -> sensor volts; divided by (volts per physical unit) -> physical unit -> SI.
     return _VOLTS[column] / (value * _VOLTS[volts]) * _PHYSICAL[quantity][physical]
 
@@ -155,11 +155,11 @@ def frf_unit(unit: str) -> tuple[str, float]:
     """(form, SI factor) of an FRF unit such as "(m/s^2)/N", "g/N", "m/N", "mm/s/N", "m/s/N",
     or SignalCalc's "(m/s²)(N)".
 
-    form: "receptance", "mobility" or "accelerance". UserError (one line) otherwise.
+    form: "receptance", "mobility" or "accelerance". FormatError (one line) otherwise.
     """
     parts = _frf_parts(unit)
     if parts is None:
-        raise UserError(
+        raise FormatError(
             f"unknown FRF unit {_show(unit)}: use a displacement, velocity or acceleration over a force, "
             "e.g. m/N, (m/s)/N, (m/s^2)/N, g/N, mm/N"
         )

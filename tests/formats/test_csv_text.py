@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from daq.errors import UserError
 from daq.formats.csv_text import read_csv, write_csv
+from daq.formats.errors import FormatError
 from daq.store.ids import new_run_id
 from daq.store.model import Hits, MeasuredFrf, Run
 
@@ -46,8 +46,8 @@ def write(tmp_path: Path, text: str, name: str = "data.csv") -> Path:
 
 
 def refused(path: Path, **kwargs) -> str:
-    """The UserError message of read_csv(path); it must be one line naming the file."""
-    with pytest.raises(UserError) as info:
+    """The FormatError message of read_csv(path); it must be one line naming the file."""
+    with pytest.raises(FormatError) as info:
         read_csv(path, **kwargs)
     message = str(info.value)
     assert "\n" not in message
@@ -121,13 +121,13 @@ def test_export_without_hits_refused(tmp_path):
     run = Run(
         new_run_id(), "imported", True, "2026-11-23T10:15:03Z", "2026-11-23T10:15:03Z", measured_frfs=frf
     )
-    with pytest.raises(UserError, match=r"has no time records; export FRFs as UFF"):
+    with pytest.raises(FormatError, match=r"has no time records; export FRFs as UFF"):
         write_csv(run, tmp_path / "x.csv")
     assert not (tmp_path / "x.csv").exists()
 
 
 def test_export_into_missing_folder_is_user_error(tmp_path):
-    with pytest.raises(UserError, match="cannot write"):
+    with pytest.raises(FormatError, match="cannot write"):
         write_csv(make_run(n=4), tmp_path / "nope" / "x.csv")
 
 
@@ -282,7 +282,7 @@ def test_device_refused():
 def test_newline_in_file_name_stays_one_line(tmp_path):
     path = tmp_path / "bad\nname.csv"
     path.write_text("0,1,2\n1,2,x\n")
-    with pytest.raises(UserError) as info:
+    with pytest.raises(FormatError) as info:
         read_csv(path)
     assert "\n" not in str(info.value)
     assert "bad\\nname.csv" in str(info.value)

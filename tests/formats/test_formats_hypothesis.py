@@ -1,4 +1,4 @@
-"""Any input gives ImportedData or a one-line UserError naming the file: never anything else."""
+"""Any input gives ImportedData or a one-line FormatError naming the file: never anything else."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from daq.errors import UserError
 from daq.formats.csv_text import read_csv
+from daq.formats.errors import FormatError
 from daq.formats.imported import ImportedData
 from daq.formats.uff58 import read_uff
 from daq.formats.uff58_export import write_uff
@@ -28,7 +28,7 @@ csv_like = st.lists(CSV_ALPHABET, max_size=200).map("".join)
 def outcome(reader, path: Path, **kwargs) -> None:
     try:
         result = reader(path, **kwargs)
-    except UserError as exc:
+    except FormatError as exc:
         message = str(exc)
         assert "\n" not in message
         assert "\r" not in message

@@ -13,7 +13,7 @@ import pytest
 from cli_helpers import assert_one_line_error, invoke_daq
 
 from daq.cli.commands.import_file import detect_format
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.frf_text import read_frf_text, scan_layout
 from daq.store import Store
 
@@ -145,7 +145,7 @@ def test_a_first_row_of_numbers_is_data_never_a_header(tmp_path):
     ]:
         path = tmp_path / name
         path.write_text(text)
-        with pytest.raises(UserError, match="line 1: a row of numbers, so data, not a header"):
+        with pytest.raises(FormatError, match="line 1: a row of numbers, so data, not a header"):
             read_frf_text(path)
         result = invoke_daq("import", str(path), "--format", "frf-text", "--store", str(store))
         assert_one_line_error(result, "a row of numbers, so data, not a header")

@@ -17,9 +17,9 @@ from cli_helpers import assert_one_line_error, invoke_daq
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from daq.errors import UserError
 from daq.formats.axis import printed_half_units
 from daq.formats.csv_text import read_csv
+from daq.formats.errors import FormatError
 from daq.formats.frf_text import read_frf_text
 from daq.formats.uff58 import read_uff
 from daq.store import Store
@@ -98,7 +98,7 @@ def test_a_dropped_sample_or_a_jump_is_refused_with_its_line(axis, data):
         t[at:] += data.draw(st.floats(0.5, 3.0)) * step  # a jump
     texts = [printed(v, style, digits) for v in t]
     path = put(time_file(texts), "uneven.csv")
-    with pytest.raises(UserError) as info:
+    with pytest.raises(FormatError) as info:
         read_csv(path)
     message = str(info.value)
     assert "\n" not in message
@@ -167,7 +167,7 @@ def test_units_in_the_header_are_applied_and_an_option_wins(force, response, tim
 
 def test_a_voltage_header_needs_a_sensitivity():
     path = put("t (s);F (N);a (mV)\n0;1;2\n0,001;1;2\n", "volts.csv")
-    with pytest.raises(UserError, match=r"--response-unit mV@10\.2mV/g"):
+    with pytest.raises(FormatError, match=r"--response-unit mV@10\.2mV/g"):
         read_csv(path)
     hits = read_csv(path, response_unit="mV@10mV/g").hits
     assert hits.response_m_s2[0, 0] == pytest.approx(0.2 * 9.80665)
@@ -289,7 +289,7 @@ def test_uff58_displacement_in_mm_is_receptance_in_m():
 )
 def test_uff58_unknown_or_contradictory_frf_types_refused(tmp_path, kind, unit, words):
     path = uff_frf(tmp_path / "bad.uff", kind, unit, np.array([1 + 1j, 2, 3j]), np.array([1.0, 2.0, 3.0]))
-    with pytest.raises(UserError, match=words):
+    with pytest.raises(FormatError, match=words):
         read_uff(path)
     store = tmp_path / "store"
     result = invoke_daq("import", str(path), "--store", str(store))

@@ -1,5 +1,5 @@
 """Damaged SDF files: cut short anywhere, sizes, offsets and types corrupted, unknown
-records and codes, counts that would need absurd memory. Each gives one UserError line
+records and codes, counts that would need absurd memory. Each gives one FormatError line
 naming the file; through `daq import`, one line on stderr, exit status 1 and a store
 left as it was."""
 
@@ -11,7 +11,7 @@ import pytest
 from cli_helpers import assert_one_line_error, invoke_daq
 
 from daq.cli.commands.import_file import guess_format
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.sdf import parse_sdf, read_sdf
 from daq.store import Store
 from formats.test_sdf_builder import (
@@ -71,7 +71,7 @@ START = {
 
 
 def refused(data: bytes, *fragments: str) -> str:
-    with pytest.raises(UserError) as info:
+    with pytest.raises(FormatError) as info:
         parse_sdf(data, NAME)
     message = str(info.value)
     assert "\n" not in message
@@ -175,13 +175,13 @@ def test_a_chain_of_logical_files_past_the_end():
 
 
 def test_read_sdf_refuses_what_is_not_a_file(tmp_path):
-    with pytest.raises(UserError, match="no such file"):
+    with pytest.raises(FormatError, match="no such file"):
         read_sdf(tmp_path / "missing.sdf")
     (tmp_path / "empty.sdf").write_bytes(b"")
-    with pytest.raises(UserError, match="is empty"):
+    with pytest.raises(FormatError, match="is empty"):
         read_sdf(tmp_path / "empty.sdf")
     (tmp_path / "big.sdf").write_bytes(FULL)
-    with pytest.raises(UserError, match="import limit"):
+    with pytest.raises(FormatError, match="import limit"):
         read_sdf(tmp_path / "big.sdf", max_bytes=100)
 
 

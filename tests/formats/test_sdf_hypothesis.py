@@ -1,6 +1,6 @@
 """Property tests: random valid SDF files (every revision, number type, x axis kind, scan
 order) written and read back give the same headers and values; random damage to valid
-files never raises anything but a one-line UserError, from the reader or the import."""
+files never raises anything but a one-line FormatError, from the reader or the import."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from store.store_helpers import make_frf, make_hits, make_run
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.sdf import (
     Channel,
     Comment,
@@ -231,11 +231,11 @@ def test_damage_gives_a_one_line_user_error_or_a_file(base, mutations):
 
 
 def _refusal(call) -> str | None:
-    """None if ``call()`` returns, its one-line UserError message if it raises one;
+    """None if ``call()`` returns, its one-line FormatError message if it raises one;
     anything else it raises fails the test."""
     try:
         call()
-    except UserError as exc:
+    except FormatError as exc:
         message = str(exc)
         assert "\n" not in message
         return message

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from cli_helpers import invoke_daq
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.sdf import read_sdf_run
 from daq.formats.units import POUND_FORCE_N
 from formats.test_sdf_builder import (
@@ -136,7 +136,7 @@ def test_a_file_with_nothing_a_run_holds_is_refused_with_what_it_holds(tmp_path)
         assemble(rev, meas_hdr(rev), data, [vector_hdr(0, -1, 96, 0)], [channel_hdr(rev)],
                  block(YDATA, values([1, 2], ">f4"))),
     )  # fmt: skip
-    with pytest.raises(UserError) as info:
+    with pytest.raises(FormatError) as info:
         read_sdf_run(path)
     message = str(info.value)
     assert message.startswith(f"{path}: nothing to import as a run")
@@ -150,7 +150,7 @@ def test_one_channel_of_time_records_is_refused(tmp_path):
         tmp_path,
         assemble(rev, meas_hdr(rev), [dh], [vector_hdr(0)], [channel_hdr(rev)], block(YDATA, bytes(8))),
     )
-    with pytest.raises(UserError, match="time records are of 1 channel"):
+    with pytest.raises(FormatError, match="time records are of 1 channel"):
         read_sdf_run(path)
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import pyuff
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.uff58 import read_uff
 from daq.formats.uff58_export import write_uff
 from daq.store.ids import new_run_id
@@ -50,7 +50,7 @@ def make_run(**parts) -> Run:
 
 
 def refused(path: Path, **kwargs) -> str:
-    with pytest.raises(UserError) as info:
+    with pytest.raises(FormatError) as info:
         read_uff(path, **kwargs)
     message = str(info.value)
     assert "\n" not in message
@@ -139,7 +139,7 @@ def test_plain_pyuff_reads_our_file_unchanged(tmp_path):
 def test_export_refuses_non_finite(tmp_path):
     hits = make_hits(n_hits=1, n=8)
     hits.force_n[0, 3] = np.nan
-    with pytest.raises(UserError, match="non-finite"):
+    with pytest.raises(FormatError, match="non-finite"):
         write_uff(make_run(hits=hits), tmp_path / "x.uff")
     assert list(tmp_path.iterdir()) == []
 

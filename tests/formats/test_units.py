@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.units import parse_unit, to_si
 
 
@@ -66,12 +66,12 @@ def test_to_si_identity_keeps_bits_and_copies():
     ],
 )
 def test_bad_units_are_one_line_user_errors(unit, quantity):
-    with pytest.raises(UserError) as info:
+    with pytest.raises(FormatError) as info:
         parse_unit(unit, quantity)
     assert "\n" not in str(info.value)
     assert quantity in str(info.value)
 
 
 def test_unknown_unit_lists_accepted_forms():
-    with pytest.raises(UserError, match=r"N, kN, lbf.*mV@"):
+    with pytest.raises(FormatError, match=r"N, kN, lbf.*mV@"):
         parse_unit("dyn", "force")

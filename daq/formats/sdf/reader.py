@@ -4,7 +4,7 @@ Everything is checked before anything is allocated: each record must be where th
 FILE_HDR says, of the type expected there, at least as long as its revision's layout and
 inside the file; counts and sizes are Python integers compared with the bytes the file
 really holds, so a damaged header cannot ask for more memory than a few times the file's
-size. Any problem is one UserError line naming the file (docs/sdf.md lists them).
+size. Any problem is one FormatError line naming the file (docs/sdf.md lists them).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ SIGNATURE = b"B\0"
 
 
 def read_sdf(path: Path | str, *, window: str = "narrow", max_bytes: int = MAX_IMPORT_BYTES) -> SdfFile:
-    """Read every logical file of the SDF file at ``path``; UserError (one line) if it
+    """Read every logical file of the SDF file at ``path``; FormatError (one line) if it
     is not a readable SDF file. window: "narrow" (default), "wide" or "none", the window
     correction applied where windowCorrMode says none has been (daq/formats/sdf/convert.py)."""
     name = show_path(path)

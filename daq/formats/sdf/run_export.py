@@ -19,7 +19,7 @@ Data headers, in this order:
 A COMMENT record carries what SDF has no field for (daq/formats/sdf/notes.py), among
 it each spectrum's full label and unit. The file
 is read back with our reader before it replaces the target: every value must come back
-bit for bit, else UserError and the target is untouched.
+bit for bit, else FormatError and the target is untouched.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from daq import __version__
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.imported import atomic_temp, commit_temp, discard_temp, one_line, show_path
 from daq.formats.sdf import codes
 from daq.formats.sdf.axes import linear_axis
@@ -68,21 +68,21 @@ def write_sdf_run(run: Run, path: Path | str) -> None:
     sdf = sdf_of_run(run)
     for dh in sdf.data:
         if not (np.all(np.isfinite(dh.y)) and np.all(np.isfinite(dh.x))):
-            raise UserError(f"cannot write {name}: run {run.run_id} holds non-finite values")
+            raise FormatError(f"cannot write {name}: run {run.run_id} holds non-finite values")
     try:
         data = encode_sdf(sdf, revision=3)
     except ValueError as exc:
-        raise UserError(f"cannot write {name}: {one_line(str(exc))}") from None
+        raise FormatError(f"cannot write {name}: {one_line(str(exc))}") from None
     back = parse_sdf(data, name)
     for wrote, read in zip(sdf.data, back.data, strict=True):
         if not (_same(wrote.y, read.y) and _same(np.asarray(wrote.x, dtype=np.float64), read.x)):
-            raise UserError(f"cannot write {name} exactly: {wrote.title!r} reads back different values")
+            raise FormatError(f"cannot write {name} exactly: {wrote.title!r} reads back different values")
     temp = atomic_temp(path)
     try:
         try:
             temp.write_bytes(data)
         except OSError as exc:
-            raise UserError(f"cannot write {name}: {exc.strerror or exc}") from None
+            raise FormatError(f"cannot write {name}: {exc.strerror or exc}") from None
         commit_temp(temp, path)
     except BaseException:
         discard_temp(temp)
@@ -116,7 +116,7 @@ def sdf_of_run(run: Run) -> SdfFile:
     for tag, frfs in sets:
         if frfs.form != "accelerance":
             # The SDF writer labels every FRF (m/s^2)/N; a receptance must not pass as one.
-            raise UserError(
+            raise FormatError(
                 f"run {run.run_id} holds FRFs of {frfs.form}; SDF export writes accelerance only: "
                 "use --format uff"
             )

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
     ImportedData,
@@ -55,7 +55,7 @@ FRF_DIMS = (-2, 0, 0, 0, 0, 0, 0, 0)  # (m/s^2)/N = 1/kg, SI exponents doubled
 
 def read_sdf_run(path: Path | str, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     """Hits (N, m/s^2), measured FRFs ((m/s^2)/N) and/or spectra from the SDF file at
-    ``path``. UserError (one line) when the file cannot be read or holds none of them."""
+    ``path``. FormatError (one line) when the file cannot be read or holds none of them."""
     path = Path(path)
     name = show_path(path)
     sdf = read_sdf(path, max_bytes=max_bytes)
@@ -68,11 +68,11 @@ def read_sdf_run(path: Path | str, max_bytes: int = MAX_IMPORT_BYTES) -> Importe
     spectra = read_spectra(path, sdf, notes, details, with_coherence=not paired)
     hits, problem = _hits(path, name, sdf, notes, stamp, details)
     if problem and frfs is None and spectra is None:
-        raise UserError(f"{name}: {problem}")
+        raise FormatError(f"{name}: {problem}")
     if problem:
         details["notes"].append(f"time records not imported: {problem}")
     if hits is None and frfs is None and spectra is None:
-        raise UserError(
+        raise FormatError(
             f"{name}: nothing to import as a run: no FRF, no spectrum and no force/response time "
             f"records; it holds {what_it_holds(sdf)}"
         )
@@ -88,7 +88,7 @@ def _kind(channel: Channel) -> str | None:
         try:
             parse_unit(channel.eng_unit.label, quantity)
             return quantity
-        except UserError:
+        except FormatError:
             pass
     dims = tuple(channel.eng_unit.dims)
     return "force" if dims == FORCE_DIMS else "response" if dims == ACCELERATION_DIMS else None
@@ -102,7 +102,7 @@ def _si_factor(channel: Channel, quantity: str, units: dict[str, str]) -> float:
         factor = parse_unit(unit.label, quantity)
         units[quantity] = unit.label
         return factor
-    except UserError:
+    except FormatError:
         pass
     dims = FORCE_DIMS if quantity == "force" else ACCELERATION_DIMS
     if tuple(unit.dims) == dims and math.isfinite(unit.factor) and unit.factor > 0:
@@ -169,7 +169,7 @@ def _hits(path, name, sdf, notes: Notes, stamp, details) -> tuple[Any, str]:
     force_y = _scaled(force_y, _si_factor(sdf.channels[force], "force", units))
     response_y = _scaled(response_y, _si_factor(sdf.channels[response], "response", units))
     if not (np.all(np.isfinite(force_y)) and np.all(np.isfinite(response_y))):
-        raise UserError(f"{name}: its time records hold NaN or infinite values")
+        raise FormatError(f"{name}: its time records hold NaN or infinite values")
     details.update(
         n_records=int(force_y.shape[0]),
         n_samples=int(force_y.shape[1]),
@@ -248,7 +248,7 @@ def _frf_factor(sdf: SdfFile, dh: DataHeader, vector: Vector, units: list[str]) 
     for top, bottom in pairs:
         try:
             factor = parse_unit(top, "response") / parse_unit(bottom, "force")
-        except UserError:
+        except FormatError:
             continue
         units.append(f"{top}/{bottom}")
         return factor
@@ -282,7 +282,7 @@ def _frfs(path, name, sdf: SdfFile, notes: Notes, details: dict) -> tuple[Any, b
                 if freq is None:
                     freq = x
                 elif not np.array_equal(x, freq):
-                    raise UserError(
+                    raise FormatError(
                         f"{name}: FRF {dh.title!r} has a different frequency axis from the first FRF"
                     )
                 values = dh.y[s, v, lines].astype(np.complex128)
@@ -295,7 +295,7 @@ def _frfs(path, name, sdf: SdfFile, notes: Notes, details: dict) -> tuple[Any, b
         return None, False  # coherence alone: the run's spectra
     values = np.stack(frf)
     if not np.all(np.isfinite(values)):
-        raise UserError(f"{name}: its FRFs hold NaN or infinite values")
+        raise FormatError(f"{name}: its FRFs hold NaN or infinite values")
     coherence = _coherence(sdf, coh_found, freq, len(frf), details)
     details.update(n_frf=len(frf), n_lines=int(freq.size), frf_units=sorted(set(units)))
     _window_decay(sdf, found, notes, details)

@@ -1,11 +1,11 @@
 """The bytes of an SDF file with bounds-checked access: every read names the record it
-wants, and anything outside the file becomes a one-line UserError naming the file."""
+wants, and anything outside the file becomes a one-line FormatError naming the file."""
 
 from __future__ import annotations
 
 from typing import Any, NoReturn
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.imported import one_line, show_path
 from daq.formats.sdf import codes
 from daq.formats.sdf.layout import Layout
@@ -24,7 +24,7 @@ class Source:
         self.view = memoryview(data)
 
     def fail(self, what: str) -> NoReturn:
-        raise UserError(f"{self.name}: {one_line(what)}")
+        raise FormatError(f"{self.name}: {one_line(what)}")
 
     def at(self, offset: int) -> int:
         """The absolute position of ``offset`` (relative to the logical file)."""

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.imported import one_line, show_path
 from daq.formats.sdf import codes
 from daq.formats.sdf.convert import used_channels, vector_unit
@@ -78,7 +78,7 @@ def read_spectra(
                 trace = scaled(dh.y[s, v, lines], factor)
                 if not np.all(np.isfinite(trace)):
                     if dh.data_type != codes.ORD_COH_DATA:
-                        raise UserError(
+                        raise FormatError(
                             f"{show_path(path)}: its spectrum {dh.title!r} holds NaN or infinite values"
                         )
                     skipped.append(f"{dh.title!r} (NaN or infinite coherence)")
@@ -105,7 +105,7 @@ def read_spectra(
     try:
         return Spectra(frequency_hz=freq, values=stacked, kinds=kind_of, units=units, labels=labels)
     except ValueError as exc:
-        raise UserError(f"{show_path(path)}: {one_line(str(exc))}") from None
+        raise FormatError(f"{show_path(path)}: {one_line(str(exc))}") from None
 
 
 def _unit(sdf: SdfFile, dh: DataHeader, vector: Vector, ours: str | None) -> tuple[str, float]:
@@ -154,7 +154,7 @@ def _base(label: str) -> tuple[str, float]:
     for quantity, base in (("force", "N"), ("response", "m/s^2")):
         try:
             return base, parse_unit(text, quantity)
-        except UserError:
+        except FormatError:
             continue
     raise ValueError(f"unit {label!r} is not a force, an acceleration or a voltage")
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from daq.errors import UserError
+from daq.formats.errors import FormatError
 from daq.formats.imported import atomic_temp, commit_temp, discard_temp, one_line, show_path
 from daq.formats.sdf import axes, codes, ydata
 from daq.formats.sdf.convert import integer_scaling, vector_factor
@@ -27,19 +27,19 @@ _INT_RANGE = {codes.INT16: (-(2**15), 2**15 - 1), codes.INT32: (-(2**31), 2**31 
 
 
 def write_sdf(sdf: SdfFile, path: Path | str, *, revision: int = 3, window: str = "narrow") -> None:
-    """Write ``sdf`` to ``path`` atomically (temporary file, fsync, rename); UserError
+    """Write ``sdf`` to ``path`` atomically (temporary file, fsync, rename); FormatError
     (one line) if it cannot be written as it is."""
     path = Path(path)
     try:
         data = encode_sdf(sdf, revision=revision, window=window)
     except ValueError as exc:
-        raise UserError(f"cannot write {show_path(path)}: {one_line(str(exc))}") from None
+        raise FormatError(f"cannot write {show_path(path)}: {one_line(str(exc))}") from None
     temp = atomic_temp(path)
     try:
         try:
             temp.write_bytes(data)
         except OSError as exc:
-            raise UserError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
+            raise FormatError(f"cannot write {show_path(path)}: {exc.strerror or exc}") from None
         commit_temp(temp, path)
     except BaseException:
         discard_temp(temp)
