@@ -1,9 +1,11 @@
 """The driver of the HP dynamic signal analyzer family: what every dialect shares.
 
-``SignalAnalyzer`` holds the link and the exchanges; a dialect's class (the HP
-mnemonics of the 35660A and 3562A in drivers/hp_mnemonic.py, the SCPI of the
-35665A/35670A in drivers/scpi_analyzer.py) adds its commands. ``SignalAnalyzer.open``
-finds out what answers and returns the right one (drivers/family.py).
+``SignalAnalyzer`` holds the link, the exchanges, the error queue and the settings
+(configure and read-back, walked from the dialect's table of settings,
+drivers/setting_table.py); a dialect's class (the HP mnemonics of the 35660A and 3562A
+in drivers/hp_mnemonic.py, the SCPI of the 35665A/35670A in drivers/scpi_analyzer.py)
+adds its commands. ``drivers.family.open_analyzer`` finds out what answers and returns
+the right one.
 
 Knows the analyzer's commands and replies, nothing of files or beams. Every
 exchange runs under the transport's thread lock. A failed exchange that is safe
@@ -20,10 +22,10 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TypeVar
 
-from drivers.dialects import Dialect, Geometry
+from drivers.detection import open_driver
+from drivers.dialects import Dialect, Geometry, identity_mismatch
 from drivers.errors import (
     ConnectionLost,
     DriverError,
@@ -33,6 +35,8 @@ from drivers.errors import (
     ProtocolError,
     UnknownInstrument,
 )
+from drivers.messages import Status, ascii_message, decode_line
+from drivers.setting_table import SettingsTable, read_fields, write_steps
 from drivers.settings import ImpactSettings
 from drivers.trace import Trace
 from drivers.transport import Transport
@@ -44,36 +48,6 @@ T = TypeVar("T")
 HIT_ALLOWANCE_S = 60.0
 #: How long to wait for the probe's reply before calling the instrument silent, s.
 PROBE_TIMEOUT_S = 0.5
-
-
-#: The state of a measurement as every dialect reports it, by name: the bits of the HP
-#: dialects' STA? (proj), to which the SCPI dialect maps its status registers.
-STATUS_BITS = {
-    "done": 1,
-    "waiting_for_trigger": 2,
-    "overload_ch1": 4,
-    "overload_ch2": 8,
-    "error": 16,
-    "hit_pending": 32,
-    "measuring": 64,
-    "paused": 128,
-}
-
-
-@dataclass(frozen=True)
-class Status:
-    """The analyzer's state: named bits (STATUS_BITS)."""
-
-    bits: int
-
-    def __getattr__(self, name: str) -> bool:
-        if name in STATUS_BITS:
-            return bool(self.bits & STATUS_BITS[name])
-        raise AttributeError(name)
-
-    def __str__(self) -> str:
-        names = [n for n, b in STATUS_BITS.items() if self.bits & b]
-        return ", ".join(names) or "idle"
 
 
 class SignalAnalyzer:
@@ -110,6 +84,9 @@ class SignalAnalyzer:
         self._record_length_s: float | None = None
         self._recovery_error: DriverError | None = None
 
+    #: The ``Dialect.family`` a dialect class drives (``hp``, ``scpi``).
+    family: str = ""
+
     @classmethod
     def open(
         cls,
@@ -119,11 +96,16 @@ class SignalAnalyzer:
         dialect: Dialect | str | None = None,
         **kwargs: object,
     ) -> SignalAnalyzer:
-        """Open ``resource`` and find out which dialect answers (``dialect`` forces one):
-        drivers/family.py."""
-        from drivers.family import open_analyzer
+        """Open ``resource`` and drive what answers with this class (its dialect detected,
+        or ``dialect`` forced): UnknownInstrument if it speaks another family's. Any
+        dialect of the family: ``drivers.family.open_analyzer``."""
 
-        return open_analyzer(resource, timeout_s, lock_file, dialect, **kwargs)
+        def this_class(found: Dialect) -> type[SignalAnalyzer]:
+            if found.family != cls.family:
+                raise UnknownInstrument(f"{resource}: the {found.name} dialect answers, not {cls.__name__}'s")
+            return cls
+
+        return open_driver(resource, this_class, timeout_s, lock_file, dialect, **kwargs)
 
     def close(self) -> None:
         self.transport.close()
@@ -261,8 +243,6 @@ class SignalAnalyzer:
         if not self.forced:
             self.identification = self.query(self.dialect.identity_query)
             return self.identification
-        from drivers.dialects import identity_mismatch
-
         hint = (
             f"; the {self.dialect.name} dialect was forced (--dialect or $DAQ_DIALECT): "
             "is it this analyzer's?"
@@ -285,8 +265,20 @@ class SignalAnalyzer:
         raise NotImplementedError
 
     def errors(self) -> list[tuple[int, str]]:
-        """Drain the instrument's error queue, oldest first: (code, message)."""
-        raise NotImplementedError
+        """Drain the instrument's error queue (``error_query`` until code 0), oldest first:
+        (code, message)."""
+        query = self.error_query
+        found = []
+        for _ in range(64):  # queues hold 32 at most; a queue that does not empty is a fault
+            reply = self.query(query)
+            code_text, comma, message = reply.partition(",")
+            if (self.error_reply_needs_comma and not comma) or not code_text.strip().lstrip("+-").isdigit():
+                raise ProtocolError(query, 'expected code,"message"', reply.encode())
+            code = int(code_text)
+            if code == 0:
+                return found
+            found.append((code, message.strip().strip('"')))
+        raise ProtocolError(query, "the error queue does not empty")
 
     def check_errors(self) -> None:
         """Raise InstrumentError for the oldest queued instrument error, if any."""
@@ -296,13 +288,74 @@ class SignalAnalyzer:
             more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
             raise InstrumentError(code, message + more)
 
+    def raise_if_error(self) -> None:
+        """InstrumentError if the status says an error is queued (after a command that
+        may be refused: start, accept, reject)."""
+        if self.status().error:
+            self.check_errors()
+
+    # ------------------------------------------------------------ settings
     def configure(self, settings: ImpactSettings) -> ImpactSettings:
-        """Apply ``settings`` and return them as the analyzer holds them (span, lines and
-        ranges as it made them). Settings naming no lines get the dialect's default."""
-        raise NotImplementedError
+        """Apply ``settings`` (the rows of the dialect's ``settings_table``, in order) and
+        return them as the analyzer holds them (span, lines and ranges as it made them).
+        Settings naming no lines get the dialect's default; lines it does not offer are
+        refused (ValueError)."""
+        geometry = self.geometry_for(settings.lines)
+        settings = settings.with_lines(geometry.lines)
+        self.send(self.clear_errors_command)  # errors left by earlier commands are not these settings'
+        up_to_span, rest = self.settings_table.split_at_span()
+        self._write(up_to_span, settings, None)
+        self.check_errors()
+        # The analyzer rounds the span up; a baseband center follows the span it chose,
+        # and the pre-trigger must fit the record of that span.
+        span = float(self.read_setting("span_hz"))
+        settings = self.fit_to_span(settings, geometry, span)
+        self._write(rest, settings, span)
+        self.check_errors()
+        return self.read_settings()
 
     def read_settings(self) -> ImpactSettings:
+        """The impact-test settings the analyzer holds now (the table's read-back)."""
+        fields, channels = read_fields(self.settings_table, self._ask)
+        settings = ImpactSettings.from_fields(
+            fields, channels, self._keep_read(fields, channels), self.baseband
+        )
+        self._record_length_s = settings.record_length_s
+        return settings
+
+    def read_setting(self, name: str, ch: int | None = None) -> object:
+        """One field of the settings table, read back (``read_setting("span_hz")``)."""
+        row = self.settings_table.row(name)
+        return row.to_ours(self._ask(row.query or row.command, ch))
+
+    def _write(self, table: SettingsTable, settings: ImpactSettings, span: float | None) -> None:
+        for command, value, ch in write_steps(table, *settings.wire_fields(span)):
+            self._put(command, value, ch)
+
+    # The dialect's part of the settings: its table, how it sends and asks one row.
+    settings_table: SettingsTable
+    clear_errors_command: str
+    #: The query that pops the oldest error, and whether its reply must hold a comma.
+    error_query: str
+    error_reply_needs_comma = False
+
+    def geometry_for(self, lines: int | None) -> Geometry:
+        return self.dialect.geometry(lines)
+
+    def _put(self, command: str, value: object, ch: int | None) -> None:
         raise NotImplementedError
+
+    def _ask(self, query: str, ch: int | None) -> object:
+        raise NotImplementedError
+
+    def _keep_read(self, fields: dict, channels: dict[int, dict]) -> int:
+        """What the dialect keeps of the settings just read (``read_fields``); their lines."""
+        raise NotImplementedError
+
+    @staticmethod
+    def baseband(span: float, center: float) -> bool:
+        """A center at span/2 is a baseband measurement; above it, a zoom."""
+        return center <= span / 2 or math.isclose(center, span / 2, rel_tol=1e-9)
 
     @staticmethod
     def fit_to_span(settings: ImpactSettings, geometry: Geometry, span_hz: float) -> ImpactSettings:
@@ -400,25 +453,3 @@ class SignalAnalyzer:
             else n * (self.hit_allowance_s + 2 * self._record_length()) + 1.0
         )
         return self.wait_for(lambda s: s.done, "waiting for the measurement to finish", timeout)
-
-
-def ascii_message(text: str) -> bytes:
-    """``text`` as the bytes of one message: ASCII, one line, not empty."""
-    try:
-        data = text.strip().encode("ascii")
-    except UnicodeEncodeError:
-        raise ValueError(f"commands are ASCII: {text!r}") from None
-    if not data or b"\n" in data or b"\r" in data:
-        raise ValueError("one command line, not empty")
-    return data
-
-
-def decode_line(raw: bytes, command_text: str) -> str:
-    """A reply line as text; ProtocolError if it is not printable ASCII."""
-    try:
-        text = raw.decode("ascii")
-    except UnicodeDecodeError:
-        raise ProtocolError(command_text, "reply is not ASCII", raw) from None
-    if any(ch < " " for ch in text):
-        raise ProtocolError(command_text, "control characters in the reply", raw)
-    return text

@@ -25,6 +25,15 @@ from typing import Literal
 
 from drivers.record import MAX_SPAN_HZ
 from drivers.reply_values import typed_value
+from drivers.setting_table import (
+    CHANNEL_ROWS,
+    SLOPES,
+    TRIGGER_SOURCES,
+    Channels,
+    Setting,
+    SettingsTable,
+    Window,
+)
 
 Kind = Literal["action", "setting", "query"]
 ArgumentKind = Literal["quantity", "integer", "flag", "choice"]
@@ -35,9 +44,7 @@ ReplyKind = Literal["none", "text", "number", "integer", "flag", "choice", "valu
 #: number is sent as the driver holds it). Names as in sims/units.py.
 UNIT_SUFFIX = {"frequency": "HZ", "time": "S", "voltage": "V"}
 
-WINDOWS = ("UNIF", "HANN", "FLAT", "FORC", "EXPO")
-TRIGGER_SOURCES = ("CH1", "CH2", "FREE")
-SLOPES = ("POS", "NEG")
+WINDOWS = tuple(w.value for w in Window)
 AVERAGING_MODES = ("STBL", "AVOF")
 TRACES = ("A", "B")
 #: Our display mnemonics; their codes in a dump header are in drivers/trace.py.
@@ -178,7 +185,57 @@ _TABLE: tuple[Mnemonic, ...] = (
 
 COMMANDS: dict[str, Mnemonic] = {m.text: m for m in _TABLE}
 
-#: STA? bits (proj): drivers/analyzer.py STATUS_BITS, which every dialect reports in.
+#: Each field of the settings (``ImpactSettings.wire_fields``) and its mnemonic, in the
+#: order ``configure`` sends them; read back in ``read_order`` (the golden transcripts').
+SETTINGS = SettingsTable(
+    (
+        Setting("measurement", "FRQR", fixed=None),
+        Setting("resolution", "LNRS", fixed=None),
+        Setting("span_hz", "FRS"),
+        Setting("center_hz", "CF"),
+        Channels(
+            (
+                Setting("window", "WIN{ch}"),
+                Setting("force_width_s", "FWD{ch}"),
+                Setting("exp_decay_s", "EXD{ch}"),
+                Setting("sensitivity_v_per_eu", "SNS{ch}"),
+                Setting("ac_coupled", "C{ch}AC"),
+                Setting("autorange", "AU{ch}?", write=False),
+                Setting("range_v", "RNG{ch}", when_none=("AU{ch}", None), unless=("autorange", True, None)),
+            ),
+            read_order=(
+                "window",
+                "sensitivity_v_per_eu",
+                "autorange",
+                "range_v",
+                "force_width_s",
+                "exp_decay_s",
+                "ac_coupled",
+            ),
+        ),
+        Setting("trigger_source", "TSRC"),
+        Setting("trigger_level_v", "TLVL"),
+        Setting("trigger_slope", "TSLP"),
+        Setting("trigger_delay_s", "TDLY"),
+        Setting("averages", "NAVG", unless=("averaging", "AVOF", 1)),
+        Setting("averaging", "STBL", fixed=None, query="AVMD?"),
+        Setting("preview", "PRVW"),
+    ),
+    read_order=(
+        "span_hz",
+        "center_hz",
+        CHANNEL_ROWS,
+        "trigger_source",
+        "trigger_level_v",
+        "averaging",
+        "trigger_slope",
+        "trigger_delay_s",
+        "averages",
+        "preview",
+    ),
+)
+
+#: STA? bits (proj): drivers/messages.py Status, which every dialect reports in.
 
 
 def grammar() -> dict[str, dict]:

@@ -1,4 +1,4 @@
-"""Which analyzer of the family answers, and the driver for it (docs/dialects.md).
+"""Which analyzer of the family answers (docs/dialects.md), and opening a driver on it.
 
 Detection asks in the order that disturbs least: a device clear, then ``*IDN?``
 with a short timeout (a SCPI 35665A/35670A answers it; an HP-mnemonic instrument
@@ -6,16 +6,25 @@ does not know it and stays silent), then a clear and ``ID?`` (``HP35660A``,
 ``HP3562A``, ``HP3563A``). The mnemonic instruments queue an error for the
 ``*IDN?`` they did not understand; it is cleared (``CLER``), so that it is not
 blamed on the next command. ``dialect`` skips all of this and trusts the caller.
+
+Which class drives a dialect is the caller's ``driver_for``: drivers/family.py's for
+every dialect (``open_analyzer``), a dialect class's own for ``open`` on it.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
-from drivers.analyzer import SignalAnalyzer, decode_line
 from drivers.dialects import HP_IDENTITIES, SCPI, SCPI_MODELS, Dialect, dialect_named
-from drivers.errors import DriverError, InstrumentTimeout, ProtocolError, UnknownInstrument
+from drivers.errors import InstrumentTimeout, ProtocolError, UnknownInstrument
+from drivers.messages import decode_line
+from drivers.resources import open_transport
 from drivers.transport import Transport
+
+#: The class that drives a dialect, built as ``driver(transport, dialect, **kwargs)``.
+DriverFor = Callable[[Dialect], Callable[..., Any]]
 
 #: How long each identity query of the detection may take, s: the instrument answers a
 #: query it knows within milliseconds; the one it does not know costs this much.
@@ -83,7 +92,9 @@ def detect(transport: Transport, timeout_s: float = DETECT_TIMEOUT_S) -> Detecti
         transport.timeout_s = saved
 
 
-def connect(transport: Transport, dialect: Dialect | str | None = None, **kwargs: object) -> SignalAnalyzer:
+def connect(
+    transport: Transport, driver_for: DriverFor, dialect: Dialect | str | None = None, **kwargs: object
+) -> Any:
     """The driver for the instrument behind the open ``transport``: of the dialect
     detection finds, or of ``dialect`` (a Dialect or its name) without asking."""
     forced = dialect is not None
@@ -93,33 +104,23 @@ def connect(transport: Transport, dialect: Dialect | str | None = None, **kwargs
     else:
         chosen = dialect if isinstance(dialect, Dialect) else dialect_named(dialect)
         reason = f"the {chosen.name} dialect was forced (--dialect or $DAQ_DIALECT); no detection"
-    if chosen.family == "scpi":
-        from drivers.scpi_analyzer import ScpiAnalyzer
-
-        return ScpiAnalyzer(transport, chosen, detection=reason, forced=forced, **kwargs)  # type: ignore[arg-type]
-    from drivers.hp_mnemonic import HPMnemonicAnalyzer
-
-    return HPMnemonicAnalyzer(transport, chosen, detection=reason, forced=forced, **kwargs)  # type: ignore[arg-type]
+    return driver_for(chosen)(transport, chosen, detection=reason, forced=forced, **kwargs)
 
 
-def open_analyzer(
+def open_driver(
     resource: str,
+    driver_for: DriverFor,
     timeout_s: float = 5.0,
     lock_file: bool = True,
     dialect: Dialect | str | None = None,
     **kwargs: object,
-) -> SignalAnalyzer:
+) -> Any:
     """Open ``resource`` (drivers/resources.py) and ``connect`` to what answers."""
-    from drivers.resources import open_transport
-
     if isinstance(dialect, str):
         dialect = dialect_named(dialect)  # a bad name must fail before the link is opened
     transport = open_transport(resource, timeout_s, lock_file)
     try:
-        return connect(transport, dialect, **kwargs)
+        return connect(transport, driver_for, dialect, **kwargs)
     except BaseException:
         transport.close()  # a bad argument or a failed detection must not leave the link held
         raise
-
-
-__all__ = ["DETECT_TIMEOUT_S", "Detection", "DriverError", "connect", "detect", "open_analyzer"]

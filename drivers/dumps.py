@@ -10,11 +10,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TypeVar
 
-from drivers.analyzer import ascii_message
 from drivers.blocks import decode_values, parse_block_header, read_ascii_dump
 from drivers.commands import DISPLAY_FUNCTIONS, replies
 from drivers.dialects import Dialect, Geometry
 from drivers.errors import InstrumentTimeout, ProtocolError
+from drivers.messages import ascii_message
 from drivers.state import STATE_LENGTH, InstrumentState
 from drivers.trace import HEADER_LENGTH, Trace
 from drivers.transport import Transport

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import math
 
-from drivers.analyzer import SignalAnalyzer, Status
-from drivers.commands import COMMANDS, command, parse_reply, replies
+from drivers.base import SignalAnalyzer
+from drivers.commands import COMMANDS, SETTINGS, command, parse_reply, replies
 from drivers.dialects import HP35660A, Dialect, Geometry
 from drivers.dumps import DumpsMixin
 from drivers.errors import ProtocolError
-from drivers.settings import ChannelSetup, ImpactSettings, Window
+from drivers.messages import Status
 from drivers.transport import Transport
 
 
@@ -24,8 +24,13 @@ class HPMnemonicAnalyzer(DumpsMixin, SignalAnalyzer):
     """An HP 35660A or 3562A/3563A, in its mnemonic dialect (``dialect``: the 35660A's
     unless told)."""
 
+    family = "hp"
+    settings_table = SETTINGS
+    clear_errors_command = "CLER"
+    error_query = "ERR?"
+
     def __init__(self, transport: Transport, dialect: Dialect = HP35660A, **kwargs: object) -> None:
-        if dialect.family != "hp":
+        if dialect.family != self.family:
             raise ValueError(f"the {dialect.name} dialect is not an HP mnemonic dialect")
         super().__init__(transport, dialect, **kwargs)  # type: ignore[arg-type]
 
@@ -69,80 +74,20 @@ class HPMnemonicAnalyzer(DumpsMixin, SignalAnalyzer):
             raise ProtocolError("STA?", "expected a status byte", str(bits).encode())
         return Status(int(bits))
 
-    def errors(self) -> list[tuple[int, str]]:
-        """Drain the instrument's error queue, oldest first."""
-        found = []
-        for _ in range(64):
-            reply = self.query("ERR?")
-            code_text, _, message = reply.partition(",")
-            if not code_text.strip().lstrip("+-").isdigit():
-                raise ProtocolError("ERR?", 'expected code,"message"', reply.encode())
-            code = int(code_text)
-            if code == 0:
-                return found
-            found.append((code, message.strip().strip('"')))
-        raise ProtocolError("ERR?", "the error queue does not empty")
-
     # ------------------------------------------------------------ settings
-    def configure(self, settings: ImpactSettings) -> ImpactSettings:
-        """Apply ``settings`` and return them as the analyzer holds them (span and
-        ranges rounded up to what it offers). The model fixes the lines: settings
-        naming others are refused (ValueError)."""
-        geometry = self.dialect.geometry(settings.lines)
-        settings = settings.with_lines(geometry.lines)
-        self.send("CLER")  # errors left by earlier commands must not be blamed on these settings
-        messages = settings.commands()
-        for message in messages[:3]:  # up to the span
-            self.send(message.decode())
-        self.check_errors()
-        # The analyzer rounds the span up; the baseband center follows the span it chose,
-        # and the pre-trigger must fit the record of that span.
-        actual_span = float(self.read("FRS"))
-        settings = self.fit_to_span(settings, geometry, actual_span)
-        for message in settings.commands(actual_span_hz=actual_span)[3:]:
-            self.send(message.decode())
-        self.check_errors()
-        actual = self.read_settings()
-        self._record_length_s = actual.record_length_s
-        return actual
+    def _put(self, command: str, value: object, ch: int | None) -> None:
+        self.set(command.format(ch=ch), value)
 
-    def read_settings(self) -> ImpactSettings:
-        """The impact-test settings the analyzer holds now."""
+    def _ask(self, query: str, ch: int | None) -> object:
+        return self.read(query.format(ch=ch))
 
-        # The order of the queries is the golden transcripts' (tests/drivers/test_protocol.py).
-        span = float(self.read("FRS"))
-        center = float(self.read("CF"))
-        channels = []
-        for ch in (1, 2):
-            channels.append(
-                ChannelSetup(
-                    window=Window(self.read(f"WIN{ch}")),
-                    sensitivity_v_per_eu=float(self.read(f"SNS{ch}")),
-                    range_v=None if self.read(f"AU{ch}?") else float(self.read(f"RNG{ch}")),
-                    force_width_s=float(self.read(f"FWD{ch}")),
-                    exp_decay_s=float(self.read(f"EXD{ch}")),
-                    ac_coupled=bool(self.read(f"C{ch}AC")),
-                )
-            )
-        source = str(self.read("TSRC"))
-        level_v = float(self.read("TLVL"))
-        trigger_channel = channels[1] if source == "CH2" else channels[0]
-        averaging = self.read("AVMD?")
-        settings = ImpactSettings(
-            span_hz=span,
-            center_hz=None if math.isclose(center, span / 2, rel_tol=1e-9) else center,
-            hammer=channels[0],
-            accelerometer=channels[1],
-            trigger_source=source,
-            trigger_level_eu=level_v / trigger_channel.sensitivity_v_per_eu,
-            trigger_slope=str(self.read("TSLP")),
-            pre_trigger_s=max(0.0, -float(self.read("TDLY"))),
-            averages=1 if averaging == "AVOF" else int(self.read("NAVG")),
-            preview=bool(self.read("PRVW")),
-            lines=self.geometry.lines,
-        )
-        self._record_length_s = settings.record_length_s
-        return settings
+    def _keep_read(self, fields: dict, channels: dict[int, dict]) -> int:
+        return self.geometry.lines
+
+    @staticmethod
+    def baseband(span: float, center: float) -> bool:
+        """A center at span/2 is a baseband measurement."""
+        return math.isclose(center, span / 2, rel_tol=1e-9)
 
     # ------------------------------------------------------------ measuring
     def _record_length(self) -> float:
@@ -154,22 +99,17 @@ class HPMnemonicAnalyzer(DumpsMixin, SignalAnalyzer):
         """Clear the average and arm the trigger (STRT); InstrumentError if it refuses."""
         self._record_length()
         self.send("STRT")
-        if self.status().error:
-            self.check_errors()
+        self.raise_if_error()
 
     def accept(self) -> None:
         """Preview: put the pending hit into the average."""
         self._exchange("ACPT", lambda: self.transport.write(b"ACPT"), repeatable=False)
-        self._raise_if_error()
+        self.raise_if_error()
 
     def reject(self) -> None:
         """Preview: throw the pending hit away and re-arm."""
         self._exchange("RJCT", lambda: self.transport.write(b"RJCT"), repeatable=False)
-        self._raise_if_error()
-
-    def _raise_if_error(self) -> None:
-        if self.status().error:
-            self.check_errors()
+        self.raise_if_error()
 
     def averages_done(self) -> int:
         return int(self.read("AVG?"))

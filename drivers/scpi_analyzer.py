@@ -22,25 +22,23 @@ import math
 
 import numpy as np
 
-from drivers.analyzer import STATUS_BITS, SignalAnalyzer, Status, ascii_message, decode_line
+from drivers.base import SignalAnalyzer
 from drivers.blocks import decode_values, parse_block_header
 from drivers.dialects import SCPI, SCPI_MODEL_LINES, Dialect, Geometry
 from drivers.errors import DriverError, InstrumentTimeout, ProtocolError
+from drivers.messages import Status, ascii_message, decode_line
 from drivers.scpi_commands import (
-    EU_LABELS,
     FEEDS,
+    SETTINGS,
     STATE_QUERY,
     STATUS_MAP,
     STATUS_QUERY,
-    TRIGGER_SOURCES,
-    WINDOW_TYPES,
     command,
     parse_reply,
     readback,
     repeatable,
     replies,
 )
-from drivers.settings import ChannelSetup, ImpactSettings, Window
 from drivers.trace import Trace, TraceHeader
 from drivers.transport import Transport
 
@@ -50,8 +48,14 @@ log = logging.getLogger(__name__)
 class ScpiAnalyzer(SignalAnalyzer):
     """An HP 35665A or 35670A in SCPI (``dialect``: drivers.dialects.SCPI)."""
 
+    family = "scpi"
+    settings_table = SETTINGS
+    clear_errors_command = "*CLS"
+    error_query = "SYST:ERR?"
+    error_reply_needs_comma = True
+
     def __init__(self, transport: Transport, dialect: Dialect = SCPI, **kwargs: object) -> None:
-        if dialect.family != "scpi":
+        if dialect.family != self.family:
             raise ValueError(f"the {dialect.name} dialect is not a SCPI dialect")
         super().__init__(transport, dialect, **kwargs)  # type: ignore[arg-type]
         self._lines: int | None = None
@@ -102,126 +106,41 @@ class ScpiAnalyzer(SignalAnalyzer):
 
     def status(self) -> Status:
         """One message, one reply: the operation condition, the overloads and the
-        status byte, mapped to STATUS_BITS."""
+        status byte, mapped to Status."""
         reply = self.query(STATUS_QUERY)
         fields = reply.split(";")
         if len(fields) != 3 or not all(f.strip().isdigit() for f in fields):
             raise ProtocolError(STATUS_QUERY, "expected three NR1 numbers joined by ;", reply.encode())
         registers = dict(zip(("oper", "volt", "stb"), (int(f) for f in fields), strict=True))
-        bits = 0
+        status = Status(0)
         for register, bit, name in STATUS_MAP:
             if registers[register] >> bit & 1:
-                bits |= STATUS_BITS[name]
-        return Status(bits)
-
-    def errors(self) -> list[tuple[int, str]]:
-        """Drain the error queue (``SYST:ERR?`` until ``+0``), oldest first."""
-        found = []
-        for _ in range(64):  # the queue holds 32; a queue that does not empty is a fault
-            reply = self.query("SYST:ERR?")
-            code_text, comma, message = reply.partition(",")
-            if not comma or not code_text.strip().lstrip("+-").isdigit():
-                raise ProtocolError("SYST:ERR?", 'expected code,"message"', reply.encode())
-            code = int(code_text)
-            if code == 0:
-                return found
-            found.append((code, message.strip().strip('"')))
-        raise ProtocolError("SYST:ERR?", "the error queue does not empty")
+                status |= Status[name.upper()]
+        return status
 
     # ------------------------------------------------------------ settings
-    def configure(self, settings: ImpactSettings) -> ImpactSettings:
-        """Apply ``settings``, one setting per message, and return them as the analyzer
-        holds them (span and ranges rounded up). Lines: the settings', or the dialect's
-        default; a count the dialect does not offer is refused (ValueError)."""
-        geometry = self.dialect.geometry(settings.lines)
+    def geometry_for(self, lines: int | None) -> Geometry:
+        """Lines: the settings', or the dialect's default; a count the model (once
+        identified) does not offer is refused (ValueError)."""
+        geometry = self.dialect.geometry(lines)
         model = self.model
         if model in SCPI_MODEL_LINES and geometry.lines not in SCPI_MODEL_LINES[model]:
             offered = ", ".join(str(n) for n in SCPI_MODEL_LINES[model])
             raise ValueError(f"the {model} offers {offered} lines, not {geometry.lines}")
-        settings = settings.with_lines(geometry.lines)
-        self.send("*CLS")  # errors left by earlier commands must not be blamed on these settings
-        self.set("INST:SEL", "FFT")
-        self.set("FORM:DATA", "REAL,64")
-        self.set("SENS:FREQ:SPAN", settings.span_hz)
-        self.check_errors()
-        # The analyzer rounds the span up; a baseband center follows the span it chose,
-        # and the pre-trigger must fit the record of that span.
-        span = float(self.read("SENS:FREQ:SPAN"))
-        settings = self.fit_to_span(settings, geometry, span)
-        self.set("SENS:FREQ:CENT", settings.center_hz if settings.center_hz is not None else span / 2)
-        self.set("SENS:FREQ:RES", geometry.lines)
-        for ch, setup in ((1, settings.hammer), (2, settings.accelerometer)):
-            self.set("SENS:WIND<n>:TYPE", WINDOW_TYPES[setup.window.value], ch)
-            self.set("SENS:WIND<n>:FORC", setup.force_width_s, ch)
-            self.set("SENS:WIND<n>:EXP", setup.exp_decay_s, ch)
-            self.set("SENS:VOLT<n>:RANG:UNIT:XDCR:SFAC", setup.sensitivity_v_per_eu, ch)
-            self.set("SENS:VOLT<n>:RANG:UNIT:XDCR:LAB", EU_LABELS[ch], ch)
-            self.set("SENS:VOLT<n>:RANG:UNIT:XDCR", True, ch)
-            self.set("INP<n>:COUP", "AC" if setup.ac_coupled else "DC", ch)
-            if setup.range_v is None:
-                self.set("SENS:VOLT<n>:RANG:AUTO", True, ch)
-            else:
-                self.set("SENS:VOLT<n>:RANG", setup.range_v, ch)  # turns autorange off
-        self.set("TRIG:SOUR", TRIGGER_SOURCES[settings.trigger_source])
-        self.set("TRIG:LEV", settings.trigger_level_v)
-        self.set("TRIG:SLOP", settings.trigger_slope)
-        # The simulator keeps one delay, a real box one per channel: both are sent, equal.
-        for ch in (1, 2):
-            self.set("TRIG:STAR<n>", -settings.pre_trigger_s, ch)
-        self.set("SENS:AVER:STAT", True)
-        self.set("SENS:AVER:COUN", settings.averages)
-        self.set("SENS:AVER:TYPE", "RMS")
-        self.set("SENS:AVER:TCON", "FREE")
-        self.set("SENS:AVER:PREV", "MAN" if settings.preview else "OFF")
-        self.check_errors()
-        return self.read_settings()
+        return geometry
 
-    def read_settings(self) -> ImpactSettings:
-        """Every setting of an impact test as the analyzer holds it now, with its lines."""
-        span = float(self.read("SENS:FREQ:SPAN"))
-        center = float(self.read("SENS:FREQ:CENT"))
-        lines = self._read_lines()
-        channels = []
-        for ch in (1, 2):
-            window = str(self.read("SENS:WIND<n>:TYPE", ch))
-            force_width = float(self.read("SENS:WIND<n>:FORC", ch))
-            exp_decay = float(self.read("SENS:WIND<n>:EXP", ch))
-            sensitivity = float(self.read("SENS:VOLT<n>:RANG:UNIT:XDCR:SFAC", ch))
-            self._eu[ch] = bool(self.read("SENS:VOLT<n>:RANG:UNIT:XDCR", ch))
-            coupling = str(self.read("INP<n>:COUP", ch))
-            auto = bool(self.read("SENS:VOLT<n>:RANG:AUTO", ch))
-            channels.append(
-                ChannelSetup(
-                    window=Window({v: k for k, v in WINDOW_TYPES.items()}[window]),
-                    sensitivity_v_per_eu=sensitivity,
-                    range_v=None if auto else float(self.read("SENS:VOLT<n>:RANG", ch)),
-                    force_width_s=force_width,
-                    exp_decay_s=exp_decay,
-                    ac_coupled=coupling == "AC",
-                )
-            )
-        source = {v: k for k, v in TRIGGER_SOURCES.items()}[str(self.read("TRIG:SOUR"))]
-        level_v = float(self.read("TRIG:LEV"))
-        slope = str(self.read("TRIG:SLOP"))
-        delay_s, delay2_s = (float(self.read("TRIG:STAR<n>", ch)) for ch in (1, 2))
-        if delay2_s != delay_s:  # configure sends them equal; the record of channel 1 rules
-            log.warning("trigger delays differ: %g s (channel 1), %g s (channel 2)", delay_s, delay2_s)
-        averaging = bool(self.read("SENS:AVER:STAT"))
-        settings = ImpactSettings(
-            span_hz=span,
-            center_hz=None if _baseband(span, center) else center,
-            hammer=channels[0],
-            accelerometer=channels[1],
-            trigger_source=source,
-            trigger_level_eu=level_v / (channels[1] if source == "CH2" else channels[0]).sensitivity_v_per_eu,
-            trigger_slope=slope,
-            pre_trigger_s=max(0.0, -delay_s),
-            averages=int(self.read("SENS:AVER:COUN")) if averaging else 1,
-            preview=self.read("SENS:AVER:PREV") == "MAN",
-            lines=lines,
-        )
-        self._record_length_s = settings.record_length_s
-        return settings
+    def _put(self, command: str, value: object, ch: int | None) -> None:
+        self.set(command, value, ch)
+
+    def _ask(self, query: str, ch: int | None) -> object:
+        if query == "SENS:FREQ:RES":
+            return self._read_lines()
+        return self.read(query, ch)
+
+    def _keep_read(self, fields: dict, channels: dict[int, dict]) -> int:
+        """Engineering units on or off, per channel: the unit of the data a fetch reads."""
+        self._eu = {ch: bool(channels[ch]["engineering_units"]) for ch in (1, 2)}
+        return int(fields["lines"])
 
     def _read_lines(self) -> int:
         lines = int(self.read("SENS:FREQ:RES"))
@@ -242,21 +161,17 @@ class ScpiAnalyzer(SignalAnalyzer):
         InstrumentError if the analyzer refuses."""
         self._record_length()
         self.send("ABOR;INIT:IMM")
-        self._raise_if_error()
+        self.raise_if_error()
 
     def accept(self) -> None:
         """Preview: put the pending hit into the average (never sent twice)."""
         self.send("SENS:AVER:PREV:ACC")
-        self._raise_if_error()
+        self.raise_if_error()
 
     def reject(self) -> None:
         """Preview: throw the pending hit away and re-arm (never sent twice)."""
         self.send("SENS:AVER:PREV:REJ")
-        self._raise_if_error()
-
-    def _raise_if_error(self) -> None:
-        if self.status().error:
-            self.check_errors()
+        self.raise_if_error()
 
     def averages_done(self) -> int:
         """Hits in the average so far."""
@@ -320,7 +235,7 @@ class ScpiAnalyzer(SignalAnalyzer):
         self, function: str, span: float, center: float, g: Geometry, count: int, overload: int
     ) -> Trace:
         feed, channel, complex_data, eu_unit, volt_unit = FEEDS[function]
-        zoom = not _baseband(span, center)
+        zoom = not self.baseband(span, center)
         time_domain = complex_data is None
         is_complex = zoom if time_domain else bool(complex_data)
         points = g.time_points(zoom) if time_domain else g.spectrum_points
@@ -397,11 +312,6 @@ class ScpiAnalyzer(SignalAnalyzer):
         if end != b"\n":
             raise ProtocolError(name, "the block does not end with LF", head + end)
         return decode_values(payload, name, ">f8", values)
-
-
-def _baseband(span: float, center: float) -> bool:
-    """A center at span/2 is a baseband measurement; above it, a zoom."""
-    return center <= span / 2 or math.isclose(center, span / 2, rel_tol=1e-9)
 
 
 def _uniform_step(x: np.ndarray, name: str) -> float:

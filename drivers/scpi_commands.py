@@ -21,6 +21,7 @@ from typing import Literal
 
 from drivers.commands import number
 from drivers.reply_values import typed_value
+from drivers.setting_table import Channels, Setting, SettingsTable, Window
 
 Kind = Literal["action", "setting", "query"]
 ArgumentKind = Literal["quantity", "number", "integer", "flag", "choice", "string"]
@@ -29,9 +30,12 @@ ReplyKind = Literal["none", "text", "number", "integer", "flag", "choice", "stri
 #: The unit suffix written after a quantity of each dimension (SI, as the driver holds it).
 UNIT_SUFFIX = {"frequency": "HZ", "time": "S", "voltage": "V"}
 
-#: Our window names (drivers.settings.Window values) and the 35670A's (peer).
-WINDOW_TYPES = {"UNIF": "UNIF", "HANN": "HANN", "FLAT": "FLAT", "FORC": "FORC", "EXPO": "EXP"}
-#: Our trigger sources (drivers.settings) and the 35670A's (peer).
+#: Our windows and the 35670A's names of them (peer).
+WINDOW_TYPES = {
+    Window.UNIFORM: "UNIF", Window.HANNING: "HANN", Window.FLAT_TOP: "FLAT", Window.FORCE: "FORC",
+    Window.EXPONENTIAL: "EXP",
+}  # fmt: skip
+#: Our trigger sources (drivers.setting_table) and the 35670A's (peer).
 TRIGGER_SOURCES = {"CH1": "INT1", "CH2": "INT2", "FREE": "IMM"}
 #: The EU label of each channel: the hammer in N, the accelerometer in m/s^2 (peer's list).
 EU_LABELS = {1: "N", 2: "M/S2"}
@@ -41,7 +45,7 @@ COORDINATES = ("NYQ", "POL", "REAL", "IMAG", "MLIN", "MLOG", "PHAS", "UPH")
 MAX_RANGE_V = 10 ** (27 / 20) * math.sqrt(2)
 
 
-#: STATUS_BITS (drivers/analyzer.py) from the SCPI registers: (register, bit, name).
+#: Status bits (drivers/messages.py) from the SCPI registers: (register, bit, name).
 #: OPER bits 4 and 5 are SCPI's (std), 8 and 9 the project's; QUES:VOLT bits proj.
 # fmt: off
 STATUS_MAP = (("oper", 8, "done"), ("oper", 5, "waiting_for_trigger"), ("oper", 9, "hit_pending"),
@@ -199,6 +203,46 @@ _TABLE: tuple[ScpiCommand, ...] = (
     _channel(_query("CALC<n>:DATA:HEAD:POIN?", "peer", "points of the trace", "integer")),
 )
 # fmt: on
+
+
+#: Each field of the settings (``ImpactSettings.wire_fields``) and its header, in the
+#: order ``configure`` sends them, one setting per message; read back in the same order.
+SETTINGS = SettingsTable(
+    (
+        Setting("instrument", "INST:SEL", fixed="FFT"),
+        Setting("data_format", "FORM:DATA", fixed="REAL,64"),
+        Setting("span_hz", "SENS:FREQ:SPAN"),
+        Setting("center_hz", "SENS:FREQ:CENT"),
+        Setting("lines", "SENS:FREQ:RES"),
+        Channels(
+            (
+                Setting("window", "SENS:WIND<n>:TYPE", WINDOW_TYPES),
+                Setting("force_width_s", "SENS:WIND<n>:FORC"),
+                Setting("exp_decay_s", "SENS:WIND<n>:EXP"),
+                Setting("sensitivity_v_per_eu", "SENS:VOLT<n>:RANG:UNIT:XDCR:SFAC"),
+                Setting("eu_label", "SENS:VOLT<n>:RANG:UNIT:XDCR:LAB", fixed=EU_LABELS),
+                # On: the data come in the channel's EU (what was read is the unit of a fetch).
+                Setting("engineering_units", "SENS:VOLT<n>:RANG:UNIT:XDCR", fixed=True,
+                        query="SENS:VOLT<n>:RANG:UNIT:XDCR"),
+                Setting("ac_coupled", "INP<n>:COUP", {True: "AC", False: "DC"}),
+                Setting("autorange", "SENS:VOLT<n>:RANG:AUTO", write=False),
+                # A range turns autorange off.
+                Setting("range_v", "SENS:VOLT<n>:RANG", when_none=("SENS:VOLT<n>:RANG:AUTO", True),
+                        unless=("autorange", True, None)),
+            ),
+        ),
+        Setting("trigger_source", "TRIG:SOUR", TRIGGER_SOURCES),
+        Setting("trigger_level_v", "TRIG:LEV"),
+        Setting("trigger_slope", "TRIG:SLOP"),
+        # The simulator keeps one delay, a real box one per channel: both are sent, equal.
+        Setting("trigger_delay_s", "TRIG:STAR<n>", each_channel=True),
+        Setting("averaging", "SENS:AVER:STAT", fixed=True, query="SENS:AVER:STAT"),
+        Setting("averages", "SENS:AVER:COUN", unless=("averaging", False, 1)),
+        Setting("averaging_type", "SENS:AVER:TYPE", fixed="RMS"),
+        Setting("averaging_stop", "SENS:AVER:TCON", fixed="FREE"),
+        Setting("preview", "SENS:AVER:PREV", {True: "MAN", False: "OFF"}, extra_replies={"TIM": False}),
+    )
+)  # fmt: skip
 
 
 # ------------------------------------------------------------------ the grammar

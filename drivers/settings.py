@@ -8,25 +8,18 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from enum import StrEnum
+from typing import Any
 
-from drivers.commands import SLOPES, TRIGGER_SOURCES, WINDOWS, command
+from drivers.commands import SETTINGS, command
 from drivers.record import RECORD_LINES
+from drivers.setting_table import SLOPES, TRIGGER_SOURCES, Window, write_steps
 
+__all__ = ["ChannelSetup", "ImpactSettings", "Window"]
 
-class Window(StrEnum):
-    """The windows of WIN1/WIN2, as the table (WINDOWS) spells them."""
-
-    UNIFORM = "UNIF"
-    HANNING = "HANN"
-    FLAT_TOP = "FLAT"
-    FORCE = "FORC"
-    EXPONENTIAL = "EXPO"
-
-
-if tuple(Window) != WINDOWS:  # an edit of the table must not leave this enum behind
-    raise ImportError(f"drivers.settings.Window {tuple(Window)} differs from the table's {WINDOWS}")
+#: The fields of a channel, as the tables name them.
+CHANNEL_FIELDS = ("window", "sensitivity_v_per_eu", "range_v", "force_width_s", "exp_decay_s", "ac_coupled")
 
 
 #: Defaults that scale with the record (T = 400 / span), so that one setup suits
@@ -209,36 +202,73 @@ class ImpactSettings:
         channel = self.accelerometer if self.trigger_source == "CH2" else self.hammer
         return self.trigger_level_eu * channel.sensitivity_v_per_eu
 
-    def commands(self, actual_span_hz: float | None = None) -> list[bytes]:
-        """The messages that apply these settings, in order.
+    def wire_fields(self, actual_span_hz: float | None = None) -> tuple[dict[str, Any], dict[int, dict]]:
+        """These settings as the analyzer holds them, by the names of the command tables'
+        rows (drivers/setting_table.py): the measurement's fields and each channel's.
 
         ``actual_span_hz`` is the span the analyzer made of ours (it rounds up to
         102.4 kHz / 2^n); at baseband the center must be half of that one.
         """
         span = self.span_hz if actual_span_hz is None else actual_span_hz
-        # The table (drivers/commands.py) spells each message: mnemonic, argument, unit.
-        out = [
-            command("FRQR"),
-            command("LNRS"),
-            command("FRS", self.span_hz),
-            command("CF", self.center_hz if self.center_hz is not None else span / 2),
+        fields = {
+            "span_hz": self.span_hz,
+            "center_hz": self.center_hz if self.center_hz is not None else span / 2,
+            "lines": self.lines,
+            "trigger_source": self.trigger_source,
+            "trigger_level_v": self.trigger_level_v,
+            "trigger_slope": self.trigger_slope,
+            "trigger_delay_s": -self.pre_trigger_s,
+            "averages": self.averages,
+            "preview": self.preview,
+        }
+        channels = {
+            ch: {name: getattr(setup, name) for name in CHANNEL_FIELDS}
+            for ch, setup in ((1, self.hammer), (2, self.accelerometer))
+        }
+        return fields, channels
+
+    @classmethod
+    def from_fields(
+        cls,
+        fields: Mapping[str, Any],
+        channels: Mapping[int, Mapping[str, Any]],
+        lines: int,
+        baseband: Callable[[float, float], bool],
+    ) -> ImpactSettings:
+        """The settings an analyzer holds, from the fields its table read back
+        (``wire_fields``' names); ``baseband(span, center)`` tells a zoom from baseband."""
+        hammer, accelerometer = (
+            ChannelSetup(
+                window=Window(channels[ch]["window"]),
+                sensitivity_v_per_eu=float(channels[ch]["sensitivity_v_per_eu"]),
+                range_v=None if channels[ch]["range_v"] is None else float(channels[ch]["range_v"]),
+                force_width_s=float(channels[ch]["force_width_s"]),
+                exp_decay_s=float(channels[ch]["exp_decay_s"]),
+                ac_coupled=bool(channels[ch]["ac_coupled"]),
+            )
+            for ch in (1, 2)
+        )
+        span, center = float(fields["span_hz"]), float(fields["center_hz"])
+        source = str(fields["trigger_source"])
+        trigger_channel = accelerometer if source == "CH2" else hammer
+        return cls(
+            span_hz=span,
+            center_hz=None if baseband(span, center) else center,
+            hammer=hammer,
+            accelerometer=accelerometer,
+            trigger_source=source,
+            trigger_level_eu=float(fields["trigger_level_v"]) / trigger_channel.sensitivity_v_per_eu,
+            trigger_slope=str(fields["trigger_slope"]),
+            pre_trigger_s=max(0.0, -float(fields["trigger_delay_s"])),
+            averages=int(fields["averages"]),
+            preview=bool(fields["preview"]),
+            lines=lines,
+        )
+
+    def commands(self, actual_span_hz: float | None = None) -> list[bytes]:
+        """The HP mnemonic messages that apply these settings, in order (drivers/commands.py
+        ``SETTINGS``); ``actual_span_hz`` as in ``wire_fields``."""
+        return [
+            command(mnemonic.format(ch=ch), value)
+            for mnemonic, value, ch in write_steps(SETTINGS, *self.wire_fields(actual_span_hz))
         ]
-        for ch, setup in ((1, self.hammer), (2, self.accelerometer)):
-            out += [
-                command(f"WIN{ch}", setup.window.value),
-                command(f"FWD{ch}", setup.force_width_s),
-                command(f"EXD{ch}", setup.exp_decay_s),
-                command(f"SNS{ch}", setup.sensitivity_v_per_eu),
-                command(f"C{ch}AC", setup.ac_coupled),
-                command(f"AU{ch}") if setup.range_v is None else command(f"RNG{ch}", setup.range_v),
-            ]
-        out += [
-            command("TSRC", self.trigger_source),
-            command("TLVL", self.trigger_level_v),
-            command("TSLP", self.trigger_slope),
-            command("TDLY", -self.pre_trigger_s),
-            command("NAVG", self.averages),
-            command("STBL"),
-            command("PRVW", self.preview),
-        ]
-        return out
