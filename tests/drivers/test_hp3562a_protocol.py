@@ -16,12 +16,12 @@ from contextlib import contextmanager
 
 import numpy as np
 import pytest
-from expected_protocol import ExpectedProtocol
 
 from drivers.dialects import HP3562A
 from drivers.errors import ProtocolError
 from drivers.hp_mnemonic import HPMnemonicAnalyzer
 from drivers.settings import ImpactSettings
+from tests.drivers.expected_protocol import ExpectedProtocol
 
 NO_ERROR = b'0,"No error"\r\n'
 # Header words (docs/instrument.md): 0 display function (1 frequency response,

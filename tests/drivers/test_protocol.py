@@ -6,11 +6,11 @@ exchange of the script did not happen. The dumps are in test_protocol_dumps.py.
 """
 
 import pytest
-from expected_protocol import ExpectedProtocol, expected
 
 from drivers.errors import ConnectionLost, InstrumentError, InstrumentTimeout, ProtocolError
 from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ChannelSetup, ImpactSettings, Window
+from tests.drivers.expected_protocol import ExpectedProtocol, expected
 
 NO_ERROR = b'0,"No error"\r\n'
 

@@ -8,9 +8,9 @@ import struct
 
 import numpy as np
 import pytest
-from expected_protocol import expected
 
 from drivers.errors import ProtocolError
+from tests.drivers.expected_protocol import expected
 
 # ------------------------------------------------------------------ dumps
 # Header words as documented (docs/instrument.md): 0 display function (1 frequency

@@ -15,13 +15,13 @@ from contextlib import contextmanager
 
 import numpy as np
 import pytest
-from expected_protocol import ExpectedProtocol
 
 from drivers.dialects import SCPI
 from drivers.errors import ConnectionLost, InstrumentError, InstrumentTimeout, ProtocolError
 from drivers.scpi_analyzer import ScpiAnalyzer
 from drivers.scpi_commands import parse_message, repeatable, replies
 from drivers.settings import ChannelSetup, ImpactSettings, Window
+from tests.drivers.expected_protocol import ExpectedProtocol
 
 IDN = b"HEWLETT-PACKARD,35670A,0000A00000,A.00.00\n"
 NO_ERROR = b'+0,"No error"\n'
