@@ -30,30 +30,6 @@ def sparkline(values: np.ndarray, width: int = 32) -> str:
     return "".join(SPARK[min(len(SPARK) - 1, int(p / top * (len(SPARK) - 1) + 0.5))] for p in peaks)
 
 
-def serve_simulator(
-    stack: contextlib.ExitStack, source: Any, time_scale: float, model: str = "35660A"
-) -> str:
-    """Start the simulated analyzer (of ``model``) serving ``source`` on a loopback TCP
-    socket for as long as ``stack`` lives; its VISA resource string."""
-    from sims.instrument import Analyzer
-    from sims.tcp_server import TcpServer
-
-    analyzer = Analyzer(source, time_scale=time_scale, model=model)
-    server = stack.enter_context(TcpServer(analyzer))
-    return server.resource
-
-
-def open_analyzer(stack: contextlib.ExitStack, resource: str, dialect: str | None = None) -> Any:
-    """The driver on ``resource`` (of ``dialect``, else of what answers), closed with
-    ``stack``; bad resources are a UserError."""
-    from drivers.family import open_analyzer as open_resource
-
-    try:
-        return stack.enter_context(open_resource(resource, timeout_s=5.0, dialect=dialect))
-    except ValueError as exc:
-        raise UserError(f"--resource {resource}: {exc}") from None
-
-
 def drive(console: Any, job: Any, store_dir: Path, ask: bool) -> Run:
     """Run ``job`` (a daq.workflows.capture.Capture) to its end with a display, seal the run and
     return it. With ``ask`` the operator decides each hit at the keyboard, else the

@@ -230,7 +230,7 @@ def create_app(service: Service) -> FastAPI:
         return _json_bytes(await read("list", "*", _store_call, service, service.runs_json, row))
 
     def run_info(rid: str) -> bytes:
-        from daq.cli.commands.runs import run_dict
+        from daq.workflows.run_views import run_dict
 
         info = run_dict(_store_call(service, service.store.open, rid), service.store.path / f"{rid}.h5")
         info["file"] = f"{rid}.h5"  # not the server's path
@@ -480,7 +480,7 @@ def _analysis(service: Service, rid: str) -> dict[str, Any]:
 
 
 def _run_row(service: Service, s: Any) -> dict[str, Any]:
-    from daq.cli.commands.runs import summary_dict
+    from daq.workflows.run_views import summary_dict
 
     row = summary_dict(s)
     row.pop("file", None)

@@ -72,7 +72,7 @@ class InstrumentLink:
         another process has it) and probe the analyzer once (a failure is recorded,
         not raised: the service starts, and says so)."""
         if self.sim is not None:
-            from daq.workflows.capture_session import serve_simulator
+            from daq.workflows.connect import serve_simulator
             from sims.hammer import HammerModel, adjusted
             from sims.sources import PhysicsSource
 

@@ -3,22 +3,14 @@ built-in simulator (resource ``sim``, ``sim:seed`` or ``sim:realistic``)."""
 
 from __future__ import annotations
 
-import enum
+import contextlib
 import os
+from typing import Any
 
 from drivers.analyzer import SignalAnalyzer
 from drivers.loopback import LoopbackTransport
 
 SIM_RESOURCES = ("sim", "sim:seed", "sim:realistic")
-
-
-class SimModel(enum.StrEnum):
-    """The models the simulator plays (sims/), by the name the CLI takes."""
-
-    hp35660a = "35660A"
-    hp3562a = "3562A"
-    hp35670a = "35670A"
-    hp35665a = "35665A"
 
 
 def configured_resource(option: str | None) -> str | None:
@@ -45,9 +37,10 @@ def open_analyzer(
     dialect: str | None = None,
     retries: int = 2,
 ) -> SignalAnalyzer:
-    """An open driver, of the dialect detection finds (``dialect`` forces one). ``sim``
-    runs the simulated analyzer in this process (scenario after the colon, ``seed`` by
-    default), at ``time_scale`` (0: hits land at once)."""
+    """An open driver, of the dialect detection finds (``dialect`` forces one): the one way
+    the application opens an analyzer. ``sim`` runs the simulated analyzer in this
+    process (scenario after the colon, ``seed`` by default), at ``time_scale`` (0: hits
+    land at once). A resource string that names nothing is a ValueError."""
     from drivers.family import connect
     from drivers.family import open_analyzer as open_resource
 
@@ -66,3 +59,16 @@ def open_analyzer(
             transport.close()
             raise
     return open_resource(resource, timeout_s=timeout_s, dialect=dialect, retries=retries)
+
+
+def serve_simulator(
+    stack: contextlib.ExitStack, source: Any, time_scale: float, model: str = "35660A"
+) -> str:
+    """Start the simulated analyzer (of ``model``) serving ``source`` on a loopback TCP
+    socket for as long as ``stack`` lives; its VISA resource string."""
+    from sims.instrument import Analyzer
+    from sims.tcp_server import TcpServer
+
+    analyzer = Analyzer(source, time_scale=time_scale, model=model)
+    server = stack.enter_context(TcpServer(analyzer))
+    return server.resource

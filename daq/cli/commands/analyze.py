@@ -21,18 +21,8 @@ import typer
 
 from daq.batch.dask_backend import failure_reason, run_on_cluster, scheduler_address
 from daq.batch.memory_tuning import worker_setup
-from daq.cli.commands.runs import JsonOption, StoreOption
+from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
 from daq.errors import UserError
-
-#: --scheduler of `daq analyze` and `daq fit`.
-SchedulerOption = Annotated[
-    str | None,
-    typer.Option(
-        metavar="<tcp://host:port>",
-        show_default=False,
-        help="Run on this Dask cluster instead of the local cores [default: $DAQ_SCHEDULER if set].",
-    ),
-]
 
 
 def register(app: typer.Typer) -> None:
@@ -95,9 +85,7 @@ def analyze(
     estimator: Annotated[
         str, typer.Option(metavar="<h1|h2|hv>", help="FRF estimator for time records.")
     ] = "h1",
-    jobs: Annotated[
-        int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
-    ] = None,
+    jobs: JobsOption = None,
     scheduler: SchedulerOption = None,
     force: Annotated[
         bool, typer.Option("--force", help="Analyse again even if a result is up to date.")

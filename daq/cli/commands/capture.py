@@ -18,10 +18,19 @@ from typing import Annotated, Any
 
 import typer
 
-from daq.cli.commands.sim import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
-from daq.cli.commands.talk import DialectOption, check_dialect
+from daq.cli.options import (
+    DialectOption,
+    Scenario,
+    SimModel,
+    SimModelOption,
+    SimScenarioOption,
+    SimSeedOption,
+    SimTimeScaleOption,
+    StoreOption,
+    check_dialect,
+)
 from daq.errors import UserError
-from daq.workflows.connect import SimModel, configured_resource
+from daq.workflows.connect import configured_resource
 from drivers.settings import ChannelSetup, ImpactSettings
 
 #: Keys of a setup file: top level, and of each [hammer] / [accelerometer] table.
@@ -172,27 +181,17 @@ def capture(
         str, typer.Option(metavar="<name>", help="Who hits the beam (stored with the run).")
     ] = "",
     note: Annotated[str, typer.Option(metavar="<text>", help="Free text stored with the run.")] = "",
-    store: Annotated[
-        str | None,
-        typer.Option(
-            metavar="<dir>", help="Run store folder (else $DAQ_STORE, the config file, the default)."
-        ),
-    ] = None,
-    scenario: Annotated[Scenario | None, typer.Option(help="Simulator only. " + SCENARIO_HELP)] = None,
-    seed: Annotated[int | None, typer.Option(metavar="<int>", help="Simulator only. " + SEED_HELP)] = None,
-    time_scale: Annotated[
-        float | None,
-        typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
-    ] = None,
+    store: StoreOption = None,
+    scenario: SimScenarioOption = None,
+    seed: SimSeedOption = None,
+    time_scale: SimTimeScaleOption = None,
     hammer: Annotated[
         str | None,
         typer.Option(
             metavar="<k=v,...>", help="Simulator only: the simulated hammer, e.g. double_hit_probability=1."
         ),
     ] = None,
-    model: Annotated[
-        SimModel | None, typer.Option(help="Simulator only: the model simulated [default: 35660A].")
-    ] = None,
+    model: SimModelOption = None,
     print_setup: Annotated[
         bool, typer.Option("--print-setup", help="Print the default setup file and exit.")
     ] = False,
@@ -269,9 +268,10 @@ def run_capture(
     capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
     from rich.console import Console
 
+    from daq.cli.capture_session import drive
     from daq.store import Store, StoreError, resolve_store_dir
     from daq.workflows.capture import Capture
-    from daq.workflows.capture_session import drive, open_analyzer, serve_simulator
+    from daq.workflows.connect import open_analyzer, serve_simulator
 
     console = Console(highlight=False, soft_wrap=True)
     store_dir, _ = resolve_store_dir(store)
@@ -296,7 +296,10 @@ def run_capture(
                 "model": model,
             }  # fmt: skip
             console.print(f"Simulated {model} ({scenario} beam) at {resource}: --sim")
-        dsa = open_analyzer(stack, resource, dialect)
+        try:
+            dsa = stack.enter_context(open_analyzer(resource, dialect=dialect))
+        except ValueError as exc:
+            raise UserError(f"--resource {resource}: {exc}") from None
         job = Capture(
             dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
             simulator=simulator, operator=operator, note=note, store_dir=store_dir,

@@ -19,7 +19,7 @@ from typing import Annotated
 
 import typer
 
-from daq.cli.commands.runs import StoreOption
+from daq.cli.options import StoreOption
 from daq.errors import UserError
 
 

@@ -9,8 +9,7 @@ from typing import Annotated, Any
 
 import typer
 
-from daq.cli.commands.analyze import SchedulerOption
-from daq.cli.commands.runs import JsonOption, StoreOption
+from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
 from daq.errors import UserError
 
 #: FitOptions' field names as the options a user types.
@@ -79,9 +78,7 @@ def fit(
             "identified in the fitted band].",
         ),
     ] = None,
-    jobs: Annotated[
-        int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
-    ] = None,
+    jobs: JobsOption = None,
     scheduler: SchedulerOption = None,
     force: Annotated[bool, typer.Option("--force", help="Fit again even if a result is up to date.")] = False,
     json_output: JsonOption = False,

@@ -17,7 +17,7 @@ from typing import Annotated, Any
 
 import typer
 
-from daq.cli.commands.runs import StoreOption
+from daq.cli.options import StoreOption
 from daq.errors import UserError
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"

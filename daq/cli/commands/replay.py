@@ -20,7 +20,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from daq.cli.commands.runs import StoreOption
+from daq.cli.options import StoreOption
 from daq.errors import UserError
 from drivers.dialects import HP3562A, HP35660A, SAMPLE_RATE_PER_SPAN, SCPI, Dialect
 
@@ -102,9 +102,10 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
     """Replay the run file at ``path`` into ``the_store``; the new Run."""
     from rich.console import Console
 
+    from daq.cli.capture_session import drive
     from daq.store import StoreError, open_run
     from daq.workflows.capture import Capture, settings_from_dict
-    from daq.workflows.capture_session import drive, open_analyzer, serve_simulator
+    from daq.workflows.connect import open_analyzer, serve_simulator
     from daq.workflows.recorded_hits import recorded_hits
     from sims.sources import ReplaySource
 
@@ -129,7 +130,7 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
             f"Replaying run {original.run_id} ({hits.n_hits} hits) "
             f"through the simulated {model} at {resource}"
         )
-        dsa = open_analyzer(stack, resource)
+        dsa = stack.enter_context(open_analyzer(resource))
 
         def original_verdict(hit: Any) -> tuple[bool, str]:
             return bool(hits.accepted[hit.index]), str(hits.reject_reason[hit.index])

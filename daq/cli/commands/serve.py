@@ -14,11 +14,18 @@ from typing import Annotated
 
 import typer
 
-from daq.cli.commands.runs import StoreOption
-from daq.cli.commands.sim import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
-from daq.cli.commands.talk import DialectOption, check_dialect
+from daq.cli.options import (
+    DialectOption,
+    Scenario,
+    SimModel,
+    SimModelOption,
+    SimScenarioOption,
+    SimSeedOption,
+    SimTimeScaleOption,
+    StoreOption,
+    check_dialect,
+)
 from daq.errors import UserError
-from daq.workflows.connect import SimModel
 
 
 def register(app: typer.Typer) -> None:
@@ -53,15 +60,10 @@ def serve(
     show_token: Annotated[
         bool, typer.Option("--show-token", help="Print the access token (made at first start) and exit.")
     ] = False,
-    scenario: Annotated[Scenario | None, typer.Option(help="Simulator only. " + SCENARIO_HELP)] = None,
-    seed: Annotated[int | None, typer.Option(metavar="<int>", help="Simulator only. " + SEED_HELP)] = None,
-    time_scale: Annotated[
-        float | None,
-        typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
-    ] = None,
-    model: Annotated[
-        SimModel | None, typer.Option(help="Simulator only: the model simulated [default: 35660A].")
-    ] = None,
+    scenario: SimScenarioOption = None,
+    seed: SimSeedOption = None,
+    time_scale: SimTimeScaleOption = None,
+    model: SimModelOption = None,
 ) -> None:
     """Run the lab service: the analyzer, the store, a live web page and an HTTP API.
 

@@ -6,12 +6,12 @@ import ipaddress
 import signal
 import sys
 import threading
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from daq.cli.options import MODEL_HELP, MODEL_METAVAR, SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
 from daq.errors import UserError
 
 sim_app = typer.Typer(
@@ -28,29 +28,6 @@ def _sim(ctx: typer.Context) -> None:
         # A bare `daq sim`: the help is the answer, not an error.
         typer.echo(ctx.get_help())
         raise typer.Exit()
-
-
-class Scenario(StrEnum):
-    seed = "seed"
-    realistic = "realistic"
-
-
-MODEL_METAVAR = "35660A|3562A|35670A|35665A"
-MODEL_HELP = (
-    "The analyzer simulated: 35660A or 3562A (HP mnemonics, docs/instrument.md) or 35670A or 35665A "
-    "(SCPI, docs/instrument-scpi.md)."
-)
-
-
-# Shared with `daq demo`, so that the same option reads the same in both helps.
-SCENARIO_HELP = (
-    "The specimen simulated: seed (the paper's 3-function model and eq (18) damping) "
-    "or realistic (the exact beam, 6 lightly damped modes)."
-)
-SEED_HELP = "Random seed of the simulated hammer and noise: the same seed gives the same data."
-TIME_SCALE_HELP = (
-    "Speed of simulated time: 1 = real time (a hit every 0.5-2 s), 0.1 = ten times faster, 0 = instant."
-)
 
 
 def _model(name: str):

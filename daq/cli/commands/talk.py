@@ -8,48 +8,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.options import DialectOption, ResourceOption, TimeoutOption, check_dialect
 from daq.errors import UserError
-
-# Optional for typer, so that a missing resource can say where else it may come from.
-ResourceOption = Annotated[
-    str | None,
-    typer.Option(
-        "--resource",
-        "-r",
-        envvar="DAQ_RESOURCE",
-        show_envvar=True,
-        metavar="<resource>",
-        help="The analyzer: GPIB0::11::INSTR, TCPIP::<host>::<port>::SOCKET, "
-        "PROLOGIX::<serial port>::<GPIB address>, or sim (the built-in simulator). Needed, "
-        "here or in the environment.",
-    ),
-]
-DialectOption = Annotated[
-    str | None,
-    typer.Option(
-        "--dialect",
-        envvar="DAQ_DIALECT",
-        show_envvar=True,
-        metavar="<35660A|3562A|SCPI>",
-        help="Speak this dialect without asking the analyzer which it is (35665A and 35670A "
-        "mean SCPI) [default: found out on connecting: *IDN?, then ID?].",
-    ),
-]
-TimeoutOption = Annotated[
-    float, typer.Option("--timeout", metavar="<seconds>", help="How long to wait for each reply.")
-]
-
-
-def check_dialect(dialect: str | None) -> str | None:
-    """The --dialect value as a dialect's name; UserError (exit 2) for an unknown one."""
-    if dialect is None:
-        return None
-    from drivers.dialects import dialect_named
-
-    try:
-        return dialect_named(dialect).name
-    except ValueError as exc:
-        raise UserError(f"--dialect: {exc}", exit_code=2) from None
 
 
 def _open(resource: str | None, timeout: float, dialect: str | None = None, retries: int = 2):

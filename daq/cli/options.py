@@ -1,0 +1,124 @@
+"""Every option that more than one command takes, declared once: the store, --json, the
+analyzer (resource, dialect, timeout), the simulator (scenario, seed, time scale, model),
+worker processes and the Dask scheduler.
+
+A command module imports its shared options from here and never from another command,
+so that one option reads the same in every help and is changed in one place.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated
+
+import typer
+
+from daq.errors import UserError
+
+# ------------------------------------------------------------------ the store
+StoreOption = Annotated[
+    str | None,
+    typer.Option(
+        "--store",
+        metavar="<dir>",
+        show_default=False,
+        help="The store folder; else $DAQ_STORE, the config file's store or the per-user data folder.",
+    ),
+]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+
+# --------------------------------------------------------------- the analyzer
+# Optional for typer, so that a missing resource can say where else it may come from.
+ResourceOption = Annotated[
+    str | None,
+    typer.Option(
+        "--resource",
+        "-r",
+        envvar="DAQ_RESOURCE",
+        show_envvar=True,
+        metavar="<resource>",
+        help="The analyzer: GPIB0::11::INSTR, TCPIP::<host>::<port>::SOCKET, "
+        "PROLOGIX::<serial port>::<GPIB address>, or sim (the built-in simulator). Needed, "
+        "here or in the environment.",
+    ),
+]
+DialectOption = Annotated[
+    str | None,
+    typer.Option(
+        "--dialect",
+        envvar="DAQ_DIALECT",
+        show_envvar=True,
+        metavar="<35660A|3562A|SCPI>",
+        help="Speak this dialect without asking the analyzer which it is (35665A and 35670A "
+        "mean SCPI) [default: found out on connecting: *IDN?, then ID?].",
+    ),
+]
+TimeoutOption = Annotated[
+    float, typer.Option("--timeout", metavar="<seconds>", help="How long to wait for each reply.")
+]
+
+
+def check_dialect(dialect: str | None) -> str | None:
+    """The --dialect value as a dialect's name; UserError (exit 2) for an unknown one."""
+    if dialect is None:
+        return None
+    from drivers.dialects import dialect_named
+
+    try:
+        return dialect_named(dialect).name
+    except ValueError as exc:
+        raise UserError(f"--dialect: {exc}", exit_code=2) from None
+
+
+# -------------------------------------------------------------- the simulator
+class Scenario(StrEnum):
+    seed = "seed"
+    realistic = "realistic"
+
+
+class SimModel(StrEnum):
+    """The models the simulator plays (sims/), by the name the CLI takes."""
+
+    hp35660a = "35660A"
+    hp3562a = "3562A"
+    hp35670a = "35670A"
+    hp35665a = "35665A"
+
+
+MODEL_METAVAR = "35660A|3562A|35670A|35665A"
+MODEL_HELP = (
+    "The analyzer simulated: 35660A or 3562A (HP mnemonics, docs/instrument.md) or 35670A or 35665A "
+    "(SCPI, docs/instrument-scpi.md)."
+)
+SCENARIO_HELP = (
+    "The specimen simulated: seed (the paper's 3-function model and eq (18) damping) "
+    "or realistic (the exact beam, 6 lightly damped modes)."
+)
+SEED_HELP = "Random seed of the simulated hammer and noise: the same seed gives the same data."
+TIME_SCALE_HELP = (
+    "Speed of simulated time: 1 = real time (a hit every 0.5-2 s), 0.1 = ten times faster, 0 = instant."
+)
+
+#: The simulator options of a command that drives a real analyzer or, with --sim, the simulator.
+SimScenarioOption = Annotated[Scenario | None, typer.Option(help="Simulator only. " + SCENARIO_HELP)]
+SimSeedOption = Annotated[int | None, typer.Option(metavar="<int>", help="Simulator only. " + SEED_HELP)]
+SimTimeScaleOption = Annotated[
+    float | None,
+    typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
+]
+SimModelOption = Annotated[
+    SimModel | None, typer.Option(help="Simulator only: the model simulated [default: 35660A].")
+]
+
+# ------------------------------------------------------------ where work runs
+JobsOption = Annotated[
+    int | None, typer.Option(metavar="<n>", help="Worker processes [default: one per core].")
+]
+SchedulerOption = Annotated[
+    str | None,
+    typer.Option(
+        metavar="<tcp://host:port>",
+        show_default=False,
+        help="Run on this Dask cluster instead of the local cores [default: $DAQ_SCHEDULER if set].",
+    ),
+]

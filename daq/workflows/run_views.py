@@ -1,0 +1,104 @@
+"""What a run is, as plain data: the JSON of a run's summary and of the whole run, which
+`daq runs list/show --json` print and the service's API serves. One view for both, so
+that the page and the terminal can never disagree about a run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+
+def summary_dict(s) -> dict[str, Any]:
+    """The JSON of a store listing's RunSummary ``s``."""
+    return {
+        "run_id": s.run_id,
+        "file": s.file_name,
+        "start_time": s.start_time,
+        "kind": s.kind,
+        "complete": s.complete,
+        "n_hits": s.n_hits,
+        "n_accepted": s.n_accepted,
+        "operator": s.operator,
+        "note": s.note,
+        "size_bytes": s.size_bytes,
+        "error": s.error,
+    }
+
+
+def run_dict(run, path: Path) -> dict[str, Any]:
+    """The JSON of a whole ``run`` (daq.store.Run) read from ``path``: its metadata, every
+    hit's verdict, and the shape of its FRFs and spectra (not the arrays)."""
+    hits = run.hits
+    hits_data = None
+    n_hits = n_accepted = 0
+    if hits is not None:
+        n_hits, n_accepted = int(hits.n_hits), int(hits.accepted.sum())
+        hits_data = {
+            "n_hits": n_hits,
+            "n_accepted": n_accepted,
+            "n_rejected": n_hits - n_accepted,
+            "n_samples": int(hits.n_samples),
+            "sample_rate_hz": float(hits.sample_rate_hz),
+            "start_s": float(hits.start_s),
+            "center_hz": float(hits.center_hz),
+            "zoom": bool(hits.is_zoom),
+            "hits": [
+                {
+                    "index": i,
+                    "accepted": bool(hits.accepted[i]),
+                    "reject_reason": str(hits.reject_reason[i]),
+                    "peak_force_n": float(hits.peak_force_n[i]),
+                    "overload_force": bool(hits.overload[i, 0]),
+                    "overload_response": bool(hits.overload[i, 1]),
+                    "timestamp_utc": str(hits.timestamp_utc[i]),
+                }
+                for i in range(n_hits)
+            ],
+        }
+    return {
+        "run_id": run.run_id,
+        "file": str(path),
+        "size_bytes": path.stat().st_size,
+        "kind": run.kind,
+        "complete": bool(run.complete),
+        "start_time": run.start_time,
+        "end_time": run.end_time,
+        "operator": run.operator,
+        "note": run.note,
+        "software": run.software,
+        "provenance": run.provenance,
+        "instrument": None if run.instrument is None else dict(vars(run.instrument)),
+        "sample": None if run.sample is None else dict(vars(run.sample)),
+        "n_hits": n_hits,
+        "n_accepted": n_accepted,
+        "hits": hits_data,
+        "analyzer": frf_dict(run.analyzer),
+        "measured_frf": frf_dict(run.measured_frfs),
+        "spectra": spectra_dict(run.spectra),
+    }
+
+
+def frf_dict(frf) -> dict[str, Any] | None:
+    if frf is None:
+        return None
+    return {
+        "n_frf": int(frf.n_frf),
+        "n_lines": int(frf.n_lines),
+        "f_min_hz": float(frf.frequency_hz[0]),
+        "f_max_hz": float(frf.frequency_hz[-1]),
+        "coherence": frf.coherence is not None,
+        "labels": list(frf.labels),
+        "form": frf.form,
+    }
+
+
+def spectra_dict(spectra) -> dict[str, Any] | None:
+    if spectra is None:
+        return None
+    lines = spectra.frequency_hz
+    return {
+        "n_traces": spectra.n_traces, "n_lines": spectra.n_lines,
+        "f_min_hz": float(lines[0]), "f_max_hz": float(lines[-1]),
+        "complex": bool(spectra.values.dtype.kind == "c"),
+        "kinds": list(spectra.kinds), "units": list(spectra.units), "labels": list(spectra.labels),
+    }  # fmt: skip
