@@ -3,7 +3,8 @@
     .venv/bin/python bench/bench_store.py [--runs 1000] [--keep DIR]
 
 Prints a small table. The store is built in a temporary folder and removed afterwards
-(--keep DIR: built in DIR/many and kept, e.g. to time other code on the same runs).
+(--keep DIR: built in DIR/many and kept; given again, the runs kept there are timed
+again, e.g. to time other code on the same runs).
 
 "cold" means without the index cache (.index.sqlite removed before each timing; the
 files themselves are in the page cache, as they are after any recent use). The cold
@@ -90,17 +91,18 @@ def timed_process(argv: list[str]) -> float:
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
-            check=True,
         )
+        if done.returncode != 0:
+            raise SystemExit(f"{' '.join(argv)} failed:\n{done.stderr[-2000:]}")
         return float(done.stderr.strip().splitlines()[-1].split()[-1])
     start = time.perf_counter()
     subprocess.run(argv, cwd=repo, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
     return time.perf_counter() - start
 
 
-def cold_cli_list(store_dir: Path) -> float:
+def cold_cli_list(store_dir: Path, *options: str) -> float:
     remove_index(store_dir)
-    return timed_process([sys.executable, "-m", "daq", "runs", "list", "--store", str(store_dir)])
+    return timed_process([sys.executable, "-m", "daq", "runs", "list", *options, "--store", str(store_dir)])
 
 
 def cli_help() -> float:
@@ -138,11 +140,16 @@ def main() -> None:
         rows.append(("verify of that run (best of 10)", f"{best_of(lambda: verify(path), 10) * 1e3:.1f} ms"))
 
         many = root / "many"
-        start = time.perf_counter()
-        for i in range(args.runs):
-            seal(make_run(10, 1024, seed=i), many)
-        filling = time.perf_counter() - start
-        rows.append((f"seal {args.runs} runs (10 x 1024 each)", f"{filling:.1f} s"))
+        kept = sorted(many.glob("*.h5")) if many.is_dir() else []
+        if kept:  # --keep of an earlier run: time the same runs again
+            args.runs = len(kept)
+            rows.append((f"seal {args.runs} runs (10 x 1024 each)", "kept from an earlier run"))
+        else:
+            start = time.perf_counter()
+            for i in range(args.runs):
+                seal(make_run(10, 1024, seed=i), many)
+            filling = time.perf_counter() - start
+            rows.append((f"seal {args.runs} runs (10 x 1024 each)", f"{filling:.1f} s"))
         store = Store(many)
         colds = []
         for _ in range(args.repeat):
@@ -162,6 +169,13 @@ def main() -> None:
         rows.append(
             (
                 f"`daq runs list` of {args.runs} runs cold, whole process (median of {args.repeat})",
+                f"{statistics.median(cli):.2f} s (min {min(cli):.2f})",
+            )
+        )
+        cli = [cold_cli_list(many, "--json") for _ in range(args.repeat)]
+        rows.append(
+            (
+                f"`daq runs list --json` of {args.runs} runs cold, whole process (median of {args.repeat})",
                 f"{statistics.median(cli):.2f} s (min {min(cli):.2f})",
             )
         )
