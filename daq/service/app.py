@@ -305,16 +305,12 @@ def create_app(service: Service) -> FastAPI:
         the_run = _store_call(service, service.store.open, rid)
         folder = Path(tempfile.mkdtemp(prefix="daq-export-"))
         target = folder / f"{rid}.{format}"
+        from daq.workflows.errors import WorkflowError
+        from daq.workflows.export import write_run
+
         try:
-            if format == "csv":
-                from daq.formats.csv_text import write_csv
-
-                write_csv(the_run, target)
-            else:
-                from daq.formats.uff58_export import write_uff
-
-                write_uff(the_run, target)
-        except (ValueError, OSError) as exc:
+            write_run(the_run, target, format)
+        except (WorkflowError, ValueError, OSError) as exc:
             _remove(folder)
             message = service.public(f"cannot export run {rid} as {format}: {exc}")
             raise HTTPException(422, message) from None

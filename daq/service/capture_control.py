@@ -19,7 +19,6 @@ import logging
 import threading
 from collections.abc import Callable
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -37,6 +36,7 @@ from daq.workflows.capture import (
     HitDecided,
     settings_as_dict,
 )
+from daq.workflows.live_frf import live_frf
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings
 
@@ -366,32 +366,3 @@ def _hits(n: int) -> str:
 
 class _Stopped(Exception):
     """Stop or Abort was asked while the capture waited."""
-
-
-def live_frf(
-    settings: dict[str, Any],
-    records: list[tuple[np.ndarray, np.ndarray]],
-    sample_rate_hz: float,
-    center_hz: float,
-) -> dict[str, Any]:
-    """H1 and coherence over the accepted hits so far, with the windows the analysis
-    will use (the analyzer's settings). records: [(force_n, response_m_s2)] each (n,)."""
-    from analysis.spectra import frf_estimate, linear_spectra
-    from daq.workflows.analysis import window_specs
-
-    force_window, response_window, _ = window_specs(
-        SimpleNamespace(instrument=SimpleNamespace(settings=settings))
-    )
-    force = np.stack([f for f, _ in records])
-    response = np.stack([r for _, r in records])
-    spectra = linear_spectra(
-        force, response, sample_rate_hz, force_window, response_window, center_hz=center_hz
-    )
-    est = frf_estimate(spectra)
-    return {
-        "n_averaged": len(records),
-        "frequency_hz": est.frequency_hz,
-        "frf_abs": np.abs(est.h1),
-        "frf_phase_deg": np.degrees(np.angle(est.h1)),
-        "coherence": est.coherence,
-    }
