@@ -12,7 +12,7 @@ import pytest
 from cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
 from reference import EQ18_DAMPING_RATIOS, REALISTIC_DAMPING_RATIOS
 
-from daq.workflows.fit import _de_bounds
+from analysis.damping.fit_limits import de_bounds as _de_bounds
 
 
 def fit_json(store: Path, *args: str) -> list[dict]:

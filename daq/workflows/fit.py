@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from analysis.damping.checks import central_jacobian, multi_start_check, per_hit_std
+from analysis.damping.fit_limits import GA_BOUNDS, coded_scale, de_bounds, identified_poles, noise_floor
 from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.run_analysis import AnalysisOptions
@@ -130,7 +131,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     elif options.method == "ga":
         result = damping.fit_ga(objective, n, seed=options.seed, psd=options.psd, bounds=GA_BOUNDS)
     elif options.method == "de":
-        bounds = _de_bounds(start, options.psd)
+        bounds = de_bounds(start, options.psd)
         result = damping.fit_de(objective, n, seed=options.seed, psd=options.psd, bounds=bounds)
         result = replace(result, message=f"{result.message} (box ±{bounds[1]:.4g} per term)")
     pole_fit = None
@@ -174,8 +175,8 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
             for f, z in zip(implied.natural_frequencies_hz, implied.damping_ratios, strict=True)
         ],
         "start": {"damping_matrix": _matrix_json(start), "matching": _jsonable(matching),
-                  "coded_scale": _coded_scale(start, options.psd)},
-        "search_box": {"ga": GA_BOUNDS[1], "de": _de_bounds(start, options.psd)[1]}.get(options.method),
+                  "coded_scale": coded_scale(start, options.psd)},
+        "search_box": {"ga": GA_BOUNDS[1], "de": de_bounds(start, options.psd)[1]}.get(options.method),
         "multi_start": global_check,
         "pole_fit": pole_fit,
         "stiffness": stiffness_info,
@@ -281,7 +282,7 @@ def _pilkey_inman(damping: Any, model: Any, f_hz: np.ndarray, zeta: np.ndarray, 
         raise ValueError("no identified mode in the fitted band to take a pole from")
     model_hz = damping.undamped_modes(model)[0] / (2 * np.pi)
     paired = match_modes(f_hz, model_hz) >= 0
-    poles = _identified_poles(f_hz[paired], np.clip(zeta[paired], 0.0, 0.999))
+    poles = identified_poles(f_hz[paired], np.clip(zeta[paired], 0.0, 0.999))
     # Not from the proportional estimate: there the poles do not move to first order
     # with the off-diagonal modal terms, and the iteration cannot leave it.
     r, info = damping.pilkey_inman(model, poles, psd=psd)
@@ -445,11 +446,6 @@ def _fixed(damping: Any, method: str, r: np.ndarray, objective: Any, n_eval: int
     )  # fmt: skip
 
 
-def _identified_poles(f_hz: np.ndarray, zeta: np.ndarray) -> np.ndarray:
-    w = 2 * np.pi * f_hz
-    return -zeta * w + 1j * w * np.sqrt(np.clip(1 - zeta**2, 0, None))
-
-
 def _data(run: Run, analysis: dict[str, Any], model: Any, options: FitOptions) -> tuple[Any, str]:
     """The data the fit compares with: the accepted hits (band-limited, time domain,
     eq 17), or the FRF the run's analysis stored (frequency domain, with the
@@ -500,65 +496,14 @@ def _objective(data: Any, domain: str):
     return objective, residual_fn, batched
 
 
-#: Samples before each hit's force peak that the analyzer's anti-alias filters may
-#: already have touched (their linear-phase pre-ringing spreads about ten samples).
-PRE_RINGING_SAMPLES = 16
-
-
-#: DE searches a box this many times the largest term of the modal estimate (at
-#: least the seed's [-10, 10]): a realistic beam's R has terms in the hundreds.
-DE_BOX_FACTOR = 10.0
-
-
-#: The seed's coding range of every term (Table 3): the GA keeps it, to be the paper's.
-GA_BOUNDS = (-10.0, 10.0)
-
-
-def _coded_scale(start: np.ndarray, psd: bool) -> float:
-    """Largest coded term the modal estimate needs: max |R_ij|, or with R = L L^T the
-    largest term of its Cholesky factor L."""
-    from analysis.damping import matrix_to_theta
-
-    return float(np.max(np.abs(matrix_to_theta(start, psd))))
-
-
-def _de_bounds(start: np.ndarray, psd: bool) -> tuple[float, float]:
-    """(lo, hi) of every coded term for differential evolution, from the modal estimate."""
-    half = max(GA_BOUNDS[1], DE_BOX_FACTOR * _coded_scale(start, psd))
-    return -half, half
-
-
 def _noise_floor(run: Run, domain: str, model: Any, damping: np.ndarray) -> float | None:
-    """Psi (eq 17) that the measurement noise alone would leave at the true R.
-
-    Both channels' noise is taken from the samples before each hit's pulse (and the
-    filters' pre-ringing). The response's noise enters Psi directly; the force's
-    enters through the model, white over the span: sigma^2 = sigma_y^2 + sigma_f^2
-    mean|H|^2 (lines 0..span, H of the model with ``damping``: the modal estimate, so
-    that every method of one run is held to the same floor). With a 2.25 mV/N hammer the second
-    term dominates at the seed beam's |H| of tens of (m/s^2)/N. None when no hit has
-    16 quiet samples.
-    """
-    from analysis.response import frequency_response
-
+    """Psi that the noise alone would leave (analysis/damping/fit_limits.noise_floor) for
+    the run's accepted hits; None in the frequency domain or without hits."""
     hits = run.hits
     if domain != "time" or hits is None:
         return None
     pick = hits.accepted
-    force = np.real(hits.force_n[pick])
-    response = np.real(hits.response_m_s2[pick])
-    ends = [int(np.argmax(np.abs(force[k]))) - PRE_RINGING_SAMPLES for k in range(force.shape[0])]
-    quiet = [(force[k, :end], response[k, :end]) for k, end in enumerate(ends) if end >= 16]
-    if not quiet:
-        return None
-    sigma_f = float(np.sqrt(np.mean(np.concatenate([q[0] - q[0].mean() for q in quiet]) ** 2)))
-    sigma_y = float(np.sqrt(np.mean(np.concatenate([q[1] - q[1].mean() for q in quiet]) ** 2)))
-    span_hz = hits.sample_rate_hz / 2.56
-    # The lines of the run's own record (2.56 samples a line), whichever analyzer made it.
-    n_points = hits.n_samples * 100 // 256 + 1
-    h = frequency_response(model, damping, np.linspace(0.0, span_hz, n_points), "acceleration")
-    sigma = np.sqrt(sigma_y**2 + sigma_f**2 * float(np.mean(np.abs(h) ** 2)))
-    return float(sigma / np.sqrt(response.size))
+    return noise_floor(hits.force_n[pick], hits.response_m_s2[pick], hits.sample_rate_hz, model, damping)
 
 
 def _num(value: float) -> float | None:
