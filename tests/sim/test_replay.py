@@ -24,7 +24,7 @@ import pytest
 from cli_helpers import DAQ, assert_one_line_error, run_daq
 from wire import HEADER_LENGTH, decode_trace
 
-from daq.errors import UserError
+from daq.workflows.errors import WorkflowError
 from daq.workflows.recorded_hits import load_recorded_hits
 from sims.command_table import ERRORS
 from sims.inprocess import InProcessConnection
@@ -423,7 +423,7 @@ def test_a_malformed_run_is_a_user_error_naming_the_problem(tmp_path, case):
     datasets = dict(datasets)
     skip = datasets.pop("skip", ())
     path = write_run(tmp_path / "bad.h5", make_hits(2), skip=skip, **datasets)
-    with pytest.raises(UserError, match=message) as info:
+    with pytest.raises(WorkflowError, match=message) as info:
         load_recorded_hits(path)
     assert str(path) in str(info.value)
 
@@ -431,18 +431,18 @@ def test_a_malformed_run_is_a_user_error_naming_the_problem(tmp_path, case):
 def test_accepted_only_leaving_nothing_is_a_user_error(tmp_path):
     path = write_run(tmp_path / "run.h5", make_hits(2), accepted=np.array([False, False]))
     assert len(load_recorded_hits(path)) == 2
-    with pytest.raises(UserError, match="no hits to replay"):
+    with pytest.raises(WorkflowError, match="no hits to replay"):
         load_recorded_hits(path, accepted_only=True)
 
 
 def test_a_file_that_is_not_hdf5_is_a_user_error(tmp_path):
     path = tmp_path / "run.h5"
     path.write_text("force,response\n1,2\n")
-    with pytest.raises(UserError, match="not a readable HDF5 file"):
+    with pytest.raises(WorkflowError, match="not a readable HDF5 file"):
         load_recorded_hits(path)
-    with pytest.raises(UserError, match="no such run file"):
+    with pytest.raises(WorkflowError, match="no such run file"):
         load_recorded_hits(tmp_path / "missing.h5")
-    with pytest.raises(UserError, match="no such run file"):
+    with pytest.raises(WorkflowError, match="no such run file"):
         load_recorded_hits(tmp_path)  # a folder
 
 
@@ -457,20 +457,20 @@ def test_a_file_that_is_not_hdf5_is_a_user_error(tmp_path):
 )
 def test_misshapen_flags_are_a_user_error(tmp_path, datasets, name):
     """Flags shaped unlike the hits (overload (n_hits, 2), accepted (n_hits,)) are a
-    UserError naming the dataset, which `daq sim serve --replay` reports as the user's
+    WorkflowError naming the dataset, which `daq sim serve --replay` reports as the user's
     mistake, not an IndexError it would turn into "internal error" (exit 70)."""
     path = write_run(tmp_path / "run.h5", make_hits(2), **datasets)
-    with pytest.raises(UserError, match=name):
+    with pytest.raises(WorkflowError, match=name):
         load_recorded_hits(path, accepted_only=True)
 
 
 def test_a_group_where_a_dataset_belongs_is_a_user_error(tmp_path):
-    """A group where the force dataset belongs is a UserError naming it, not the
+    """A group where the force dataset belongs is a WorkflowError naming it, not the
     TypeError h5py raises on reading a group as an array."""
     path = write_run(tmp_path / "run.h5", make_hits(2), skip=("force",))
     with h5py.File(path, "a") as f:
         f.create_group("entry/hits/force")
-    with pytest.raises(UserError, match="force"):
+    with pytest.raises(WorkflowError, match="force"):
         load_recorded_hits(path)
 
 
