@@ -165,16 +165,17 @@ def test_daq_scheduler_gives_the_address_and_an_explicit_jobs_wins(cluster, stor
     remote = copy_store(store, tmp_path / "remote")
     env = {"DAQ_SCHEDULER": cluster.scheduler_address}
     calls = []
+    original = dask_batch.run_on_cluster
 
     def spy(address, *args):
         calls.append(address)
-        return dask_batch.run_on_cluster(address, *args)
+        return original(address, *args)
 
-    with mock.patch("daq.cli.commands.analyze.run_on_cluster", side_effect=spy):
+    with mock.patch.object(dask_batch, "run_on_cluster", side_effect=spy):
         (first, *_) = batch("analyze", remote, env=env)
         assert calls == [cluster.scheduler_address]
         assert first["cached"] is False
-        batch("analyze", remote, "--force", "--jobs", "1", env=env)  # the local pool
+        batch("analyze", remote, "--recompute", "--jobs", "1", env=env)  # the local pool
         assert calls == [cluster.scheduler_address]
     result = invoke_daq("analyze", "--all", "--jobs", "2", "--scheduler", cluster.scheduler_address)
     assert_one_line_error(result, "not both")
@@ -271,15 +272,21 @@ def test_a_worker_of_another_version_refuses_the_task():
     assert "the same version" in reason
 
 
-def test_a_run_from_bytes_is_checked_as_a_run_file(tmp_path):
+def test_a_worker_decodes_the_run_as_the_store_reads_a_run_file(tmp_path):
+    """The bytes sent go through daq.store.open_run_bytes: what the store refuses in a
+    file on disk is refused, as a one-line reason naming the file."""
+    from analysis.run_analysis import AnalysisOptions
+    from daq.workflows.fit import FitOptions
+
+    software = dask_batch._software()
     run = make_run(kind="imported", measured=make_frf(n_frf=1))
     path = seal(run, tmp_path)
-    got = dask_batch.run_from_bytes(path.read_bytes(), str(path))
-    assert got.run_id == run.run_id
-    from daq.store import StoreError
-
-    with pytest.raises(StoreError, match="damaged or not an HDF5 run file"):
-        dask_batch.run_from_bytes(b"not hdf5", "somewhere/x.h5")
+    info, _ = dask_batch._analyze_task(path.read_bytes(), str(path), AnalysisOptions(), software)
+    assert info["run_id"] == run.run_id
+    reason = dask_batch._analyze_task(b"not hdf5", "somewhere/x.h5", AnalysisOptions(), software)
+    assert reason.startswith("somewhere/x.h5: damaged or not an HDF5 run file")
+    reason = dask_batch._fit_task(b"not hdf5", "somewhere/x.h5", FitOptions(), None, True, software)
+    assert reason.startswith("somewhere/x.h5: damaged or not an HDF5 run file")
     # An external link inside the file is refused, as in a file opened from disk.
     import h5py
 
@@ -287,5 +294,6 @@ def test_a_run_from_bytes_is_checked_as_a_run_file(tmp_path):
     shutil.copy2(path, linked)
     with h5py.File(linked, "a") as f:
         f["entry/outside"] = h5py.ExternalLink("/etc/passwd", "/")
-    with pytest.raises(StoreError, match="external link"):
-        dask_batch.run_from_bytes(linked.read_bytes(), str(linked))
+    reason = dask_batch._analyze_task(linked.read_bytes(), str(linked), AnalysisOptions(), software)
+    assert "external link" in reason
+    assert str(linked) in reason

@@ -42,8 +42,8 @@ def test_seed_run_least_squares_gives_the_eq18_damping_at_the_noise_level(seed_r
 def test_the_seed_ga_is_reproducible_and_reported_as_it_comes_out(seed_run):
     store, run_id = seed_run
     first = fit_json(store, run_id, "--method", "ga", "--seed", "3", "--functions", "3")[0]
-    again = fit_json(store, run_id, "--method", "ga", "--seed", "3", "--functions", "3", "--force")[0]
-    other = fit_json(store, run_id, "--method", "ga", "--seed", "4", "--functions", "3", "--force")[0]
+    again = fit_json(store, run_id, "--method", "ga", "--seed", "3", "--functions", "3", "--recompute")[0]
+    other = fit_json(store, run_id, "--method", "ga", "--seed", "4", "--functions", "3", "--recompute")[0]
     assert first["damping_matrix"] == again["damping_matrix"]
     assert other["damping_matrix"] != first["damping_matrix"]
     assert first["n_evaluations"] >= 1500  # the seed's budget: 50 x 30 (+ the first generation)

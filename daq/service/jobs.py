@@ -1,31 +1,33 @@
-"""Analysis and damping fit of every run as it lands, in worker processes.
+"""Analysis and damping fit of every run as it lands, on the batch executor's queue.
 
 The store is the queue: at start every readable run without its analysis or its
 default (least-squares) fit is queued, so a run sealed while the service was down,
 or whose analysis a crash interrupted, is done now. Results are written by the same
-code as ``daq analyze`` and ``daq fit`` (atomically, beside the run), so a killed
-worker leaves no half result, only a run to do again at the next start.
+code as ``daq analyze`` and ``daq fit`` (the same tasks: daq/batch/tasks.py), so a
+killed worker leaves no half result, only a run to do again at the next start.
 
-Workers are separate processes (``spawn``: the service's threads must not be
-forked), so a long fit never stalls serving. With a Dask scheduler the work goes to
-the cluster instead (daq/batch/dask_backend.py).
+The tasks run on daq/batch/queue_backend.py: separate worker processes (``spawn``),
+so a long fit never stalls serving, or with a Dask scheduler the cluster.
 """
 
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
-from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from daq.service.events import EventHub
+
+if TYPE_CHECKING:
+    from daq.batch.tasks import Task
+    from daq.store import RunSummary
+    from daq.workflows.outcome import RunOutcome
 
 log = logging.getLogger(__name__)
 
@@ -46,70 +48,50 @@ def fit_result_name() -> str:
     return FitOptions().result_name
 
 
-def analyse_in_worker(store_dir: Path, run_id: str) -> dict[str, Any] | str:
-    """The run's analysis summary, or a one-line reason (runs in a worker process)."""
-    from analysis.run_analysis import AnalysisOptions
-    from daq.cli.commands.analyze import analyze_one
+def task_for(store_dir: Path, run_id: str, stage: str) -> Task:
+    """The task of ``stage`` (ANALYSIS, FIT) for ``run_id``: the default analysis, or
+    the default (least-squares) fit, never recomputing an up-to-date result."""
+    from daq.batch.tasks import AnalyseTask, FitTask
 
-    return analyze_one(store_dir, run_id, AnalysisOptions(), False)
+    return (AnalyseTask if stage == ANALYSIS else FitTask).default(store_dir, run_id)
+
+
+def analyse_in_worker(store_dir: Path, run_id: str) -> dict[str, Any] | str:
+    """The run's analysis summary, or a one-line reason (as a worker computes it)."""
+    outcome = task_for(store_dir, run_id, ANALYSIS).run()
+    return outcome.summary if outcome.summary is not None else str(outcome.error)
 
 
 def fit_in_worker(store_dir: Path, run_id: str) -> dict[str, Any] | str:
     """The run's default damping fit summary, or a one-line reason."""
-    from daq.cli.commands.fit import fit_one
-    from daq.workflows.fit import FitOptions
-
-    return fit_one(store_dir, run_id, FitOptions(), False)
-
-
-def on_cluster(address: str, store_dir: Path, run_id: str, kind: str) -> dict[str, Any] | str:
-    """Analyse ("analyze") or fit ("fit") one run on the Dask cluster at ``address``
-    (daq/batch/dask_backend.py: the run's bytes go to a worker, the result comes back and is
-    stored here); the summary or a one-line reason."""
-    from analysis.run_analysis import AnalysisOptions
-    from daq.batch.dask_backend import run_on_cluster
-    from daq.errors import UserError
-    from daq.workflows.fit import FitOptions
-
-    outcomes: dict[str, dict[str, Any] | str] = {}
-    options = AnalysisOptions() if kind == "analyze" else FitOptions()
-    try:
-        run_on_cluster(address, store_dir, [run_id], options, False, kind, outcomes.__setitem__)
-    except UserError as exc:
-        return str(exc)
-    return outcomes.get(run_id, "the cluster returned no result")
-
-
-def _init_worker() -> None:
-    from daq.batch.memory_tuning import keep_freed_memory
-
-    keep_freed_memory()
-    threading.Thread(target=_exit_with_parent, args=(os.getppid(),), name="parent-watch", daemon=True).start()
-
-
-def _exit_with_parent(parent: int) -> None:
-    """End this worker when the service is gone (SIGKILL leaves no one to stop it):
-    an orphan would finish its run and then wait under init for ever."""
-    while os.getppid() == parent:
-        time.sleep(1.0)
-    os._exit(0)
+    outcome = task_for(store_dir, run_id, FIT).run()
+    return outcome.summary if outcome.summary is not None else str(outcome.error)
 
 
 class JobRunner:
     """Queues runs for analysis then fit; ``state(run_id)`` says where each stands."""
 
     def __init__(
-        self, store_dir: Path, hub: EventHub, workers: int = 1, scheduler: str | None = None
+        self,
+        store_dir: Path,
+        hub: EventHub,
+        workers: int = 1,
+        scheduler: str | None = None,
+        list_runs: Callable[[], Sequence[RunSummary]] | None = None,
     ) -> None:
+        """list_runs: the store's runs for the backlog at start (the service lists
+        regular files only); None: Store.list()."""
+        from daq.batch.queue_backend import QueueBackend
+
         self.store_dir = store_dir
         self.hub = hub
         self.workers = max(1, workers)
         self.scheduler = scheduler
+        self._list_runs = list_runs
         self._lock = threading.Lock()
         self._states: dict[str, dict[str, str]] = {}
         self._counts = {"queued": 0, "running": 0, "done": 0, "failed": 0}
-        self._pool: ProcessPoolExecutor | None = None
-        self._cluster_calls: ThreadPoolExecutor | None = None
+        self._queue = QueueBackend(self.workers, scheduler)
         self._closed = False
         self._waiting: deque[tuple[str, str]] = deque()
         self._inflight = 0
@@ -118,19 +100,13 @@ class JobRunner:
 
     # ------------------------------------------------------------ lifecycle
     def start(self) -> None:
-        if self.scheduler is None:
-            self._pool = self._new_pool()
-        else:  # each call blocks until the cluster has done the run: one thread per slot
-            self._cluster_calls = ThreadPoolExecutor(self.workers, thread_name_prefix="dask")
+        self._queue.start()
         threading.Thread(target=self._backlog, name="backlog", daemon=True).start()
 
     def close(self) -> None:
         with self._lock:
             self._closed = True
-        if self._pool is not None:
-            self._pool.shutdown(wait=False, cancel_futures=True)
-        if self._cluster_calls is not None:
-            self._cluster_calls.shutdown(wait=False, cancel_futures=True)
+        self._queue.close()
 
     def _backlog(self) -> None:
         """Remove temporaries a crash left (older than an hour: a younger one may be
@@ -142,11 +118,9 @@ class JobRunner:
             removed = Store(self.store_dir).clean_temporaries()
             if removed:
                 log.warning("removed %d stale temporary files from %s", len(removed), self.store_dir)
-            # Run files that are regular files only: a link may lead anywhere, a FIFO
-            # would hang the listing (and a worker) for ever.
-            from daq.service.service import list_regular_runs
-
-            summaries = list_regular_runs(Store(self.store_dir))
+            # The service lists run files that are regular files only: a link may lead
+            # anywhere, a FIFO would hang the listing (and a worker) for ever.
+            summaries = self._list_runs() if self._list_runs is not None else Store(self.store_dir).list()
         except StoreError as exc:
             log.error("cannot list the store for its backlog: %s", exc)
             return
@@ -201,62 +175,43 @@ class JobRunner:
             self._dispatch(run_id, stage)
 
     def _dispatch(self, run_id: str, stage: str) -> None:
-        worker: Callable[[Path, str], dict | str] = analyse_in_worker if stage == ANALYSIS else fit_in_worker
+        from daq.batch.queue_backend import outcome_of
+        from daq.workflows.outcome import RunOutcome
+
         self._set(run_id, stage, "running")
         if stage == ANALYSIS:
             self.hub.publish("analysis_started", {"run_id": run_id})
         try:
-            future = self._submit(worker, run_id)
+            future: Future = self._queue.submit(task_for(self.store_dir, run_id, stage))
         except RuntimeError as exc:  # the pool is shut down, or broken by a killed worker
-            self._finished(run_id, stage, f"cannot run: {exc}")
+            self._finished(run_id, stage, RunOutcome.failed(run_id, f"cannot run: {exc}"))
             return
-        future.add_done_callback(lambda f: self._finished(run_id, stage, _outcome(f)))
+        future.add_done_callback(lambda f: self._finished(run_id, stage, outcome_of(f, run_id)))
 
-    def _submit(self, worker: Callable[[Path, str], dict | str], run_id: str) -> Future:
-        if self.scheduler is not None:
-            kind = "analyze" if worker is analyse_in_worker else "fit"
-            assert self._cluster_calls is not None
-            return self._cluster_calls.submit(on_cluster, self.scheduler, self.store_dir, run_id, kind)
-        assert self._pool is not None
-        try:
-            return self._pool.submit(worker, self.store_dir, run_id)
-        except BrokenProcessPool:  # a worker was killed: later runs get a new pool
-            with self._lock:
-                if self._closed:
-                    raise
-                self._pool = self._new_pool()
-            return self._pool.submit(worker, self.store_dir, run_id)
-
-    def _new_pool(self) -> ProcessPoolExecutor:
-        return ProcessPoolExecutor(
-            max_workers=self.workers,
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_init_worker,
-        )
-
-    def _finished(self, run_id: str, stage: str, outcome: dict[str, Any] | str) -> None:
-        failed = isinstance(outcome, str)
+    def _finished(self, run_id: str, stage: str, outcome: RunOutcome) -> None:
+        failed = not outcome.ok
+        summary = outcome.summary or {}
         self._set(run_id, stage, "failed" if failed else "done")
         with self._lock:
             self._inflight -= 1
         if stage == ANALYSIS:
             if failed:
-                self.hub.publish("analysis_failed", {"run_id": run_id, "error": outcome})
+                self.hub.publish("analysis_failed", {"run_id": run_id, "error": outcome.error})
                 self._set(run_id, FIT, "none")
                 self._count_end(failed=True)
             else:
                 self.hub.publish(
-                    "analysis_done", {"run_id": run_id, "n_modes": len(outcome.get("modes", []))}
+                    "analysis_done", {"run_id": run_id, "n_modes": len(summary.get("modes", []))}
                 )
                 with self._lock:
                     self._waiting.appendleft((run_id, FIT))  # its fit before the next run's analysis
             self._pump()
             return
         if failed:
-            self.hub.publish("fit_failed", {"run_id": run_id, "method": "ls", "error": outcome})
+            self.hub.publish("fit_failed", {"run_id": run_id, "method": "ls", "error": outcome.error})
         else:
             self.hub.publish(
-                "fit_done", {"run_id": run_id, "method": outcome.get("method"), "psi": outcome.get("psi")}
+                "fit_done", {"run_id": run_id, "method": summary.get("method"), "psi": summary.get("psi")}
             )
         self._count_end(failed=failed)
         self._pump()
@@ -295,10 +250,3 @@ class JobRunner:
     def idle(self) -> bool:
         with self._lock:
             return self._counts["queued"] == 0 and self._counts["running"] == 0
-
-
-def _outcome(future: Future) -> dict[str, Any] | str:
-    try:
-        return future.result()
-    except Exception as exc:  # a worker died (BrokenProcessPool) or a bug
-        return f"worker failed: {type(exc).__name__}: {' '.join(str(exc).split()) or 'no message'}"

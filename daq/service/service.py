@@ -57,7 +57,10 @@ class Service:
         self.link = InstrumentLink(
             config.resource, config.sim, holder=f"daq serve at {config.url}", dialect=config.dialect
         )
-        self.jobs = JobRunner(config.store_dir, self.hub, config.workers, config.scheduler)
+        self.jobs = JobRunner(
+            config.store_dir, self.hub, config.workers, config.scheduler,
+            list_runs=lambda: list_regular_runs(Store(config.store_dir)),
+        )  # fmt: skip
         self.capture = CaptureController(self.link, config.store_dir, self.hub, on_sealed=self.jobs.submit)
         self._results = _ResultCache(self.store)
         # The lock lives in the store: every process finds it whatever its environment.

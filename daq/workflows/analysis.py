@@ -23,6 +23,7 @@ from analysis.table2 import identified_table2
 from analysis.windows import WindowSpec
 from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
+from daq.workflows.outcome import RunOutcome, failure_reason
 
 RESULT_NAME = "analysis"
 #: Bumped when the analysis changes what it computes from the same run and options.
@@ -284,8 +285,9 @@ def stored_options(store: Store, run_id: str) -> AnalysisOptions | None:
 
 
 def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, force: bool = False) -> dict:
-    """Analyse run ``run_id`` of the store (or reuse its up-to-date result); its summary
-    with ``cached`` saying which. StoreError / ValueError name what is wrong."""
+    """Analyse run ``run_id`` of the store (or reuse its up-to-date result unless
+    ``force``: recompute); its summary with ``cached`` saying which. StoreError /
+    ValueError name what is wrong."""
     store = Store(store_dir)
     path = store.resolve(run_id)
     key = cache_key(path, options)
@@ -297,3 +299,18 @@ def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, force
     info, arrays = compute_analysis(run, options)
     store_analysis(store, run.run_id, key, info, arrays)
     return {**info, "cached": False}
+
+
+def analyze_one(
+    store_dir: Path, run_id: str, options: AnalysisOptions, recompute: bool = False
+) -> RunOutcome:
+    """Analyse run ``run_id`` of the store (analyze_stored): its outcome, the summary or
+    the one-line reason it failed. An exception that is no failure of the run (a bug)
+    is raised."""
+    try:
+        return RunOutcome.done(run_id, analyze_stored(store_dir, run_id, options, recompute))
+    except Exception as exc:
+        reason = failure_reason(exc)  # the reasons a run on a Dask cluster gives too
+        if reason is None:
+            raise
+        return RunOutcome.failed(run_id, reason)

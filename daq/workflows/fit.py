@@ -25,6 +25,7 @@ from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
 from daq.workflows.analysis import RESULT_NAME as ANALYSIS_RESULT
 from daq.workflows.analysis import analyze_stored, beam_of, stored_options
+from daq.workflows.outcome import RunOutcome, failure_reason
 
 METHODS = ("modal", "ls", "ga", "de", "pilkey-inman")
 STIFFNESS = ("modes", "scale", "none")
@@ -590,7 +591,20 @@ def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = 
     return {**summary, "cached": False}
 
 
+def fit_one(store_dir: Path, run_id: str, options: FitOptions, recompute: bool = False) -> RunOutcome:
+    """Fit run ``run_id`` of the store (fit_stored): its outcome, the summary or the
+    one-line reason it failed. An exception that is no failure of the run (a bug) is
+    raised."""
+    try:
+        return RunOutcome.done(run_id, fit_stored(store_dir, run_id, options, recompute))
+    except Exception as exc:
+        reason = failure_reason(exc)
+        if reason is None:
+            raise
+        return RunOutcome.failed(run_id, reason)
+
+
 __all__ = [
-    "ANALYSIS_RESULT", "METHODS", "FitOptions", "cached_fit", "fit_cache_key", "fit_run", "fit_stored",
-    "store_fit",
+    "ANALYSIS_RESULT", "METHODS", "FitOptions", "cached_fit", "fit_cache_key", "fit_one", "fit_run",
+    "fit_stored", "store_fit",
 ]  # fmt: skip

@@ -1,6 +1,6 @@
 """`daq analyze RUN... | --all`: FRFs, modes and Table 2 of stored runs, kept beside each
-run (daq/workflows/analysis.py), in parallel over the cores, or on a Dask cluster with
---scheduler (daq/batch/dask_backend.py), with a progress bar.
+run (daq/workflows/analysis.py), on the batch executor (daq/batch/executor.py: in
+parallel over the cores, or on a Dask cluster with --scheduler), with a progress bar.
 
 Without --json it prints each run's modes; with --json a list with one object per
 run (``run_id``, ``modes`` sorted by frequency, ``table2``, ...). A run that cannot
@@ -11,18 +11,29 @@ any failed.
 from __future__ import annotations
 
 import json
-import os
 import sys
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from pathlib import Path
-from typing import Annotated, Any
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from daq.batch.dask_backend import failure_reason, run_on_cluster, scheduler_address
-from daq.batch.memory_tuning import worker_setup
 from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
 from daq.errors import UserError
+
+if TYPE_CHECKING:
+    from daq.batch.executor import Backend, BatchReport
+    from daq.batch.tasks import Task
+    from daq.workflows.outcome import RunOutcome
+
+#: The hidden alias of --recompute, kept for one release.
+FORCE_NOTE = "daq: note: --force is now --recompute; --force will go in the next release\n"
+
+
+def recompute_flag(recompute: bool, force: bool) -> bool:
+    """--recompute, or the old --force (one note on stderr that it is going)."""
+    if force:
+        sys.stderr.write(FORCE_NOTE)
+    return recompute or force
 
 
 def register(app: typer.Typer) -> None:
@@ -87,9 +98,10 @@ def analyze(
     ] = "h1",
     jobs: JobsOption = None,
     scheduler: SchedulerOption = None,
-    force: Annotated[
-        bool, typer.Option("--force", help="Analyse again even if a result is up to date.")
+    recompute: Annotated[
+        bool, typer.Option("--recompute", help="Analyse again even if a result is up to date.")
     ] = False,
+    force: Annotated[bool, typer.Option("--force", hidden=True, help="Old name of --recompute.")] = False,
     json_output: JsonOption = False,
     store: StoreOption = None,
 ) -> None:
@@ -99,7 +111,9 @@ def analyze(
     written). An unchanged run analysed with unchanged options is a cache hit.
     """
     from analysis.run_analysis import AnalysisOptions
+    from daq.batch.tasks import AnalyseTask
 
+    recompute = recompute_flag(recompute, force)
     if bool(runs) == all_runs:
         raise UserError("name the runs to analyse, or give --all", exit_code=2)
     try:
@@ -112,147 +126,76 @@ def analyze(
         text = str(exc).replace("max_order", "--max-order").replace("estimator", "--estimator")
         raise UserError(text.replace("band ", "--band "), exit_code=2) from None
     run_batch(
-        runs, all_runs, store, options, force, jobs, json_output, analyze_one, _print, "analyse", scheduler
-    )
+        runs, all_runs, store, jobs, scheduler, json_output, _print, "analyse",
+        lambda store_dir, run_id: AnalyseTask(store_dir, run_id, options, recompute),
+    )  # fmt: skip
 
 
 def run_batch(
-    runs: list[str] | None,
+    runs: Sequence[str] | None,
     all_runs: bool,
     store: str | None,
-    options: Any,
-    force: bool,
     jobs: int | None,
+    scheduler: str | None,
     json_output: bool,
-    worker: Any,
-    printer: Any,
+    printer: Callable[[dict], None],
     verb: str,
-    scheduler: str | None = None,
+    make_task: Callable[..., Task],
 ) -> None:
-    """The part `daq analyze` and `daq fit` share: pick the runs (named, or every run
-    file with --all, damaged ones too so that they fail with a line, never silently),
-    run ``worker`` on each in worker processes (or on the Dask cluster of
-    ``scheduler``, the --scheduler option, else $DAQ_SCHEDULER), print each summary
-    (``printer``) or the JSON list, and end with one error line if any run failed."""
-    from daq.store import Store, StoreError, resolve_store_dir
+    """The part `daq analyze` and `daq fit` share: pick where to run (--jobs,
+    --scheduler, $DAQ_SCHEDULER), pick the runs (named, or every run file with --all),
+    run ``make_task(store_dir, run_id)`` of each on the executor (daq/batch/executor.py)
+    with a progress bar, say each failure (or skip) on stderr as it comes, print each
+    summary (``printer``) or the JSON list, and end with one error line if any run
+    failed."""
+    from daq.batch.executor import choose_backend, select_runs
+    from daq.store import resolve_store_dir
 
-    if jobs is not None and jobs < 1:
-        raise UserError("--jobs must be at least 1", exit_code=2)
-    if jobs is not None and scheduler is not None:
-        raise UserError("give --jobs (local worker processes) or --scheduler (a Dask cluster), not both", 2)
-    # An explicit --jobs asks for the local pool, whatever $DAQ_SCHEDULER says.
-    address = None if jobs is not None else scheduler_address(scheduler)
+    choice = choose_backend(jobs, scheduler)
     store_dir, _ = resolve_store_dir(store)
-    the_store = Store(store_dir)
-    try:
-        if all_runs:
-            ids = [s.file_name.removesuffix(".h5") for s in the_store.list()]
-        else:
-            ids = list(dict.fromkeys(the_store.resolve(name).stem for name in runs or []))
-    except StoreError as exc:
-        raise UserError(str(exc)) from None
+    ids = select_runs(store_dir, runs, all_runs)
     if not ids:
         raise UserError(f"no runs to {verb} in {store_dir}")
     label = {"analyse": "analysing", "fit": "fitting"}.get(verb, verb)
-    quiet = len(ids) == 1
-    results, failures = run_all(
-        store_dir, ids, options, force, jobs, worker, label, quiet, address, skip_empty=all_runs
-    )
+    tasks = [make_task(store_dir, run_id) for run_id in ids]
+    backend = choice.backend(len(tasks))
+    report = run_with_progress(tasks, backend, label, quiet=len(ids) == 1, skip_empty=all_runs)
     if json_output:
-        typer.echo(json.dumps([results[i] for i in ids if i in results], indent=2, ensure_ascii=False))
+        typer.echo(json.dumps(report.summaries(ids), indent=2, ensure_ascii=False))
     else:
-        for run_id in ids:
-            if run_id in results:
-                printer(results[run_id])
-    if failures and len(ids) == 1:
-        raise UserError(f"run {ids[0]}: {failures[0][1]}")
-    if failures:
-        raise UserError(
-            f"{len(failures)} of {len(ids)} runs could not be {'analysed' if verb == 'analyse' else 'fitted'}"
-        )
+        for summary in report.summaries(ids):
+            printer(summary)
+    if report.failures and len(ids) == 1:
+        raise UserError(f"run {ids[0]}: {report.failures[0].error}")
+    if report.failures:
+        done = "analysed" if verb == "analyse" else "fitted"
+        raise UserError(f"{len(report.failures)} of {len(ids)} runs could not be {done}")
 
 
-def run_all(
-    store_dir: Path,
-    ids: list[str],
-    options: Any,
-    force: bool,
-    jobs: int | None,
-    worker: Any = None,
-    label: str = "analysing",
-    quiet: bool = False,
-    scheduler: str | None = None,
-    skip_empty: bool = False,
-) -> tuple[dict[str, dict], list[tuple[str, str]]]:
-    """Run ``worker(store_dir, run_id, options, force)`` (default: analyze_one) on
-    ``ids`` in worker processes; (summaries by run id, failed ids). A worker returns a
-    summary dict or a one-line reason; failures, (run id, reason), are reported on
-    stderr unless ``quiet`` (one run: the caller makes its reason the one error line).
-
-    scheduler: a Dask scheduler's address (daq/dask_batch.scheduler_address): the
-    runs are computed on its cluster instead (the same outcomes and stored results;
-    ``jobs`` unused).
-
-    skip_empty: a run with nothing to analyse (analysis_store.nothing_to_identify) is
-    reported as skipped, even when ``quiet``, and is not among the failures."""
-    from daq.workflows.analysis import nothing_to_identify
-
-    worker = worker or analyze_one
-    command = "fit" if worker is not analyze_one else "analyze"
+def run_with_progress(
+    tasks: Sequence[Task], backend: Backend, label: str, quiet: bool = False, skip_empty: bool = False
+) -> BatchReport:
+    """daq.batch.executor.execute with a progress bar on stderr (when it is a terminal)
+    and a line there for each run skipped (always) or failed (unless ``quiet``: one run,
+    whose reason the caller makes its one error line). The BatchReport."""
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    workers = min(jobs or os.cpu_count() or 1, len(ids))
-    results: dict[str, dict] = {}
-    failures: list[tuple[str, str]] = []
+    from daq.batch.executor import execute
+
     console = Console(stderr=True)
     columns = (TextColumn(label), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True, disable=not console.is_terminal) as progress:
-        task = progress.add_task("runs", total=len(ids))
+        bar = progress.add_task("runs", total=len(tasks))
 
-        def done(run_id: str, outcome: dict | str) -> None:
-            if isinstance(outcome, str) and skip_empty and nothing_to_identify(outcome):
-                sys.stderr.write(f"daq {command}: run {run_id}: skipped: {outcome}\n")
-            elif isinstance(outcome, str):
-                if not quiet:
-                    sys.stderr.write(f"daq {command}: run {run_id}: {outcome}\n")
-                failures.append((run_id, outcome))
-            else:
-                results[run_id] = outcome
-            progress.advance(task)
+        def said(task: Task, outcome: RunOutcome) -> None:
+            if outcome.status == "skipped":
+                sys.stderr.write(f"daq {task.command}: run {task.run_id}: skipped: {outcome.error}\n")
+            elif outcome.status == "failed" and not quiet:
+                sys.stderr.write(f"daq {task.command}: run {task.run_id}: {outcome.error}\n")
+            progress.advance(bar)
 
-        if scheduler is not None:
-            run_on_cluster(scheduler, store_dir, ids, options, force, command, done)
-        elif workers == 1:
-            for run_id in ids:
-                done(run_id, worker(store_dir, run_id, options, force))
-        else:
-            # Workers die with this process: killed, it must not leave them running for good.
-            pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_setup, initargs=(os.getpid(),))
-            with pool:
-                futures = {pool.submit(worker, store_dir, r, options, force): r for r in ids}
-                for future in as_completed(futures):
-                    done(futures[future], future.result())
-    return results, failures
-
-
-def analyze_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:
-    """The summary of one run's analysis, or a one-line reason it failed (picklable)."""
-    from daq.workflows.analysis import analyze_stored
-
-    try:
-        return analyze_stored(store_dir, run_id, options, force)
-    except Exception as exc:
-        reason = failure_reason(exc)  # the reasons a run on a Dask cluster gives too
-        if reason is None:
-            raise
-        return reason
-
-
-def np_errors() -> tuple[type[BaseException], ...]:
-    import numpy as np
-
-    return (np.linalg.LinAlgError, FloatingPointError, ZeroDivisionError)
+        return execute(tasks, backend, skip_empty=skip_empty, on_outcome=said)
 
 
 def _print(info: dict) -> None:

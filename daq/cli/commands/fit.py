@@ -1,11 +1,10 @@
 """`daq fit RUN... | --all`: the damping matrix of stored runs (daq/workflows/fit.py), each
-result beside its run, in worker processes (or on a Dask cluster with --scheduler)
-with a progress bar."""
+result beside its run, on the batch executor (daq/batch/executor.py: worker processes,
+or a Dask cluster with --scheduler) with a progress bar."""
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
@@ -80,7 +79,10 @@ def fit(
     ] = None,
     jobs: JobsOption = None,
     scheduler: SchedulerOption = None,
-    force: Annotated[bool, typer.Option("--force", help="Fit again even if a result is up to date.")] = False,
+    recompute: Annotated[
+        bool, typer.Option("--recompute", help="Fit again even if a result is up to date.")
+    ] = False,
+    force: Annotated[bool, typer.Option("--force", hidden=True, help="Old name of --recompute.")] = False,
     json_output: JsonOption = False,
     store: StoreOption = None,
 ) -> None:
@@ -90,9 +92,11 @@ def fit(
     beside the noise floor, and the uncertainty of every term of R, naming the
     combinations the data does not determine.
     """
-    from daq.cli.commands.analyze import run_batch
+    from daq.batch.tasks import FitTask
+    from daq.cli.commands.analyze import recompute_flag, run_batch
     from daq.workflows.fit import FitOptions
 
+    recompute = recompute_flag(recompute, force)
     if bool(runs) == all_runs:
         raise UserError("name the runs to fit, or give --all", exit_code=2)
     if psd and unconstrained:
@@ -112,22 +116,10 @@ def fit(
         for name, option in OPTION_NAMES:
             text = text.replace(f"{name} must", f"{option} must")
         raise UserError(text, exit_code=2) from None
-    run_batch(runs, all_runs, store, options, force, jobs, json_output, fit_one, print_fit, "fit", scheduler)
-
-
-def fit_one(store_dir: Path, run_id: str, options: Any, force: bool) -> dict | str:
-    """The summary of one run's fit, or a one-line reason it failed (picklable)."""
-    import numpy as np
-
-    from daq.store import StoreError
-    from daq.workflows.fit import fit_stored
-
-    try:
-        return fit_stored(store_dir, run_id, options, force)
-    except (StoreError, ValueError) as exc:
-        return " ".join(str(exc).split())
-    except (np.linalg.LinAlgError, FloatingPointError, ZeroDivisionError) as exc:
-        return f"numerical failure ({type(exc).__name__}: {' '.join(str(exc).split())})"
+    run_batch(
+        runs, all_runs, store, jobs, scheduler, json_output, print_fit, "fit",
+        lambda store_dir, run_id: FitTask(store_dir, run_id, options, recompute),
+    )  # fmt: skip
 
 
 def print_fit(info: dict) -> None:
