@@ -20,8 +20,9 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 from analysis.run_analysis import AnalysisOptions
+from daq.batch.executor import BackendChoice, execute
+from daq.batch.tasks import AnalyseTask
 from daq.cli.app import main
-from daq.cli.commands.analyze import run_all
 from daq.store import Store, new_run_id
 from daq.workflows.analysis import analyze
 
@@ -57,6 +58,12 @@ def main_bench(n_runs: int = 200) -> None:
     print(f"{'what':<{width}}  value\n{'-' * width}  -----")
     for what, value in rows:
         print(f"{what:<{width}}  {value}")
+
+
+def run_all(store_dir: Path, ids: list[str], options: AnalysisOptions, recompute: bool, jobs: int) -> None:
+    """Analyse ``ids`` on the executor with ``jobs`` worker processes, as `daq analyze`."""
+    tasks = [AnalyseTask(store_dir, run_id, options, recompute) for run_id in ids]
+    execute(tasks, BackendChoice(jobs).backend(len(tasks)))
 
 
 def _timed(job) -> float:

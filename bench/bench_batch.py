@@ -57,38 +57,37 @@ def clear_results(store_dir: Path) -> None:
             path.unlink()
 
 
+def run_tasks(tasks: list, jobs: int | None, scheduler: str | None):
+    """The executor (daq/batch/executor.py) on ``tasks``, as `daq analyze|fit` runs them."""
+    from daq.batch.executor import BackendChoice, execute
+
+    return execute(tasks, BackendChoice(jobs, scheduler).backend(len(tasks)))
+
+
 def batch(store_dir: Path, ids: list[str], jobs: int | None, scheduler: str | None) -> tuple[float, float]:
     """Seconds of (analyse all, then fit all) from a store without results."""
-    from analysis.run_analysis import AnalysisOptions
-    from daq.cli.commands.analyze import analyze_one, run_all
-    from daq.cli.commands.fit import fit_one
-    from daq.workflows.fit import FitOptions
+    from daq.batch.tasks import AnalyseTask, FitTask
 
     clear_results(store_dir)
     times = []
-    for worker, options, label in (
-        (analyze_one, AnalysisOptions(), "analysing"),
-        (fit_one, FitOptions(), "fitting"),
-    ):
+    for kind, label in ((AnalyseTask, "analysing"), (FitTask, "fitting")):
         start = time.perf_counter()
-        results, failures = run_all(store_dir, ids, options, False, jobs, worker, label, False, scheduler)
+        report = run_tasks([kind.default(store_dir, i) for i in ids], jobs, scheduler)
         times.append(time.perf_counter() - start)
-        if failures or len(results) != len(ids) or any(r["cached"] for r in results.values()):
-            raise SystemExit(f"{label}: {len(failures)} failures, {len(results)} results")
+        summaries = report.summaries(ids)
+        if report.failures or len(summaries) != len(ids) or any(r["cached"] for r in summaries):
+            raise SystemExit(f"{label}: {len(report.failures)} failures, {len(summaries)} results")
     return times[0], times[1]
 
 
 def cached(store_dir: Path, ids: list[str], scheduler: str | None) -> float:
     """Seconds of both passes again, every result up to date (nothing computed)."""
-    from analysis.run_analysis import AnalysisOptions
-    from daq.cli.commands.analyze import analyze_one, run_all
-    from daq.cli.commands.fit import fit_one
-    from daq.workflows.fit import FitOptions
+    from daq.batch.tasks import AnalyseTask, FitTask
 
     start = time.perf_counter()
-    for worker, options in ((analyze_one, AnalysisOptions()), (fit_one, FitOptions())):
-        results, _ = run_all(store_dir, ids, options, False, None, worker, "again", False, scheduler)
-        assert all(r["cached"] for r in results.values())
+    for kind in (AnalyseTask, FitTask):
+        report = run_tasks([kind.default(store_dir, i) for i in ids], None, scheduler)
+        assert all(r["cached"] for r in report.summaries(ids))
     return time.perf_counter() - start
 
 

@@ -30,9 +30,9 @@ def run() -> None:
         run_id = Store(store_dir).list()[0].run_id
         rows = []
         for seed in range(10):
-            info = fit_stored(store_dir, run_id, FitOptions(method="ga", seed=seed), force=True)
+            info = fit_stored(store_dir, run_id, FitOptions(method="ga", seed=seed), recompute=True)
             rows.append((seed, info["psi"], [m["damping_ratio"] for m in info["modes"]], info["seconds"]))
-        ls = fit_stored(store_dir, run_id, FitOptions(method="ls"), force=True)
+        ls = fit_stored(store_dir, run_id, FitOptions(method="ls"), recompute=True)
     print(f"truth (eq 18): {' '.join(f'{100 * z:6.2f}' for z in TRUTH)} %")
     print("seed        Psi   damping ratios (%)        time")
     for seed, psi, zetas, seconds in rows:

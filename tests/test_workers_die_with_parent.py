@@ -51,7 +51,7 @@ def _session(sid: int) -> dict[int, tuple[int, str]]:
 def test_killing_the_batch_command_kills_its_workers(store, command):
     env = {**os.environ, **ENV}
     env.pop("DAQ_SCHEDULER", None)
-    args = [str(DAQ), command, "--all", "--force", "--jobs", "2", "--store", str(store)]
+    args = [str(DAQ), command, "--all", "--recompute", "--jobs", "2", "--store", str(store)]
     parent = subprocess.Popen(
         args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True
     )

@@ -284,14 +284,14 @@ def stored_options(store: Store, run_id: str) -> AnalysisOptions | None:
         return None
 
 
-def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, force: bool = False) -> dict:
-    """Analyse run ``run_id`` of the store (or reuse its up-to-date result unless
-    ``force``: recompute); its summary with ``cached`` saying which. StoreError /
-    ValueError name what is wrong."""
+def analyze_stored(store_dir: Path, run_id: str, options: AnalysisOptions, recompute: bool = False) -> dict:
+    """Analyse run ``run_id`` of the store (or reuse its up-to-date result, unless
+    ``recompute``); its summary with ``cached`` saying which. StoreError / ValueError
+    name what is wrong."""
     store = Store(store_dir)
     path = store.resolve(run_id)
     key = cache_key(path, options)
-    if not force:
+    if not recompute:
         stored = cached_analysis(store, path.stem, key)
         if stored is not None:
             return {**stored["summary"], "cached": True}

@@ -572,8 +572,9 @@ def store_fit(
     return store.write_result(run_id, options.result_name, payload, overwrite=True)
 
 
-def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = False) -> dict[str, Any]:
-    """Fit run ``run_id`` of the store (or reuse an up-to-date result); its summary."""
+def fit_stored(store_dir: Path, run_id: str, options: FitOptions, recompute: bool = False) -> dict[str, Any]:
+    """Fit run ``run_id`` of the store (or reuse an up-to-date result, unless
+    ``recompute``); its summary."""
     store = Store(store_dir)
     path = store.resolve(run_id)
     # The analysis the user made (its options kept), not a default one made behind their back.
@@ -581,7 +582,7 @@ def fit_stored(store_dir: Path, run_id: str, options: FitOptions, force: bool = 
     stored_analysis = store.read_result(path.stem, ANALYSIS_RESULT)
     analysis["arrays"] = {k: v for k, v in stored_analysis.items() if isinstance(v, np.ndarray)}
     key = fit_cache_key(path, stored_analysis.get("cache_key"), options)
-    if not force:
+    if not recompute:
         stored = cached_fit(store, path.stem, options, key)
         if stored is not None:
             return {**stored, "cached": True}
