@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from damping_truth import frf_truth, truth
 
 from analysis.damping.objective import (
     FrequencyData,
@@ -16,6 +15,7 @@ from analysis.damping.objective import (
     residuals_frf,
 )
 from analysis.response import time_response
+from tests.damping.damping_truth import frf_truth, truth
 
 
 def _population(r_true: np.ndarray, size: int = 40, seed: int = 3) -> np.ndarray:

@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from damping_truth import RATE_HZ, half_sine_force
 
 from analysis.damping import fit_least_squares, identifiability, matrix_to_theta
 from analysis.damping.bandlimited import BandLimitedData, batched_residuals, model_response, residuals
 from analysis.damping.checks import central_jacobian, combined_std, per_hit_std
 from analysis.ritz import RitzBeam
 from analysis.seed import eq18_damping_matrix
+from tests.damping.damping_truth import RATE_HZ, half_sine_force
 
 SEEDS = 16
 PEAKS_N = (100.0, 70.0, 130.0, 85.0, 115.0)

@@ -4,7 +4,6 @@ it as one line ``daq: error: ...`` with exit status 1 (daq/cli/errors.py)."""
 from __future__ import annotations
 
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from daq.cli.errors import exit_code_and_message
 from daq.errors import UserError
@@ -13,6 +12,7 @@ from daq.formats.csv_text import read_csv
 from daq.store import Store, StoreError
 from daq.workflows.errors import WorkflowError
 from drivers.errors import ConnectionFailed
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 
 def test_format_error_is_not_the_command_lines_error():

@@ -10,12 +10,12 @@ import json
 import h5py
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from daq.cli.commands.import_file import detect_format
 from daq.formats.errors import FormatError
 from daq.formats.frf_text import read_frf_text, scan_layout
 from daq.store import Store
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 FREQ = np.arange(6) * 0.01953125
 FRF = np.array([-0.1504349, -0.1366724 + 0.007331555j, -0.1397468 - 0.006409508j, 0.5 + 0.25j, 1e-3, -2j])

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import pyuff
-from cli_helpers import assert_one_line_error, invoke_daq
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -23,6 +22,7 @@ from daq.formats.errors import FormatError
 from daq.formats.frf_text import read_frf_text
 from daq.formats.uff58 import read_uff
 from daq.store import Store
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 WORK = Path(tempfile.mkdtemp(prefix="printed-files-"))

@@ -8,25 +8,14 @@ from __future__ import annotations
 import struct
 
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from daq.cli.commands.import_file import guess_format
 from daq.formats.errors import FormatError
 from daq.formats.sdf import parse_sdf, read_sdf
 from daq.store import Store
-from formats.test_sdf_builder import (
-    assemble,
-    block,
-    channel_hdr,
-    comment,
-    data_hdr,
-    meas_hdr,
-    scan_big,
-    scan_struct,
-    scan_var,
-    unit,
-    values,
-    vector_hdr,
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.formats.sdf_builder import (
+    full_file,
 )
 
 NAME = "damaged.sdf"
@@ -34,26 +23,7 @@ NAME = "damaged.sdf"
 FIELDS = ">hihhhhh8s6h7ihhiii"
 
 
-def _full() -> bytes:
-    """Revision 3 with every record type: 2 data headers (time records in 2 scans, an FRF
-    with XDATA), 2 channels, an instrument record, scans, a comment, XDATA and YDATA."""
-    data = [
-        data_hdr(3, n_points=4, first_vector=0, rows=2, domain=1, data_type=0, ydata_type=2, scan_data=1),
-        data_hdr(3, n_points=3, first_vector=2, complex=1, ydata_type=4, x_res=3, xdata_type=4, data_type=4),
-    ]
-    vectors = [vector_hdr(0), vector_hdr(1), vector_hdr(1, 0, 48, -48)]
-    channels = [channel_hdr(3, "F", int2engr=2.0), channel_hdr(3, "A", int2engr=0.5)]
-    scans = scan_struct(2, 1, 0, 3, values([1, 2], ">f4"), unit("count"))
-    big = [scan_big(2, 1, 0), scan_var("t", 4, values([0.5, 1.5], ">f8"), base=2)]
-    y = values(range(16), ">i4") + values(range(6), ">f8")
-    return assemble(
-        3, meas_hdr(3), data, vectors, channels, block(17, y),
-        unique=[struct.pack(">hi", 1500, 8) + b"xy"], scans=scans, big=big,
-        comments=[comment(b"note")], xdata=block(16, values([1.0, 2.0, 4.0], ">f8")),
-    )  # fmt: skip
-
-
-FULL = _full()
+FULL = full_file()
 _HEAD = struct.unpack_from(FIELDS, FULL, 2)
 START = {
     "FILE_HDR": 2,

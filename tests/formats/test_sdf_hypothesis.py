@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from store.store_helpers import make_frf, make_hits, make_run
 
 from daq.formats.errors import FormatError
 from daq.formats.sdf import (
@@ -33,8 +32,8 @@ from daq.formats.sdf import (
 from daq.formats.sdf.convert import integer_scaling, vector_factor
 from daq.formats.sdf.run_export import sdf_of_run
 from daq.formats.sdf.writer import encode_sdf
-from formats.test_sdf_bad_files import FULL
-from formats.test_sdf_records import frf_file
+from tests.formats.sdf_builder import frf_file, full_file
+from tests.store.store_helpers import make_frf, make_hits, make_run
 
 REAL = Path(__file__).resolve().parents[1] / "data" / "sdf" / "SDF3KHZ.DAT"
 TEXT = st.text(alphabet="abcXYZ 019_-/^", max_size=9)
@@ -174,7 +173,14 @@ def _bases() -> list[bytes]:
     """Valid files to damage: every record type, an FRF in each revision, the real
     35670A file, and our export of a run with hits, FRFs and coherence."""
     exported = make_run(hits=make_hits(n_hits=3, n_samples=16), analyzer=make_frf(n_frf=1, n_lines=9))
-    return [FULL, frf_file(1), frf_file(2), frf_file(3), REAL.read_bytes(), encode_sdf(sdf_of_run(exported))]
+    return [
+        full_file(),
+        frf_file(1),
+        frf_file(2),
+        frf_file(3),
+        REAL.read_bytes(),
+        encode_sdf(sdf_of_run(exported)),
+    ]
 
 
 BASES = _bases()

@@ -8,12 +8,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import invoke_daq
 
 from daq.formats.errors import FormatError
 from daq.formats.sdf import read_sdf_run
 from daq.formats.units import POUND_FORCE_N
-from formats.test_sdf_builder import (
+from tests.cli_helpers import invoke_daq
+from tests.formats.sdf_builder import (
+    YDATA,
     assemble,
     block,
     channel_hdr,
@@ -26,7 +27,6 @@ from formats.test_sdf_builder import (
     window,
 )
 
-YDATA = 17
 VOLT = unit("V", 1.0, (2, 4, -6, -2, 0, 0, 0, 0))
 EXPONENTIAL = window(5, 0, 1.0, 0.25, 0.0, 1.0, 1.0)  # time constant 0.25 s
 

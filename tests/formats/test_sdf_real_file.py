@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import invoke_daq
 
 from daq.formats.sdf import read_sdf
 from daq.formats.sdf.convert import vector_unit
 from daq.store import Store
+from tests.cli_helpers import invoke_daq
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "sdf"
 REAL = DATA / "SDF3KHZ.DAT"

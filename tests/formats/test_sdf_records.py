@@ -13,12 +13,15 @@ import pytest
 
 from daq.formats.sdf import parse_sdf
 from daq.formats.sdf.writer import encode_sdf
-from formats.test_sdf_builder import (
+from tests.formats.sdf_builder import (
+    XDATA,
+    YDATA,
     assemble,
     block,
     channel_hdr,
     comment,
     data_hdr,
+    frf_file,
     meas_hdr,
     scan_big,
     scan_struct,
@@ -28,24 +31,6 @@ from formats.test_sdf_builder import (
     vector_hdr,
     window,
 )
-
-XDATA, YDATA = 16, 17
-HANNING = window(1, 0, 1.5, 0.0, 0.0, 1.5, 2.0)  # narrow 2.0, wide 1.5, no correction applied
-
-
-def frf_file(rev: int) -> bytes:
-    """One FRF: response channel 1 (int2engrUnit 0.5), force channel 0 (4.0), Hanning on
-    both with no correction applied; stored (1+2j), (-0.5+0.25j), (3-1j) as float32."""
-    channels = [
-        channel_hdr(rev, "Force", win=HANNING, eng=unit("N", 1.0, (2, 2, -4, 0, 0, 0, 0, 0)), int2engr=4.0),
-        channel_hdr(
-            rev, "Accel", win=HANNING, eng=unit("g", 9.80665, (0, 2, -4, 0, 0, 0, 0, 0)), int2engr=0.5
-        ),
-    ]
-    dh = data_hdr(rev, n_points=3, title="Freq Resp", first_x=10.0, delta_x=2.5, complex=1, data_type=4)
-    stored = values([1, 2, -0.5, 0.25, 3, -1], ">f4")
-    meas = meas_hdr(rev, center=1000.0, span=2000.0, block=2048, start=0, stop=2)
-    return assemble(rev, meas, [dh], [vector_hdr(1, 0, 48, -48)], channels, block(YDATA, stored))
 
 
 @pytest.mark.parametrize("rev", [1, 2, 3])

@@ -9,12 +9,12 @@ import warnings
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
-from store.store_helpers import make_frf, make_hits, make_run
 
 from daq.formats.sdf import parse_sdf, read_sdf, sdf_of_run
 from daq.formats.sdf.writer import encode_sdf
 from daq.store import Store, open_run, seal
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.store.store_helpers import make_frf, make_hits, make_run
 
 
 @pytest.fixture(scope="module")

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from daq.formats.sdf import read_sdf_run, write_sdf_run
 from daq.store import MeasuredFrf, Run, Spectra, Store, new_run_id
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "sdf"
 REAL = DATA / "SDF3KHZ.DAT"

@@ -20,8 +20,9 @@ from typing import Any
 from urllib.parse import urlsplit
 
 import httpx
-from cli_helpers import DAQ
-from service_helpers import Served, wait_for
+
+from tests.cli_helpers import DAQ
+from tests.service.service_helpers import Served, wait_for
 
 
 #: The banner line of a service bound beyond loopback (it does not print the token).

@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-from cli_helpers import DAQ, ENV
+
+from tests.cli_helpers import DAQ, ENV
 
 ADDRESS_LINE = re.compile(r"open (http://[^/\s]+)/#token=([0-9a-f]+)")
 BEYOND_LOOPBACK_LINE = re.compile(r"listening on (\S+), .*open http://\S+:(\d+)/#token=")
@@ -240,9 +241,9 @@ def import_noise_frf(tmp_path: Path, store: Path, seed: int = 1) -> str:
 
     import numpy as np
     import pyuff
-    from cli_helpers import invoke_daq
 
     from daq.store import Store
+    from tests.cli_helpers import invoke_daq
 
     rng = np.random.default_rng(seed)
     x = np.arange(1, 801, dtype=float)

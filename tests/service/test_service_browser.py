@@ -14,10 +14,10 @@ import shutil
 from pathlib import Path
 
 import pytest
-from conftest import NO_BROWSER
-from service_helpers import import_noise_frf, serving, wait_for
 
 from daq.store import Store
+from tests.conftest import NO_BROWSER
+from tests.service.service_helpers import import_noise_frf, serving, wait_for
 
 CHROMIUM = os.environ.get("DAQ_CHROMIUM") or shutil.which("chromium") or shutil.which("chromium-browser")
 

@@ -12,11 +12,11 @@ import h5py
 import numpy as np
 import pytest
 import pyuff
-from cli_helpers import DAQ, assert_one_line_error
-from reference import REALISTIC_DAMPING_RATIOS
-from service_helpers import EventReader, service_env, serving, sim_server, wait_for
 
 from daq.store import Store
+from tests.cli_helpers import DAQ, assert_one_line_error
+from tests.reference import REALISTIC_DAMPING_RATIOS
+from tests.service.service_helpers import EventReader, service_env, serving, sim_server, wait_for
 
 pytestmark = pytest.mark.slow
 

@@ -8,10 +8,10 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import pytest
-from service_helpers import import_noise_frf, serving, wait_for
 
 from daq.service.app import _run_row
 from daq.store import Store
+from tests.service.service_helpers import import_noise_frf, serving, wait_for
 
 
 def _service(analysis: dict | None, fit: dict | None) -> SimpleNamespace:

@@ -5,9 +5,9 @@ with the model's geometry and gets its analysis, as with the 35660A."""
 from __future__ import annotations
 
 import pytest
-from service_helpers import EventReader, serving
 
 from daq.store import Store
+from tests.service.service_helpers import EventReader, serving
 
 pytestmark = pytest.mark.slow
 

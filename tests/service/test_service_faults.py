@@ -12,8 +12,10 @@ import signal
 from pathlib import Path
 
 import pytest
-from cli_helpers import capture_sim
-from hardening_helpers import (
+
+from daq.store import Store
+from tests.cli_helpers import capture_sim
+from tests.service.hardening_helpers import (
     children_of,
     free_port,
     kill_service,
@@ -22,9 +24,7 @@ from hardening_helpers import (
     running,
     unexpected_store_entries,
 )
-from service_helpers import EventReader, Served, service_env, serving, sim_server, wait_for
-
-from daq.store import Store
+from tests.service.service_helpers import EventReader, Served, service_env, serving, sim_server, wait_for
 
 pytestmark = pytest.mark.slow
 

@@ -13,12 +13,12 @@ import os
 
 import httpx
 import pytest
-from cli_helpers import assert_one_line_error
-from hardening_helpers import run_daq_env
-from service_helpers import service_env, serving
-from test_cli_runs import make_run
 
 from daq.store import seal
+from tests.cli.run_files import make_run
+from tests.cli_helpers import assert_one_line_error
+from tests.service.hardening_helpers import run_daq_env
+from tests.service.service_helpers import service_env, serving
 
 pytestmark = pytest.mark.slow
 

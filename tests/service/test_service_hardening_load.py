@@ -22,11 +22,11 @@ from urllib.parse import urlsplit
 
 import httpx
 import pytest
-from cli_helpers import DAQ
-from service_helpers import ADDRESS_LINE, Served, service_env, stop_service
-from test_cli_runs import make_run
 
 from daq.store import seal
+from tests.cli.run_files import make_run
+from tests.cli_helpers import DAQ
+from tests.service.service_helpers import ADDRESS_LINE, Served, service_env, stop_service
 
 pytestmark = pytest.mark.slow
 
@@ -174,9 +174,8 @@ def _get(served: Served, path: str, timeout: float) -> int | str:
 
 def _hard_link_bomb(store: Path) -> Path:
     """A sound run of the service's store turned into the issue's hard-link bomb."""
-    from store.store_helpers import add_hard_link_bomb, make_run
-
     from daq.store import seal
+    from tests.store.store_helpers import add_hard_link_bomb, make_run
 
     return add_hard_link_bomb(seal(make_run(run_id="20261124T235958.000Z-0badf11e"), store))
 

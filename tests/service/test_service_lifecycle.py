@@ -7,10 +7,10 @@ import signal
 import subprocess
 
 import pytest
-from cli_helpers import DAQ, assert_one_line_error
-from service_helpers import EventReader, service_env, serving, wait_for
 
 from daq.store import Store
+from tests.cli_helpers import DAQ, assert_one_line_error
+from tests.service.service_helpers import EventReader, service_env, serving, wait_for
 
 pytestmark = pytest.mark.slow
 

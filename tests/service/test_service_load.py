@@ -13,7 +13,9 @@ from dataclasses import dataclass, field
 
 import httpx
 import pytest
-from hardening_helpers import (
+
+from daq.store import Store
+from tests.service.hardening_helpers import (
     SseEvent,
     follow_until,
     open_fds,
@@ -21,9 +23,7 @@ from hardening_helpers import (
     sse_events,
     threads_of,
 )
-from service_helpers import EventReader, Served, serving, wait_for
-
-from daq.store import Store
+from tests.service.service_helpers import EventReader, Served, serving, wait_for
 
 pytestmark = pytest.mark.slow
 

@@ -13,13 +13,14 @@ import stat
 
 import httpx
 import pytest
-from cli_helpers import assert_one_line_error, capture_sim
-from hardening_helpers import (
+
+from tests.cli_helpers import assert_one_line_error, capture_sim
+from tests.service.hardening_helpers import (
     first_event,
     raw_request,
     run_daq_env,
 )
-from service_helpers import EventReader, Served, service_env, serving, wait_for
+from tests.service.service_helpers import EventReader, Served, service_env, serving, wait_for
 
 pytestmark = pytest.mark.slow
 

@@ -10,9 +10,9 @@ the grammar cannot drift together.
 from __future__ import annotations
 
 import pytest
-from wire import ask
 
 from sims.command_table import grammar
+from tests.sim.wire import ask
 
 CRLF = b"\r\n"
 KEYS = {"kind", "source", "argument", "dimension", "choices", "readback"}

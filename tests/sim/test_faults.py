@@ -18,7 +18,6 @@ import time
 
 import numpy as np
 import pytest
-from wire import HEADER_LENGTH, decode_trace
 
 from sims.command_table import ERRORS
 from sims.faults import FAULTS, parse_fault
@@ -26,6 +25,7 @@ from sims.inprocess import InProcessConnection
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
 from sims.tcp_server import TcpServer
+from tests.sim.wire import HEADER_LENGTH, decode_trace
 
 TYPICAL = "FRS 200 HZ;TSRC CH1;TLVL 2 MV;TDLY -10 MS;STRT"
 IDENT = b"HP35660A\r\n"

@@ -19,11 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from wire import ask, decode_trace
 
 from sims.command_table import ERRORS, commands_for
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource, RecordedHit, ReplaySource
+from tests.sim.wire import ask, decode_trace
 
 pytestmark = pytest.mark.timeout(10)
 

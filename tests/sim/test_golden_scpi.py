@@ -26,11 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from wire import ask
 
 from sims.instrument import Analyzer
 from sims.scpi_table import COMMANDS
 from sims.sources import PhysicsSource, RecordedHit, ReplaySource
+from tests.sim.wire import ask
 
 pytestmark = pytest.mark.timeout(10)
 

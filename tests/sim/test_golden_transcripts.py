@@ -31,11 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from wire import ask
 
 from sims.command_table import COMMANDS, ERRORS
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
+from tests.sim.wire import ask
 
 pytestmark = pytest.mark.timeout(10)
 

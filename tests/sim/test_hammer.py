@@ -1,9 +1,9 @@
 """The simulated hammer: adjustable in-band and from the command line, validated."""
 
 import pytest
-from wire import decode_trace
 
 from sims.hammer import HammerModel, adjusted
+from tests.sim.wire import decode_trace
 
 
 @pytest.mark.parametrize(

@@ -17,10 +17,10 @@ import struct
 
 import numpy as np
 import pytest
-from wire import ask
 
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
+from tests.sim.wire import ask
 
 pytestmark = pytest.mark.timeout(10)
 

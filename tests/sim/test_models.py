@@ -15,7 +15,6 @@ import time
 import numpy as np
 import pytest
 import serial
-from wire import ask, decode_trace
 
 from analysis.response import frequency_response
 from sims.inprocess import InProcessConnection
@@ -23,6 +22,7 @@ from sims.instrument import Analyzer
 from sims.prologix import PrologixPty
 from sims.scenarios import build_specimen
 from sims.sources import PhysicsSource, RecordedHit, ReplaySource
+from tests.sim.wire import ask, decode_trace
 
 pytestmark = pytest.mark.timeout(60)
 

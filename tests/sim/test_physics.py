@@ -6,11 +6,11 @@ independent of the simulator's pole-residue sampling, anti-alias filter and DSP.
 
 import numpy as np
 import pytest
-from reference import EXACT_TABULATED_HZ
-from wire import decode_trace
 
 from analysis.response import frequency_response
 from sims.scenarios import build_specimen
+from tests.reference import EXACT_TABULATED_HZ
+from tests.sim.wire import decode_trace
 
 
 def _trace(conn, commands: str) -> tuple[np.ndarray, np.ndarray]:

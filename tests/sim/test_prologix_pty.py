@@ -20,12 +20,12 @@ import numpy as np
 import pytest
 import pyvisa
 import serial
-from wire import HEADER_LENGTH, decode_ascii_trace, decode_trace
 
 from sims.instrument import Analyzer
 from sims.prologix import PrologixPty
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
+from tests.sim.wire import HEADER_LENGTH, decode_ascii_trace, decode_trace
 
 pytestmark = pytest.mark.timeout(30)
 

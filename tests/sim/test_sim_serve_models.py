@@ -14,7 +14,8 @@ import h5py
 import numpy as np
 import pytest
 import pyvisa
-from cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq
+
+from tests.cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq
 
 pytestmark = pytest.mark.timeout(60)
 

@@ -18,11 +18,11 @@ import time
 import numpy as np
 import pytest
 import pyvisa
-from wire import HEADER_LENGTH, decode_ascii_trace, decode_trace, split_block
 
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
+from tests.sim.wire import HEADER_LENGTH, decode_ascii_trace, decode_trace, split_block
 
 pytestmark = pytest.mark.timeout(30)
 

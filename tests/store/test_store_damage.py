@@ -11,9 +11,9 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from store_helpers import NOTE_MARKER, assert_same_run, make_frf, make_hits, make_run
 
 from daq.store import Store, StoreError, open_run, read_summary, seal, verify
+from tests.store.store_helpers import NOTE_MARKER, assert_same_run, make_frf, make_hits, make_run
 
 
 @pytest.fixture

@@ -7,11 +7,11 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import pytest
-from cli_helpers import invoke_daq
-from store_helpers import make_frf, make_run
 
 from daq.store import SCHEMA_VERSION, MeasuredFrf, open_run, seal, verify
 from daq.store.layout import SCHEMA_VERSION_FRF_FORMS
+from tests.cli_helpers import invoke_daq
+from tests.store.store_helpers import make_frf, make_run
 
 
 def with_form(form: str) -> MeasuredFrf:

@@ -21,10 +21,10 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from store_helpers import add_hard_link_bomb, make_run
 
 from daq.store import Store, open_run, seal, verify
 from daq.store.h5io import refuse_outside_references
+from tests.store.store_helpers import add_hard_link_bomb, make_run
 
 DAQ = Path(sys.executable).with_name("daq")
 #: Address-space limit of the CLI under test: the sound run needs well under half of it.

@@ -12,9 +12,9 @@ import time
 from pathlib import Path
 
 import pytest
-from store_helpers import make_hits, make_run
 
 from daq.store import Store, StoreError, open_run, seal, verify
+from tests.store.store_helpers import make_hits, make_run
 
 HERE = Path(__file__).parent
 EXAMPLE_IDS = [

@@ -6,9 +6,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-from store_helpers import make_frf, make_hits, make_run
 
 from daq.store import Hits, MeasuredFrf, Run, Sample
+from tests.store.store_helpers import make_frf, make_hits, make_run
 
 
 def _hits_args(**changes):

@@ -6,10 +6,10 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import pytest
-from store_helpers import assert_same_run, make_frf, make_hits, make_run
 
 from daq import __version__
 from daq.store import SCHEMA_NAME, SCHEMA_VERSION, open_run, read_summary, seal, verify
+from tests.store.store_helpers import assert_same_run, make_frf, make_hits, make_run
 
 
 @pytest.mark.parametrize(

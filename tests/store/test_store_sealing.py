@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from store_helpers import make_hits, make_run
 
 from daq.errors import UserError
 from daq.store import Store, StoreError, open_run, read_result, seal, write_result
+from tests.store.store_helpers import make_hits, make_run
 
 HERE = Path(__file__).parent
 

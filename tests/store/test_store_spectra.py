@@ -6,7 +6,6 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import pytest
-from store_helpers import make_hits, make_run
 
 from daq.store import (
     SCHEMA_VERSION,
@@ -19,6 +18,7 @@ from daq.store import (
     seal,
     verify,
 )
+from tests.store.store_helpers import make_hits, make_run
 
 N_LINES = 1601
 

@@ -16,7 +16,6 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from store_helpers import add_hard_link_bomb, assert_same_run, make_frf, make_hits, make_run
 
 from daq.store import (
     NotARunError,
@@ -34,6 +33,7 @@ from daq.store import (
 )
 from daq.store.layout import ATTR_SUMMARY
 from daq.store.summary import SUMMARY_TYPES, parse_summary
+from tests.store.store_helpers import add_hard_link_bomb, assert_same_run, make_frf, make_hits, make_run
 
 
 def _attribute(path: Path) -> dict:

@@ -9,9 +9,9 @@ import subprocess
 
 import numpy as np
 import pytest
-from cli_helpers import DAQ, ENV
 
 from daq.store import Store
+from tests.cli_helpers import DAQ, ENV
 
 N_PROCESSES = 4
 STEPS = 3  # each process: capture, import, capture (alternating with its neighbours)

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
-from reference import EQ18, EQ18_DAMPING_RATIOS, EQ18_EIGENVALUES, EQ18_POLE_MAGNITUDE_HZ
 
 from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.seed import eq18_damping_matrix
+from tests.reference import EQ18, EQ18_DAMPING_RATIOS, EQ18_EIGENVALUES, EQ18_POLE_MAGNITUDE_HZ
 
 
 @pytest.fixture

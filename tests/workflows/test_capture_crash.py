@@ -15,9 +15,9 @@ import subprocess
 import time
 
 import pytest
-from cli_helpers import DAQ, ENV, invoke_daq
 
 from daq.store import Store, open_run, verify
+from tests.cli_helpers import DAQ, ENV, invoke_daq
 
 KILLS = 50
 

@@ -19,10 +19,10 @@ import subprocess
 import time
 
 import pytest
-from cli_helpers import DAQ, ENV
-from test_cli_runs import make_run
 
 from daq.store import seal
+from tests.cli.run_files import make_run
+from tests.cli_helpers import DAQ, ENV
 
 RUN_ID = "20261123T101503.123Z-0000aaaa"
 OPERATOR = "\x1b]0;OWNED\x07"

@@ -1,14 +1,14 @@
-"""What a new user's trial of analyze, fit and report found: one error line for one
+"""What `daq analyze`, `daq fit` and `daq report` refuse, and how: one error line for one
 failing run, no fit of a band that misses the model's modes, no report written
 over another without --force, frequencies of interest that are really near."""
 
 from __future__ import annotations
 
 import numpy as np
-from cli_helpers import assert_one_line_error, invoke_daq
-from store.store_helpers import make_frf, make_run
 
 from daq.store import Hits, Store, seal
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.store.store_helpers import make_frf, make_run
 
 
 def all_rejected_run():

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
-from reference import PHI_AT_TIP, RITZ_N3_HZ, RITZ_N6_HZ, RITZ_N10_HZ
 
 from analysis.beam import TABLE_1
 from analysis.exact_beam import cantilever_frequencies_hz
 from analysis.ritz import RitzBeam, admissible_functions, ritz_frequencies_hz, ritz_matrices
+from tests.reference import PHI_AT_TIP, RITZ_N3_HZ, RITZ_N6_HZ, RITZ_N10_HZ
 
 
 @pytest.mark.parametrize(("n", "expected"), [(3, RITZ_N3_HZ), (6, RITZ_N6_HZ), (10, RITZ_N10_HZ)])

@@ -17,11 +17,11 @@ import textwrap
 
 import numpy as np
 import pytest
-from cli_helpers import DAQ, ENV, invoke_daq
 
 from daq.store import Store, new_run_id, open_run, verify
 from daq.store.journal import Journal, is_journal_name, read_journal, recover
 from daq.workflows.capture import check_plain_text, table1_sample, utc_now
+from tests.cli_helpers import DAQ, ENV, invoke_daq
 
 N = 64
 

@@ -8,11 +8,11 @@ import socket
 import threading
 
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 #: model -> (identification, dialect line, geometry line), from docs/dialects.md's table.
 EXPECTED = {

@@ -15,10 +15,10 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
-from store.store_helpers import make_frf, make_run
 
 from daq.store import Hits, Store, seal
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.store.store_helpers import make_frf, make_run
 
 RAW = ("force", "response", "time", "accepted", "reject_reason", "overload")
 

@@ -19,20 +19,13 @@ import time
 from pathlib import Path
 
 import pytest
-from cli_helpers import DAQ, ENV
-from test_capture_journal_signals import listed, start_capture, wait_for_accepted
 
 from daq.store import open_run, verify
+from tests.cli_helpers import DAQ
+from tests.workflows.capture_processes import capture_env, listed, start_capture, wait_for_accepted
 
 KILLS = 54
 AT_ONCE = 9
-
-
-def _env(tmp_path: Path) -> dict[str, str]:
-    env = {**os.environ, **ENV, "DAQ_LOCK_DIR": str(tmp_path / "locks"), "DAQ_CONFIG": str(tmp_path / "none")}
-    for name in ("DAQ_DEBUG", "DAQ_RESOURCE", "DAQ_STORE"):
-        env.pop(name, None)
-    return env
 
 
 def _kill_when(proc: subprocess.Popen, output: Path, ready: str | None, delay_s: float) -> None:
@@ -53,7 +46,7 @@ def test_sigkill_at_random_moments_never_loses_an_accepted_hit(tmp_path):
     """Most kills land while hits are taken (a random moment after "Hammer away"), one
     in six anywhere from the start (start-up, connecting, configuring)."""
     store = tmp_path / "runs"
-    env = _env(tmp_path)
+    env = capture_env(tmp_path)
     rng = random.Random(20261124)
     outputs: dict[int, Path] = {}
     for first in range(0, KILLS, AT_ONCE):
@@ -134,7 +127,7 @@ def test_a_store_without_room_for_the_run_is_refused_before_the_first_hit(tmp_pa
         store = small / "runs"
         result = subprocess.run(
             [str(DAQ), "capture", "--sim", "--yes", "--hits", "10", "--time-scale", "0", "--store", store],
-            capture_output=True, text=True, env=_env(tmp_path), timeout=60,
+            capture_output=True, text=True, env=capture_env(tmp_path), timeout=60,
         )  # fmt: skip
         assert result.returncode == 1, result.stderr
         lines = result.stderr.splitlines()
@@ -146,7 +139,7 @@ def test_a_store_without_room_for_the_run_is_refused_before_the_first_hit(tmp_pa
 
 @pytest.mark.timeout(90)
 def test_a_disk_that_fills_during_the_capture_keeps_the_journal_and_says_where(tmp_path):
-    env = _env(tmp_path)
+    env = capture_env(tmp_path)
     with small_filesystem(tmp_path / "small", "2m") as small:
         store = small / "runs"
         proc = start_capture(store, env)

@@ -5,11 +5,11 @@ reaches it the same way these tests reach the simulator here."""
 import json
 
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 
 @pytest.fixture

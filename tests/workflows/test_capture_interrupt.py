@@ -11,9 +11,9 @@ import subprocess
 import time
 
 import pytest
-from cli_helpers import DAQ, ENV
 
 from daq.store import Store
+from tests.cli_helpers import DAQ, ENV
 
 
 @pytest.mark.timeout(60)

@@ -9,11 +9,11 @@ import time
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 
 @pytest.fixture

@@ -1,11 +1,11 @@
 import numpy as np
 import pytest
 import scipy.signal
-from reference import EQ18
 
 from analysis.exact_beam import ExactCantilever
 from analysis.response import frequency_response, time_response
 from analysis.ritz import RitzBeam
+from tests.reference import EQ18
 
 QUANTITIES = ("displacement", "velocity", "acceleration")
 

@@ -6,10 +6,10 @@ import json
 import re
 
 import numpy as np
-from cli_helpers import assert_one_line_error, invoke_daq
-from store.store_helpers import make_run
 
 from daq.store import MeasuredFrf, Store, seal
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.store.store_helpers import make_run
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

@@ -1,4 +1,4 @@
-"""What a new user's trial of SDF import found (docs/sdf.md): a run exported as SDF and
+"""`daq export --format sdf` and `daq import` of SDF files (docs/sdf.md): a run exported as SDF and
 imported back is analysed with the same windows (the channel headers carry them); a
 damaged HP .DAT file gets the SDF reader's reason; units kept as they were are said
 on stderr, not only in the provenance."""
@@ -8,9 +8,9 @@ from __future__ import annotations
 import json
 
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
 
 from daq.store import Store
+from tests.cli_helpers import assert_one_line_error, invoke_daq
 
 
 @pytest.fixture(scope="module")

@@ -10,63 +10,20 @@ incomplete run holding both.
 from __future__ import annotations
 
 import contextlib
-import json
 import os
-import select
 import signal
 import subprocess
-import time
 from pathlib import Path
 
 import pytest
-from cli_helpers import DAQ, ENV
-from service.service_helpers import serving, wait_for
 
 from daq.store import Store, open_run
+from tests.cli_helpers import DAQ
+from tests.service.service_helpers import serving, wait_for
+from tests.workflows.capture_processes import capture_env, listed, start_capture, wait_for_accepted
 
 EXIT = {signal.SIGTERM: 143, signal.SIGHUP: 129, signal.SIGKILL: -signal.SIGKILL}
 WHY = {signal.SIGTERM: "terminated (SIGTERM)", signal.SIGHUP: "hung up (SIGHUP)"}
-
-
-def _env(tmp_path: Path) -> dict[str, str]:
-    env = {**os.environ, **ENV, "DAQ_LOCK_DIR": str(tmp_path / "locks"), "DAQ_CONFIG": str(tmp_path / "none")}
-    for name in ("DAQ_DEBUG", "DAQ_RESOURCE", "DAQ_STORE"):
-        env.pop(name, None)
-    return env
-
-
-def start_capture(store: Path, env: dict[str, str], *extra: str) -> subprocess.Popen:
-    command = ["capture", "--sim", "--hits", "10", "--yes", "--time-scale", "0.5", "--store", str(store)]
-    return subprocess.Popen(
-        [str(DAQ), *command, *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        stdin=subprocess.DEVNULL, env=env, text=True, bufsize=1, start_new_session=True,
-    )  # fmt: skip
-
-
-def wait_for_accepted(proc: subprocess.Popen, n: int, timeout_s: float = 40.0) -> list[str]:
-    """Read the capture's output until ``n`` hits were accepted; the lines read."""
-    lines: list[str] = []
-    accepted = 0
-    deadline = time.monotonic() + timeout_s
-    while accepted < n and time.monotonic() < deadline:
-        ready, _, _ = select.select([proc.stdout], [], [], 1.0)
-        if ready:
-            line = proc.stdout.readline()
-            if not line:
-                break
-            lines.append(line)
-            accepted += line.lstrip().startswith("-> accepted")
-    assert accepted == n, f"{n} hits should have been accepted: {''.join(lines)}"
-    return lines
-
-
-def listed(store: Path, env: dict[str, str]) -> tuple[list[dict], str]:
-    result = subprocess.run(
-        [str(DAQ), "runs", "list", "--json", "--store", str(store)],
-        capture_output=True, text=True, env=env, timeout=60,
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr
-    return json.loads(result.stdout), result.stderr
 
 
 def assert_one_incomplete_run(store: Path, env: dict[str, str], accepted_at_least: int) -> dict:
@@ -93,7 +50,7 @@ def assert_one_incomplete_run(store: Path, env: dict[str, str], accepted_at_leas
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP, signal.SIGKILL], ids=lambda s: s.name)
 def test_a_signalled_capture_keeps_every_accepted_hit(tmp_path, signum):
     store = tmp_path / "runs"
-    env = _env(tmp_path)
+    env = capture_env(tmp_path)
     proc = start_capture(store, env)
     try:
         wait_for_accepted(proc, 2)

@@ -5,10 +5,10 @@ characters with one line, and reads or writes nothing outside the store folder."
 from __future__ import annotations
 
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
-from store.store_helpers import make_run
 
 from daq.store import seal
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.store.store_helpers import make_run
 
 BAD_NAMES = [
     "../etc/passwd",

@@ -12,16 +12,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
-from reference import (
+
+from daq.store import MeasuredFrf, seal
+from tests.cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
+from tests.reference import (
     EQ18_DAMPING_RATIOS,
     EQ18_POLE_MAGNITUDE_HZ,
     EXACT_TABULATED_HZ,
     REALISTIC_DAMPING_RATIOS,
 )
-from store.store_helpers import make_run
-
-from daq.store import MeasuredFrf, seal
+from tests.store.store_helpers import make_run
 
 
 def analyze_json(store: Path, *args: str) -> list[dict]:

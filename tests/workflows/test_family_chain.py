@@ -10,8 +10,9 @@ from __future__ import annotations
 import json
 
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
-from reference import EXACT_TABULATED_HZ, REALISTIC_DAMPING_RATIOS
+
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.reference import EXACT_TABULATED_HZ, REALISTIC_DAMPING_RATIOS
 
 #: model -> (dialect recorded, model recorded, lines, samples per record, span Hz for 200 Hz asked)
 MODELS = {

@@ -3,11 +3,10 @@
 import re
 from pathlib import Path
 
-from cli_helpers import invoke_daq
-
 from daq.cli.reference import REGENERATE, reference
+from tests.cli_helpers import invoke_daq
 
-CLI_MD = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
+CLI_MD = Path(__file__).resolve().parents[2] / "docs" / "cli.md"
 SECTION = re.compile(r"^## (daq[a-z ]*)\n\n```text\n(.*?)\n```$", re.MULTILINE | re.DOTALL)
 
 

@@ -5,8 +5,9 @@ import json
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, invoke_daq
-from reference import (
+
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.reference import (
     EQ18,
     EQ18_DAMPING_RATIOS,
     EQ18_POLE_MAGNITUDE_HZ,

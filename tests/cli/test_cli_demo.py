@@ -6,8 +6,9 @@ from __future__ import annotations
 import re
 
 import pytest
-from cli_helpers import invoke_daq
-from reference import EXACT_TABULATED_HZ
+
+from tests.cli_helpers import invoke_daq
+from tests.reference import EXACT_TABULATED_HZ
 
 LINE_SPACING_HZ = 0.5  # 200 Hz span / 400 lines
 

@@ -12,10 +12,10 @@ import time
 
 import pytest
 import typer
-from cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq, run_daq
 
 from daq import __version__
 from daq.cli.app import app, help_hint
+from tests.cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq, run_daq
 
 #: Every command and group, as typed after `daq`.
 COMMANDS = [(), ("model",), ("sim",), ("sim", "serve"), ("sim", "commands"), ("instruments",)]

@@ -14,10 +14,10 @@ import h5py
 import numpy as np
 import pytest
 import pyuff
-from cli_helpers import assert_one_line_error, invoke_daq
-from store.store_helpers import make_run
 
 from daq.store import Store, open_run, seal
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.store.store_helpers import make_run
 
 
 @pytest.fixture(scope="module")
@@ -119,7 +119,7 @@ def test_export_never_overwrites_without_force(captured, tmp_path):
 
 
 def test_export_of_a_frf_only_run_to_csv_is_one_line(tmp_path):
-    from store.store_helpers import make_frf
+    from tests.store.store_helpers import make_frf
 
     run = make_run(kind="imported", measured=make_frf())
     seal(run, tmp_path)

@@ -18,11 +18,11 @@ import time
 import pytest
 import pyvisa
 import serial
-from cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq
 
 from sims.command_table import COMMANDS
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
+from tests.cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq
 
 pytestmark = pytest.mark.timeout(30)
 

@@ -1,7 +1,6 @@
 import numpy as np
 import pytest
 import scipy.integrate
-from reference import CANTILEVER_BETA_L, EXACT_DERIVED_HZ, EXACT_TABULATED_HZ, SEED_EXPERIMENTAL_HZ
 
 from analysis.beam import TABLE_1
 from analysis.exact_beam import (
@@ -10,6 +9,7 @@ from analysis.exact_beam import (
     cantilever_mode_shapes,
     cantilever_roots,
 )
+from tests.reference import CANTILEVER_BETA_L, EXACT_DERIVED_HZ, EXACT_TABULATED_HZ, SEED_EXPERIMENTAL_HZ
 
 
 def test_roots_match_design():
