@@ -1,16 +1,27 @@
 """A transport that checks the exact bytes the driver sends and plays scripted replies,
 in the spirit of PyMeasure's ``expected_protocol``: used as a context manager, it
 also checks on exit that every scripted exchange happened and every reply was read,
-so a test whose driver skips an exchange fails."""
+so a test whose driver skips an exchange fails. ``expected`` puts the driver of any
+dialect (HP 35660A, HP 3562A, SCPI) on it; ``link_lost`` on a link that is gone."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-from drivers.errors import InstrumentTimeout
-from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
+from drivers.base import SignalAnalyzer
+from drivers.dialects import HP3562A, HP35660A, SCPI, Dialect
+from drivers.errors import ConnectionLost, InstrumentTimeout
+from drivers.hp_mnemonic import HPMnemonicAnalyzer
+from drivers.scpi_analyzer import ScpiAnalyzer
 from drivers.transport import Transport
+
+#: The driver class of each dialect the protocol tests script.
+DRIVERS: dict[Dialect, type[SignalAnalyzer]] = {
+    HP35660A: HPMnemonicAnalyzer,
+    HP3562A: HPMnemonicAnalyzer,
+    SCPI: ScpiAnalyzer,
+}
 
 
 class ExpectedProtocol(Transport):
@@ -69,7 +80,20 @@ class ExpectedProtocol(Transport):
 
 
 @contextmanager
-def expected(steps: list[tuple[bytes, bytes | None]], **kwargs: object) -> Iterator[HP35660A]:
-    """A driver on a scripted transport; on leaving, every step must have happened."""
+def expected(
+    steps: list[tuple[bytes, bytes | None]], dialect: Dialect = HP35660A, **kwargs: object
+) -> Iterator[SignalAnalyzer]:
+    """The ``dialect``'s driver on a scripted transport; on leaving, every step must have
+    happened."""
     with ExpectedProtocol(steps) as transport:
-        yield HP35660A(transport, **kwargs)  # type: ignore[arg-type]
+        yield DRIVERS[dialect](transport, dialect, **kwargs)  # type: ignore[arg-type]
+
+
+class _LinkLost(ExpectedProtocol):
+    def _write(self, message: bytes) -> None:
+        raise ConnectionLost("link lost")
+
+
+def link_lost(dialect: Dialect = HP35660A, **kwargs: object) -> SignalAnalyzer:
+    """The ``dialect``'s driver on a link where every write is lost."""
+    return DRIVERS[dialect](_LinkLost([]), dialect, **kwargs)  # type: ignore[arg-type]

@@ -1,4 +1,4 @@
-"""The bench of the fault tests (test_driver_faults.py, test_scpi_faults.py): a simulated
+"""The bench of the fault tests (test_driver_faults.py, every dialect): a simulated
 analyzer of one model, optionally measured already, behind a TCP server or the
 Prologix pty with faults armed; and what the tests read off the driver's logging.
 

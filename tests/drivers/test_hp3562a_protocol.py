@@ -11,17 +11,14 @@ big-endian float64 (66 header values, then the data, complex interleaved re, im)
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterator
-from contextlib import contextmanager
 
 import numpy as np
 import pytest
 
 from drivers.dialects import HP3562A
 from drivers.errors import ProtocolError
-from drivers.hp_mnemonic import HPMnemonicAnalyzer
 from drivers.settings import ImpactSettings
-from tests.drivers.expected_protocol import ExpectedProtocol
+from tests.drivers.expected_protocol import expected
 
 NO_ERROR = b'0,"No error"\r\n'
 # Header words (docs/instrument.md): 0 display function (1 frequency response,
@@ -31,10 +28,9 @@ NO_ERROR = b'0,"No error"\r\n'
 FRF, COHERENCE, TIME_1, TIME_2, LINEAR_1 = 1.0, 4.0, 6.0, 7.0, 8.0
 
 
-@contextmanager
-def hp3562a(steps: list[tuple[bytes, bytes | None]], **kwargs: object) -> Iterator[HPMnemonicAnalyzer]:
-    with ExpectedProtocol(steps) as transport:
-        yield HPMnemonicAnalyzer(transport, HP3562A, **kwargs)  # type: ignore[arg-type]
+def hp3562a(steps: list[tuple[bytes, bytes | None]], **kwargs: object):
+    """The 3562A's driver on a scripted transport (expected_protocol.expected)."""
+    return expected(steps, HP3562A, **kwargs)
 
 
 def dump(header: list[float], data: list[float]) -> bytes:

@@ -8,9 +8,8 @@ exchange of the script did not happen. The dumps are in test_protocol_dumps.py.
 import pytest
 
 from drivers.errors import ConnectionLost, InstrumentError, InstrumentTimeout, ProtocolError
-from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ChannelSetup, ImpactSettings, Window
-from tests.drivers.expected_protocol import ExpectedProtocol, expected
+from tests.drivers.expected_protocol import expected, link_lost
 
 NO_ERROR = b'0,"No error"\r\n'
 
@@ -317,11 +316,7 @@ def test_start_refused_raises_the_instrument_error():
 def test_accept_is_never_repeated():
     # A lost ACPT may or may not have reached the instrument: repeating it could put
     # a hit in the average twice. The driver reports instead.
-    class Failing(ExpectedProtocol):
-        def _write(self, message):
-            raise ConnectionLost("link lost")
-
-    dsa = HP35660A(Failing([]), retries=3)
+    dsa = link_lost(retries=3)
     with pytest.raises(ConnectionLost, match=r"link lost$"):
         dsa.accept()
 

@@ -10,18 +10,15 @@ by byte: ``#``, the digit count, the byte count, big-endian float64, LF.
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterator
-from contextlib import contextmanager
 
 import numpy as np
 import pytest
 
 from drivers.dialects import SCPI
 from drivers.errors import ConnectionLost, InstrumentError, InstrumentTimeout, ProtocolError
-from drivers.scpi_analyzer import ScpiAnalyzer
 from drivers.scpi_commands import parse_message, repeatable, replies
 from drivers.settings import ChannelSetup, ImpactSettings, Window
-from tests.drivers.expected_protocol import ExpectedProtocol
+from tests.drivers.expected_protocol import expected, link_lost
 
 IDN = b"HEWLETT-PACKARD,35670A,0000A00000,A.00.00\n"
 NO_ERROR = b'+0,"No error"\n'
@@ -32,11 +29,9 @@ STATE = (
 )
 
 
-@contextmanager
-def scpi(steps: list[tuple[bytes, bytes | None]], **kwargs: object) -> Iterator[ScpiAnalyzer]:
-    """The SCPI driver on a scripted transport; on leaving, every step must have happened."""
-    with ExpectedProtocol(steps) as transport:
-        yield ScpiAnalyzer(transport, SCPI, **kwargs)  # type: ignore[arg-type]
+def scpi(steps: list[tuple[bytes, bytes | None]], **kwargs: object):
+    """The SCPI driver on a scripted transport (expected_protocol.expected)."""
+    return expected(steps, SCPI, **kwargs)
 
 
 def block(values: list[float]) -> bytes:
@@ -421,11 +416,7 @@ def test_accept_with_no_hit_pending_raises_the_settings_conflict():
 def test_accept_reject_and_init_are_never_repeated(action):
     # A lost message may or may not have reached the analyzer: sending it again could
     # put a hit in the average twice (or drop the one after it).
-    class Failing(ExpectedProtocol):
-        def _write(self, message):
-            raise ConnectionLost("link lost")
-
-    dsa = ScpiAnalyzer(Failing([]), SCPI, retries=3)
+    dsa = link_lost(SCPI, retries=3)
     dsa._record_length_s = 2.0  # start() would otherwise ask for it first
     with pytest.raises(ConnectionLost, match=r"link lost$"):
         getattr(dsa, action)()
