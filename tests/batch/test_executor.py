@@ -8,7 +8,6 @@ import pickle
 from pathlib import Path
 
 import pytest
-from cli_helpers import capture_sim, invoke_daq
 
 from analysis.run_analysis import AnalysisOptions
 from daq.batch.executor import (
@@ -24,6 +23,7 @@ from daq.workflows.analysis import NOTHING_TO_IDENTIFY
 from daq.workflows.errors import WorkflowError
 from daq.workflows.fit import FitOptions
 from daq.workflows.outcome import RunOutcome
+from tests.cli_helpers import capture_sim, invoke_daq
 
 ADDRESS = "tcp://10.0.0.9:8786"
 

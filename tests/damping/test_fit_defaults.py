@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
 
 from analysis.damping import pilkey_inman, undamped_modes, update_mode_frequencies, update_stiffness
 from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.seed import eq18_damping_matrix
 from daq.workflows.fit import FitOptions, fit_cautions, resolve_functions
+from tests.cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
 
 
 def test_the_default_options_and_their_result_names():

@@ -12,10 +12,10 @@ import sys
 from pathlib import Path
 
 import pytest
-from hardening_helpers import free_port
-from service_helpers import EventReader, serving, wait_for
 
 from daq.store import Store
+from tests.service.hardening_helpers import free_port
+from tests.service.service_helpers import EventReader, serving, wait_for
 
 DASK = Path(sys.executable).with_name("dask")
 

@@ -21,8 +21,6 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from cli_helpers import DAQ, assert_one_line_error, run_daq
-from wire import HEADER_LENGTH, decode_trace
 
 from daq.workflows.errors import WorkflowError
 from daq.workflows.recorded_hits import load_recorded_hits
@@ -30,6 +28,8 @@ from sims.command_table import ERRORS
 from sims.inprocess import InProcessConnection
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
+from tests.cli_helpers import DAQ, assert_one_line_error, run_daq
+from tests.sim.wire import HEADER_LENGTH, decode_trace
 
 SPAN_HZ = 200.0
 FS_HZ = 2.56 * SPAN_HZ  # 512 Hz

@@ -14,7 +14,8 @@ import time
 from pathlib import Path
 
 import pytest
-from cli_helpers import DAQ, ENV, capture_sim
+
+from tests.cli_helpers import DAQ, ENV, capture_sim
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
 

@@ -19,12 +19,12 @@ from unittest import mock
 import distributed
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, capture_sim, invoke_daq, run_daq
 from store.store_helpers import make_frf, make_run
 
 from daq.batch import dask_backend as dask_batch
 from daq.store import Run, Store, seal
 from daq.store.ids import RUN_ID_LENGTH
+from tests.cli_helpers import assert_one_line_error, capture_sim, invoke_daq, run_daq
 
 #: Summary fields that time the computation: the only ones two runs may differ in.
 TIMING = ("seconds",)

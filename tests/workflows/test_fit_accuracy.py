@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
-from reference import EQ18_DAMPING_RATIOS, REALISTIC_DAMPING_RATIOS
 
 from analysis.damping.fit_limits import de_bounds as _de_bounds
+from tests.cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
+from tests.reference import EQ18_DAMPING_RATIOS, REALISTIC_DAMPING_RATIOS
 
 
 def fit_json(store: Path, *args: str) -> list[dict]:
