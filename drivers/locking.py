@@ -14,8 +14,8 @@ by every user, such as ``/tmp/daq-locks``, could be created by another user firs
 who could then plant a symlink named like a lock file and have our open truncate
 the file it points to. So the directory is created 0700, refused unless it is ours
 and writable by nobody else, and lock files are opened without following symlinks
-and without truncating. The store's lock lives in the store itself (``store_lock``),
-so every process using that folder finds it, from any environment and any user.
+and without truncating. The store's lock (daq/store/lock.py) is a ResourceLock whose file lives in the
+store itself, so every process using that folder finds it, from any environment and any user.
 
 What these locks cannot see: another user's processes (two users still cannot
 drive one GPIB bus at once: the bus itself, its device file, is theirs to share
@@ -41,8 +41,6 @@ from drivers.errors import ConnectionFailed, ResourceBusy
 #: process of this user on this machine, whatever its environment (not tempfile's
 #: choice, which follows $TMPDIR; not $XDG_RUNTIME_DIR, which services lack).
 LOCK_ROOT = Path("/tmp")
-#: The store lock's file, in the store folder (hidden: never taken for a run).
-STORE_LOCK_NAME = ".daq-serve.lock"
 
 
 def lock_directory() -> Path:
@@ -93,7 +91,7 @@ class ResourceLock:
         messages call it (default: the key); ``holder`` says who holds it, for the
         message another process gets (e.g. "daq serve at http://127.0.0.1:8000").
         ``path``: the lock file, when it is not the key's in lock_directory() (the
-        store's lock, see store_lock); its folder is then not checked for ownership."""
+        store's lock, daq/store/lock.py); its folder is then not checked for ownership."""
         self.key = key
         self.label = label or key
         self.holder = " ".join(holder.split())[:200]
@@ -146,11 +144,3 @@ class ResourceLock:
     @property
     def held(self) -> bool:
         return self._fd is not None
-
-
-def store_lock(store_dir: Path | str, holder: str = "") -> ResourceLock:
-    """The lock of one service per store: a file in the store folder itself, so that
-    every process using the folder (any environment, any user, any machine sharing
-    the folder through a filesystem with working flock) finds the same one."""
-    where = os.path.realpath(store_dir)
-    return ResourceLock(f"STORE::{where}", f"store {where}", holder, path=Path(where) / STORE_LOCK_NAME)

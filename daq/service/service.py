@@ -22,7 +22,7 @@ from daq.service.events import EventHub, plain
 from daq.service.instrument_link import InstrumentLink, SimSpec
 from daq.service.jobs import JobRunner, analysis_result_name, fit_result_name
 from daq.store import Store, StoreError
-from drivers.locking import store_lock
+from daq.store.lock import store_lock
 
 
 @dataclass

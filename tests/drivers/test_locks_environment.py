@@ -18,7 +18,8 @@ import pytest
 
 HOLD = """
 import sys
-from drivers.locking import ResourceLock, store_lock
+from daq.store.lock import store_lock
+from drivers.locking import ResourceLock
 kind, name = sys.argv[1], sys.argv[2]
 lock = store_lock(name, holder="holder") if kind == "store" else ResourceLock(name, holder="holder")
 lock.acquire()
@@ -29,7 +30,8 @@ sys.stdin.readline()  # held until the test closes our stdin
 TRY = """
 import sys
 from drivers.errors import ResourceBusy
-from drivers.locking import ResourceLock, store_lock
+from daq.store.lock import store_lock
+from drivers.locking import ResourceLock
 kind, name = sys.argv[1], sys.argv[2]
 lock = store_lock(name) if kind == "store" else ResourceLock(name)
 try:

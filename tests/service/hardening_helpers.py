@@ -183,14 +183,14 @@ def unexpected_store_entries(store: Path) -> list[str]:
     """Entries of the store folder that are neither runs, nor results of a run
     present, nor the index cache, nor hidden temporaries (which the store never lists
     and `Store.clean_temporaries` removes)."""
+    from daq.store.lock import STORE_LOCK_NAME
     from daq.store.store import is_run_file_name, is_temporary_name
-    from drivers.locking import STORE_LOCK_NAME
 
     names = sorted(os.listdir(store))
     runs = {n[:-3] for n in names if is_run_file_name(n)}
     odd = []
     for name in names:
-        # The store's lock (drivers/locking.store_lock) lives in the store by design.
+        # The store's lock (daq/store/lock.py) lives in the store by design.
         if is_run_file_name(name) or is_temporary_name(name) or name.startswith(".index.sqlite"):
             continue
         if name == STORE_LOCK_NAME:
