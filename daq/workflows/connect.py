@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import contextlib
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from drivers.analyzer import SignalAnalyzer
-from drivers.loopback import LoopbackTransport
+if TYPE_CHECKING:
+    from drivers.analyzer import SignalAnalyzer
 
 SIM_RESOURCES = ("sim", "sim:seed", "sim:realistic")
 
@@ -41,8 +41,10 @@ def open_analyzer(
     the application opens an analyzer. ``sim`` runs the simulated analyzer in this
     process (scenario after the colon, ``seed`` by default), at ``time_scale`` (0: hits
     land at once). A resource string that names nothing is a ValueError."""
+    # The drivers (and numpy under them) load here, not with the command line.
     from drivers.family import connect
     from drivers.family import open_analyzer as open_resource
+    from drivers.loopback import LoopbackTransport
 
     if is_simulated(resource):
         from sims.inprocess import InProcessConnection

@@ -5,11 +5,14 @@ from __future__ import annotations
 import json
 import tomllib
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from analysis.beam import BeamProperties
 from daq.errors import UserError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from analysis.beam import BeamProperties
 
 #: Largest damping matrix / Ritz model accepted: beyond ~60 functions M is too
 #: ill-conditioned (cond > 1e13) for the eigenvalues to mean much.
@@ -52,6 +55,9 @@ def read_damping_matrix(path: Path) -> np.ndarray:
     JSON: a list of rows, or an object with a ``damping_matrix`` list of rows.
     Text: one row per line, numbers separated by spaces or commas, ``#`` comments.
     """
+    # numpy loads here, not with `daq --help` (daq/cli/commands/model.py imports MAX_FUNCTIONS).
+    import numpy as np
+
     if path.suffix.lower() == ".npy":
         _check_file(path)
         try:
@@ -85,6 +91,8 @@ def read_damping_matrix(path: Path) -> np.ndarray:
 
 
 def _rows_to_array(rows: object, path: Path) -> np.ndarray:
+    import numpy as np
+
     if not isinstance(rows, list) or not rows or not all(isinstance(r, list) for r in rows):
         raise UserError(f"{path}: expected a non-empty list of rows")
     lengths = {len(r) for r in rows}
@@ -100,6 +108,8 @@ def _rows_to_array(rows: object, path: Path) -> np.ndarray:
 
 
 def _check_matrix(values: np.ndarray, path: Path) -> np.ndarray:
+    import numpy as np
+
     if values.ndim != 2 or values.shape[0] != values.shape[1]:
         shape = "x".join(str(s) for s in values.shape) or "a scalar"
         raise UserError(f"{path}: the damping matrix must be square, got {shape}")
@@ -114,6 +124,8 @@ def _check_matrix(values: np.ndarray, path: Path) -> np.ndarray:
 def read_beam(path: Path) -> BeamProperties:
     """Beam properties from a TOML or JSON table of field names (SI units); missing
     fields keep the seed's Table 1 values."""
+    from analysis.beam import BeamProperties
+
     text = _read_text(path)
     try:
         data = json.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)

@@ -11,7 +11,6 @@ source's name, size and SHA-256, so it can always be traced back to the bytes it
 from __future__ import annotations
 
 import enum
-import hashlib
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -356,6 +355,8 @@ def looks_like_sdf(head: bytes) -> bool:
 
 def sha256_of(path: Path) -> tuple[str, int]:
     """SHA-256 (hex) and size of the regular file at ``path``; UserError otherwise."""
+    import hashlib
+
     from daq.formats.imported import check_regular_file, show_path
 
     check_regular_file(path)

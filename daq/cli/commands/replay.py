@@ -11,24 +11,33 @@ rejected with the same reason), so the analyzer averages the same hits.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import math
 import sys
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 
 from daq.cli.options import StoreOption
 from daq.errors import UserError
-from drivers.dialects import HP3562A, HP35660A, SAMPLE_RATE_PER_SPAN, SCPI, Dialect
+
+if TYPE_CHECKING:
+    from drivers.dialects import Dialect
 
 #: The simulated models a replay may use, the first whose records fit the run's: a run
-#: of another analyzer of the family replays through the model that records like it.
-#: The simulator offers 20 spans of each (max / 2^n).
-REPLAY_MODELS: tuple[tuple[str, Dialect], ...] = (("35660A", HP35660A), ("3562A", HP3562A), ("35670A", SCPI))
+#: of another analyzer of the family replays through the model that records like it
+#: (each model's dialect: replay_models). The simulator offers 20 spans of each (max / 2^n).
+REPLAY_MODELS: tuple[str, ...] = ("35660A", "3562A", "35670A")
 N_SPANS = 20
+
+
+def replay_models() -> tuple[tuple[str, Dialect], ...]:
+    """REPLAY_MODELS with the dialect each speaks (the drivers load here, not with the
+    command line)."""
+    from drivers.dialects import HP3562A, HP35660A, SCPI
+
+    dialects = {"35660A": HP35660A, "3562A": HP3562A, "35670A": SCPI}
+    return tuple((model, dialects[model]) for model in REPLAY_MODELS)
 
 
 def register(app: typer.Typer) -> None:
@@ -118,6 +127,8 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
     hits = original.hits
     model, settings = replay_settings(original, settings_from_dict)
     n_accepted = int(hits.accepted.sum())
+    import hashlib
+
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     console = Console(highlight=False, soft_wrap=True)
     with contextlib.ExitStack() as stack:
@@ -173,13 +184,15 @@ def replay_model(run: Any) -> tuple[str, int, float]:
     """(simulated model, lines, span Hz) that record like ``run``'s hits: 2.56 x lines
     real samples at 2.56 x span (half as many complex at 1.28 x span in zoom), span
     one of the model's. UserError naming the records when no model of the family fits."""
+    from drivers.dialects import SAMPLE_RATE_PER_SPAN
+
     hits = run.hits
     zoom = hits.is_zoom
     per_span = SAMPLE_RATE_PER_SPAN / (2 if zoom else 1)
     span = hits.sample_rate_hz / per_span
     baseband_samples = hits.n_samples * (2 if zoom else 1)
     lines = baseband_samples * 100 // 256
-    for model, dialect in REPLAY_MODELS:
+    for model, dialect in replay_models():
         spans = [s for s in dialect.spans_hz(N_SPANS) if math.isclose(s, span, rel_tol=1e-9)]
         if lines * 256 == baseband_samples * 100 and lines in dialect.line_choices and spans:
             return model, lines, spans[0]
@@ -217,6 +230,8 @@ def replay_settings(run: Any, from_dict: Any) -> tuple[str, Any]:
 
 def first_difference(a: Any, b: Any) -> str:
     """ "" when hits ``a`` and ``b`` hold the same raw data bit for bit, else what differs."""
+    import numpy as np
+
     if b is None:
         return "the new run has no hits"
     if a.force_n.shape != b.force_n.shape or a.force_n.dtype != b.force_n.dtype:

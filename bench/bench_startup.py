@@ -1,0 +1,127 @@
+"""Start-up of the `daq` command line (not a test): whole processes, interpreter included.
+
+    .venv/bin/python bench/bench_startup.py [--repeat 20] [--repo DIR]
+
+Runs each of `daq --help`, `daq runs list --store <small store>` and `daq model`
+--repeat times as `python -m daq ...` subprocesses and prints the min and median wall
+time of each. The small store (5 runs of 10 hits) is built in a temporary folder and
+removed afterwards; one untimed call of each command comes first (page cache, .pyc
+files, the store's index).
+
+--repo DIR times the code in DIR instead of this checkout (PYTHONPATH=DIR, run from
+DIR), e.g. an older commit checked out with `git worktree add /tmp/wt-before <commit>`.
+
+The same figures by hand, with /usr/bin/time (GNU time; "%e" is elapsed seconds):
+
+    for i in $(seq 20); do /usr/bin/time -f %e .venv/bin/python -m daq --help >/dev/null; done
+    for i in $(seq 20); do /usr/bin/time -f %e .venv/bin/python -m daq runs list --store DIR >/dev/null; done
+
+and what the imports cost, largest last:
+
+    .venv/bin/python -X importtime -m daq --help 2>&1 >/dev/null | sort -t'|' -k2 -n | tail -30
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def make_store(folder: Path, runs: int = 5) -> None:
+    """``runs`` small sealed runs in ``folder``."""
+    import numpy as np
+
+    from daq.store import Hits, Instrument, Run, Sample, new_run_id, seal
+
+    for seed in range(runs):
+        rng = np.random.default_rng(seed)
+        n_hits, n_samples = 10, 1024
+        t = np.arange(n_samples) / 2560.0
+        response = np.sin(2 * np.pi * 27.3 * t) * np.exp(-t / 0.4) * 20 + rng.normal(
+            0, 0.05, (n_hits, n_samples)
+        )
+        force = np.zeros((n_hits, n_samples))
+        force[:, 32:40] = 150.0
+        run = Run(
+            run_id=new_run_id(),
+            kind="simulated",
+            complete=True,
+            start_time="2026-11-23T10:15:03.123Z",
+            end_time="2026-11-23T10:16:03.123Z",
+            operator="bench",
+            note=f"bench run {seed}",
+            instrument=Instrument(
+                "HP 35660A", "HEWLETT-PACKARD,35660A", "sim", "tcp", "35660A", {"span_hz": 1000.0}
+            ),
+            sample=Sample(2700.0, 69e9, 0.025, 0.003, 0.3, 7.5e-5, 5.625e-11),
+            hits=Hits(
+                force_n=force,
+                response_m_s2=response,
+                sample_rate_hz=2560.0,
+                start_s=-32 / 2560.0,
+                center_hz=0.0,
+                accepted=np.ones(n_hits, bool),
+                reject_reason=[""] * n_hits,
+                overload=np.zeros((n_hits, 2), bool),
+                peak_force_n=force.max(axis=1),
+                timestamp_utc=["2026-11-23T10:15:03.123Z"] * n_hits,
+                checks=[{"double_hit": False}] * n_hits,
+            ),
+        )
+        seal(run, folder)
+
+
+def timed(argv: list[str], repo: Path) -> float:
+    """Wall seconds of the process ``argv``, run from ``repo`` with its code first on the path."""
+    env = {**os.environ, "PYTHONPATH": str(repo), "COLUMNS": "120"}
+    start = time.perf_counter()
+    done = subprocess.run(
+        argv, cwd=repo, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    )
+    elapsed = time.perf_counter() - start
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)} failed ({done.returncode}):\n{done.stderr[-2000:]}")
+    return elapsed
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=20, help="timed calls of each command")
+    parser.add_argument("--repo", type=Path, default=REPO, help="the checkout whose daq is timed")
+    args = parser.parse_args()
+    repo = args.repo.resolve()
+    root = Path(tempfile.mkdtemp(prefix="bench-startup-"))
+    try:
+        store = root / "store"
+        make_store(store)
+        daq = [sys.executable, "-m", "daq"]
+        commands = {
+            "daq --help": [*daq, "--help"],
+            "daq runs list --store <5 runs>": [*daq, "runs", "list", "--store", str(store)],
+            "daq model": [*daq, "model"],
+        }
+        rows = []
+        for label, argv in commands.items():
+            timed(argv, repo)  # warm-up: page cache, .pyc files, the store's index
+            times = [timed(argv, repo) for _ in range(args.repeat)]
+            rows.append((label, min(times), statistics.median(times)))
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    width = max(len(label) for label, *_ in rows)
+    print(f"code: {repo}   calls per command: {args.repeat}")
+    print(f"{'command':<{width}}  {'min':>8}  {'median':>8}")
+    for label, low, middle in rows:
+        print(f"{label:<{width}}  {low * 1e3:6.0f} ms  {middle * 1e3:6.0f} ms")
+
+
+if __name__ == "__main__":
+    main()
