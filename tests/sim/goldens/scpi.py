@@ -13,26 +13,24 @@ back from the simulator:
   unless it starts with ``:`` or ``*``;
 * ``CALC<n>:DATA?`` with ``FORM:DATA REAL,64``: ``#<d><len>`` + big-endian float64 + LF.
 
-Traces whose values must be known come from the replay source (hits built here;
-200 Hz span, 400 lines: 1024 samples at 512 Hz). ``test_goldens_cover_every_command``
-fails when a command is added to the simulator's SCPI table without a golden here.
+Traces whose values must be known come from the replay source (the hits of
+tests/sim/goldens/common.py; 200 Hz span, 400 lines: 1024 samples at 512 Hz).
+tests/sim/test_golden_transcripts.py plays these goldens, and fails when a command is
+added to the simulator's SCPI table without a golden here.
 """
 
 from __future__ import annotations
 
 import struct
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
-import pytest
 
 from sims.instrument import Analyzer
+from sims.scpi_status import MESSAGES
 from sims.scpi_table import COMMANDS
-from sims.sources import PhysicsSource, RecordedHit, ReplaySource
-from tests.sim.wire import ask
-
-pytestmark = pytest.mark.timeout(10)
+from sims.sources import PhysicsSource, ReplaySource
+from tests.sim.goldens.common import TIME_START_S, Book, Dialect, ErrorGolden, FakeClock, Golden, Hits
 
 IDN = b"HEWLETT-PACKARD,35670A,0000A00000,A.00.00\n"
 NO_ERROR = b'+0,"No error"\n'
@@ -46,28 +44,11 @@ def err(code: str, message: str) -> bytes:
     return f'{code},"{message}"\n'.encode("ascii")
 
 
-class FakeClock:
-    def __init__(self) -> None:
-        self.now = 0.0
-
-    def __call__(self) -> float:
-        return self.now
-
-
-RATE_HZ = 512.0  # 2.56 x 200 Hz
-N = 1024  # 2.56 x 400 lines
-_rng = np.random.default_rng(35670)
-TIME_FORCE = np.round(_rng.normal(0.0, 3.0, N), 6)
-TIME_ACCEL = np.round(_rng.normal(0.0, 40.0, N), 6)
-TIME_START_S = -0.25
-TIME_HIT = RecordedHit(TIME_FORCE, TIME_ACCEL, RATE_HZ, TIME_START_S, overload=(True, False))
-# Two delayed impulses: force 2 N at sample 1, acceleration 3 m/s^2 at sample 5: with a
-# uniform window the FRF is 1.5 exp(-2 pi j k 4 / 1024) on line k.
-DELTA_FORCE = np.zeros(N)
-DELTA_FORCE[1] = 2.0
-DELTA_ACCEL = np.zeros(N)
-DELTA_ACCEL[5] = 3.0
-DELTA_HIT = RecordedHit(DELTA_FORCE, DELTA_ACCEL, RATE_HZ)
+HITS = Hits.make(35670, 1024, 512.0)  # 2.56 x 200 Hz, 2.56 x 400 lines
+RATE_HZ, N = HITS.rate_hz, HITS.n
+TIME_FORCE, TIME_ACCEL = HITS.time_force, HITS.time_accel
+# With a uniform window the FRF of the delta hit (force 2 N at sample 1, acceleration
+# 3 m/s^2 at sample 5) is 1.5 exp(-2 pi j k 4 / 1024) on line k.
 K = np.arange(401)
 DELTA_FRF = 1.5 * np.exp(-2j * np.pi * K * 4 / N)
 
@@ -80,13 +61,12 @@ def make_bench(kind: str, clock: FakeClock) -> Analyzer:
     if kind == "35665A":
         return Analyzer(PhysicsSource("seed", seed=0), model="35665A")
     if kind == "time":
-        return Analyzer(ReplaySource([TIME_HIT], loop=True, model="35670A"), model="35670A")
+        return Analyzer(ReplaySource([HITS.time_hit], loop=True, model="35670A"), model="35670A")
     if kind == "delta":
-        return Analyzer(ReplaySource([DELTA_HIT], loop=True, model="35670A"), model="35670A")
+        return Analyzer(ReplaySource([HITS.delta_hit], loop=True, model="35670A"), model="35670A")
     if kind == "clock":
-        return Analyzer(
-            ReplaySource([DELTA_HIT], loop=True, model="35670A"), time_scale=1.0, clock=clock, model="35670A"
-        )
+        replay = ReplaySource([HITS.delta_hit], loop=True, model="35670A")
+        return Analyzer(replay, time_scale=1.0, clock=clock, model="35670A")
     raise ValueError(kind)
 
 
@@ -119,23 +99,8 @@ REAL64 = ":FORM:DATA REAL,64"
 
 
 # --------------------------------------------------------------------------- goldens
-@dataclass(frozen=True)
-class Golden:
-    covers: str  # the command (as the driver sends it, or its query form) this pins
-    exchanges: tuple[tuple[float | None, str, bytes | Callable[[bytes], bool]], ...]
-    bench: str = "physics"
-
-
-GOLDENS: list[Golden] = []
-
-
-def g(covers: str, *exchanges: tuple[str, bytes | Callable[[bytes], bool]], bench: str = "physics") -> None:
-    GOLDENS.append(Golden(covers, tuple((None, req, rep) for req, rep in exchanges), bench))
-
-
-def g_timed(covers: str, *exchanges: tuple[float, str, bytes]) -> None:
-    GOLDENS.append(Golden(covers, tuple(exchanges), "clock"))
-
+_BOOK = Book()
+g, g_timed = _BOOK.g, _BOOK.g_timed
 
 # -- identification, across the family
 g("*IDN?", ("*IDN?", IDN))
@@ -642,65 +607,31 @@ ERROR_GOLDENS: list[tuple[int, str, bytes]] = [
 ]
 
 
-@pytest.mark.parametrize("golden", GOLDENS, ids=[f"{i:03d}-{gold.covers}" for i, gold in enumerate(GOLDENS)])
-def test_golden_transcript(golden: Golden, connect):
-    clock = FakeClock()
-    conn = connect(make_bench(golden.bench, clock))
-    for at, request, expected in golden.exchanges:
-        if at is not None:
-            clock.now = at
-        got = ask(conn, request)
-        if callable(expected):
-            assert expected(got), (at, request, got[:80])
-        else:
-            assert got == expected, (at, request)
-
-
-@pytest.mark.parametrize(
-    ("code", "message", "first"),
-    ERROR_GOLDENS,
-    ids=[f"{i:02d}{c}" for i, (c, _, _) in enumerate(ERROR_GOLDENS)],
-)
-def test_error_transcript(code: int, message: str, first: bytes, connect):
-    conn = connect(make_bench("physics", FakeClock()))
-    assert ask(conn, message) == b""
-    assert ask(conn, "SYST:ERR?") == first
+# ------------------------------------------------------------------------- the dialect
+def _error_golden(code: int, message: str, first: bytes) -> ErrorGolden:
+    """The error made (nothing sent back), read through SYST:ERR?, then the queue empty:
+    every error read exactly once."""
+    exchanges = [(None, message, b""), (None, "SYST:ERR?", first)]
     if code == -350:  # 33 errors: the 32nd place holds the overflow
-        for _ in range(30):
-            assert ask(conn, "SYST:ERR?") == first
-        assert ask(conn, "SYST:ERR?") == err("-350", "Queue overflow")
-    assert ask(conn, "SYST:ERR?") == NO_ERROR  # every error read exactly once
+        exchanges += [(None, "SYST:ERR?", first)] * 30
+        exchanges += [(None, "SYST:ERR?", err("-350", "Queue overflow"))]
+    exchanges.append((None, "SYST:ERR?", NO_ERROR))
+    return ErrorGolden(code, tuple(exchanges))
 
 
-def test_hardware_fault_holds_until_rst(connect):
-    conn = connect(make_bench("delta", FakeClock()))
-    assert ask(conn, "SIM:FAULT error;*STB?") == reply("4")
-    assert ask(conn, f"{SPAN200};:INIT:IMM;:STAT:OPER:COND?;:SYST:ERR?;:SYST:ERR?") == reply(
-        "0",
-        '-240,"Hardware error; input A/D converter does not respond"',
-        '-240,"Hardware error; input A/D converter does not respond"',
-    )
-    assert ask(conn, f"*RST;{SPAN200};:INIT:IMM;:STAT:OPER:COND?;:SYST:ERR?") == reply("256", '+0,"No error"')
+def _sends_what_it_covers(gold: Golden) -> bool:
+    sent = " ".join(req.upper() for _, req, _ in gold.exchanges)
+    head = gold.covers.rstrip("?").split(":")[-1].rstrip("0123456789")
+    return head in sent
 
 
-def test_sim_controls_answer_with_lf(connect):
-    conn = connect(make_bench("physics", FakeClock()))
-    assert ask(conn, "SIM:FAULT?") == b"NONE\n"
-    assert ask(conn, "*IDN?;SIM:SCEN?;*OPC?") == IDN + b"seed\n" + reply("1")
-
-
-def test_goldens_cover_every_command():
-    required = {c.sent for c in COMMANDS} | {c.sent + "?" for c in COMMANDS if c.kind == "setting"}
-    covered = {gold.covers for gold in GOLDENS}
+HP35670A = Dialect(
+    model="35670A",
+    goldens=tuple(_BOOK.goldens),
+    error_goldens=tuple(_error_golden(*e) for e in ERROR_GOLDENS),
+    make_bench=make_bench,
     # A setting's query form is covered by its preset golden or its own.
-    assert required - covered == set(), "commands without a golden transcript"
-    for gold in GOLDENS:
-        sent = " ".join(req.upper() for _, req, _ in gold.exchanges)
-        head = gold.covers.rstrip("?").split(":")[-1].rstrip("0123456789")
-        assert head in sent, gold
-
-
-def test_error_goldens_cover_every_error_code():
-    from sims.scpi_status import MESSAGES
-
-    assert {code for code, _, _ in ERROR_GOLDENS} == set(MESSAGES)
+    required=frozenset({c.sent for c in COMMANDS} | {c.sent + "?" for c in COMMANDS if c.kind == "setting"}),
+    sends_what_it_covers=_sends_what_it_covers,
+    error_codes=frozenset(MESSAGES),
+)
