@@ -32,7 +32,7 @@ demo: $(VENV)/.installed-run
 	$(BIN)/daq fit latest --store $(DEMO_STORE)
 	$(BIN)/daq report latest --store $(DEMO_STORE) -o $(VENV)/demo-report --force
 	# The same beam on a simulated SCPI 35670A, its run through an SDF file and back.
-	$(BIN)/daq capture --sim --model 35670A --hits 3 --yes --note "make demo, 35670A" --store $(DEMO_STORE)
+	$(BIN)/daq capture --sim --analyzer 35670A --hits 3 --yes --note "make demo, 35670A" --store $(DEMO_STORE)
 	$(BIN)/daq analyze latest --store $(DEMO_STORE)
 	$(BIN)/daq export latest --format sdf --force -o $(VENV)/demo-35670A.sdf --store $(DEMO_STORE)
 	$(BIN)/daq import $(VENV)/demo-35670A.sdf --store $(DEMO_STORE)

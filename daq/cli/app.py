@@ -12,7 +12,6 @@ release.
 
 from __future__ import annotations
 
-import logging
 import os
 import sys
 from typing import Annotated
@@ -25,11 +24,12 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import typer
 
-from daq.batch.memory_tuning import keep_freed_memory
-
-keep_freed_memory()
-
+# Every command module is imported here, to put its options in the help: each imports
+# typer, daq.cli.options and the standard library only, and loads numpy, scipy, h5py,
+# rich, the drivers or the service inside the function that needs them, so that
+# `daq --help` and `daq runs list` start fast (bench/bench_startup.py).
 from daq import __version__
+from daq.cli import options
 from daq.cli.commands import (
     analyze as analyze_command,
 )
@@ -64,7 +64,6 @@ from daq.cli.commands import talk
 from daq.cli.commands.demo import demo
 from daq.cli.commands.model import model
 from daq.cli.commands.sim import sim_app
-from daq.cli.errors import exit_code_and_message
 
 app = typer.Typer(
     name="daq",
@@ -87,6 +86,8 @@ def _version(value: bool) -> None:
 
 
 def _log_to_stderr(ctx: typer.Context, verbose: int) -> None:
+    import logging
+
     # Quiet by default: a failure is reported once, as one line, by main(); the
     # CRITICAL handler also keeps logging's last-resort handler from printing warnings.
     root = logging.getLogger()
@@ -126,6 +127,10 @@ def _root(
         # A bare `daq`: the help is the answer, not an error.
         typer.echo(ctx.get_help())
         raise typer.Exit()
+    # Here, not at import: a command is about to run (not --help, not --version).
+    from daq.batch.memory_tuning import keep_freed_memory
+
+    keep_freed_memory()
     _log_to_stderr(ctx, verbose)
 
 
@@ -150,6 +155,10 @@ serve_command.register(app)
 
 def _fail(message: str, exit_code: int) -> int:
     # One line, whatever the message holds: the contract with scripts and technicians.
+    # The notes of old option spellings ride on it (daq/cli/options.py: renamed).
+    notes = options.take_notes()
+    if notes:
+        message = f"{message} (note: {'; '.join(notes)})"
     line = " ".join(str(message).split())
     sys.stderr.write(f"daq: error: {line}\n")
     sys.stderr.flush()
@@ -171,6 +180,7 @@ def help_hint(exc: typer.TyperException) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `daq` console script; returns the exit status."""
     command = typer.main.get_command(app)
+    options.take_notes()  # none left from an earlier call in this process
     try:
         result = command.main(args=argv, prog_name="daq", standalone_mode=False)
     except typer.TyperException as exc:
@@ -188,6 +198,8 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:
         # The layers' own errors (formats, store, workflows, drivers) and UserError:
         # one line and their exit status (daq/cli/errors.py). Anything else is a bug.
+        from daq.cli.errors import exit_code_and_message
+
         known = exit_code_and_message(exc)
         if known is not None:
             code, message = known
@@ -199,4 +211,6 @@ def main(argv: list[str] | None = None) -> int:
         # typer turns a Ctrl-C inside a command into a silent exit 130; nothing
         # in daq exits 130 on purpose, so this is that Ctrl-C.
         return _fail("interrupted", 130)
+    for note in options.take_notes():
+        sys.stderr.write(f"daq: note: {note}\n")
     return result if isinstance(result, int) else 0

@@ -1,9 +1,11 @@
 """Every option that more than one command takes, declared once: the store, --json, the
-analyzer (resource, dialect, timeout), the simulator (scenario, seed, time scale, model),
-worker processes and the Dask scheduler.
+analyzer (resource, dialect, timeout), the simulator (scenario, seed, time scale, the
+analyzer model simulated), worker processes and the Dask scheduler; and the old spellings
+of renamed options, kept hidden for one release (renamed, given_once).
 
 A command module imports its shared options from here and never from another command,
-so that one option reads the same in every help and is changed in one place.
+so that one option reads the same in every help and is changed in one place. Nothing
+here imports more than typer: `daq --help` loads every command module.
 """
 
 from __future__ import annotations
@@ -85,6 +87,7 @@ class SimModel(StrEnum):
     hp35665a = "35665A"
 
 
+#: "model" alone is the beam model (`daq model`); the analyzer's model is --analyzer.
 MODEL_METAVAR = "35660A|3562A|35670A|35665A"
 MODEL_HELP = (
     "The analyzer simulated: 35660A or 3562A (HP mnemonics, docs/instrument.md) or 35670A or 35665A "
@@ -107,7 +110,17 @@ SimTimeScaleOption = Annotated[
     typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
 ]
 SimModelOption = Annotated[
-    SimModel | None, typer.Option(help="Simulator only: the model simulated [default: 35660A].")
+    SimModel | None,
+    typer.Option(
+        "--analyzer",
+        metavar=MODEL_METAVAR,
+        show_default=False,
+        help="Simulator only: the analyzer model simulated [default: 35660A].",
+    ),
+]
+#: --analyzer's old spelling, hidden; the commands take it as given_once("--analyzer", ...).
+OldSimModelOption = Annotated[
+    SimModel | None, typer.Option("--model", hidden=True, help="Old name of --analyzer.")
 ]
 
 # ------------------------------------------------------------ where work runs
@@ -122,3 +135,35 @@ SchedulerOption = Annotated[
         help="Run on this Dask cluster instead of the local cores [default: $DAQ_SCHEDULER if set].",
     ),
 ]
+
+
+# ------------------------------------------------ renamed options, for one release
+# An old spelling is a hidden option beside the new one and does the same. Its note is
+# held until the command is over: main() prints it on stderr after a command that
+# succeeded, and adds it to the one line of a failure (a failure stays one line).
+_notes: list[str] = []
+
+
+def renamed(old: str, new: str) -> None:
+    """Say (once the command is over) that option ``old`` is now ``new``."""
+    note = f"{old} is now {new}; {old} will go in the next release"
+    if note not in _notes:
+        _notes.append(note)
+
+
+def take_notes() -> list[str]:
+    """The notes held so far, in order; none are held afterwards."""
+    notes = list(_notes)
+    _notes.clear()
+    return notes
+
+
+def given_once(new: str, new_value: object, old: str, old_value: object) -> object:
+    """The value of option ``new`` when its old spelling ``old`` may have been given
+    instead (None: not given). Both given is a usage error; ``old`` alone is noted."""
+    if old_value is None:
+        return new_value
+    if new_value is not None:
+        raise UserError(f"{old} is the old name of {new}: give {new} only", exit_code=2)
+    renamed(old, new)
+    return old_value

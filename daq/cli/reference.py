@@ -4,7 +4,7 @@
 
 Each command's section is its `--help` exactly as a terminal 80 columns wide or
 wider shows it, so that the page and the program cannot tell different stories;
-tests/test_cli_reference.py fails when docs/cli.md is stale. typer's own
+tests/cli/test_cli_reference.py fails when docs/cli.md is stale. typer's own
 `typer ... utils docs` is not used: it drops the -h alias, cuts summaries at 45
 characters and lets <placeholders> in help texts read as HTML in Markdown.
 """
@@ -29,7 +29,7 @@ PREAMBLE = f"""\
 
 > Generated from the help texts in `daq/*.py`; do not edit by hand. After changing
 > a help text, regenerate with `{REGENERATE}`
-> (tests/test_cli_reference.py fails while this page is stale).
+> (tests/cli/test_cli_reference.py fails while this page is stale).
 
 Every command prints `--help` (or `-h`). Errors are one line on stderr,
 `daq: error: ...`, with these exit statuses:

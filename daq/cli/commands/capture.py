@@ -12,14 +12,14 @@ from __future__ import annotations
 import contextlib
 import math
 import sys
-import tomllib
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from daq.cli.options import (
     DialectOption,
+    OldSimModelOption,
     Scenario,
     SimModel,
     SimModelOption,
@@ -28,10 +28,14 @@ from daq.cli.options import (
     SimTimeScaleOption,
     StoreOption,
     check_dialect,
+    given_once,
 )
 from daq.errors import UserError
-from daq.workflows.connect import configured_resource
-from drivers.settings import ChannelSetup, ImpactSettings
+
+if TYPE_CHECKING:
+    # The driver's settings load with the first function that needs them (the command
+    # line's start-up stays light): `from drivers.settings import ...` in each.
+    from drivers.settings import ChannelSetup, ImpactSettings
 
 #: Keys of a setup file: top level, and of each [hammer] / [accelerometer] table.
 TOP_KEYS = {
@@ -105,6 +109,8 @@ def _typed(where: str, key: str, raw: object, kind: Any) -> object:
 
 def settings_from_setup(data: dict[str, Any], where: str) -> ImpactSettings:
     """ImpactSettings from a parsed setup file; UserError names the bad key."""
+    from drivers.settings import ChannelSetup, ImpactSettings
+
     kwargs: dict[str, Any] = {}
     for key, raw in data.items():
         if key in ("hammer", "accelerometer"):
@@ -139,6 +145,8 @@ def settings_from_setup(data: dict[str, Any], where: str) -> ImpactSettings:
 
 
 def read_setup(path: Path) -> ImpactSettings:
+    import tomllib
+
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
@@ -191,7 +199,8 @@ def capture(
             metavar="<k=v,...>", help="Simulator only: the simulated hammer, e.g. double_hit_probability=1."
         ),
     ] = None,
-    model: SimModelOption = None,
+    analyzer: SimModelOption = None,
+    model: OldSimModelOption = None,
     print_setup: Annotated[
         bool, typer.Option("--print-setup", help="Print the default setup file and exit.")
     ] = False,
@@ -203,6 +212,10 @@ def capture(
     accepted hits; its FRF and coherence are stored with every hit's time records.
     Ctrl-C keeps the hits so far as an incomplete run.
     """
+    from daq.workflows.connect import configured_resource
+    from drivers.settings import ImpactSettings
+
+    simulated = given_once("--analyzer", analyzer, "--model", model)
     if print_setup:
         sys.stdout.write(setup_toml(ImpactSettings()))
         return
@@ -222,7 +235,7 @@ def capture(
         )
     sim_options = {
         "--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--hammer": hammer,
-        "--model": model,
+        "--analyzer": analyzer, "--model": model,
     }  # fmt: skip
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
@@ -232,7 +245,7 @@ def capture(
         real, settings, hits_wanted, yes, operator, note, store,
         scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
         time_scale=0.05 if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
-        dialect=check_dialect(dialect), model=(model or SimModel.hp35660a).value,
+        dialect=check_dialect(dialect), model=(simulated or SimModel.hp35660a).value,
     )  # fmt: skip
 
 

@@ -9,8 +9,12 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.options import given_once
 from daq.errors import UserError
 from daq.workflows.model_inputs import MAX_FUNCTIONS
+
+#: The default of --functions (the seed's 3-function model).
+DEFAULT_FUNCTIONS = 3
 
 
 class Section(StrEnum):
@@ -19,15 +23,20 @@ class Section(StrEnum):
 
 
 def model(
-    modes_n: Annotated[
-        int,
+    functions: Annotated[
+        int | None,
         typer.Option(
-            "--modes-n",
+            "--functions",
             "-n",
             metavar="<N>",
-            help=f"Number N of Ritz admissible functions (1-{MAX_FUNCTIONS}).",
+            show_default=False,
+            help=f"Number N of Ritz admissible functions (1-{MAX_FUNCTIONS}).  "
+            f"[default: {DEFAULT_FUNCTIONS}]",
         ),
-    ] = 3,
+    ] = None,
+    modes_n: Annotated[
+        int | None, typer.Option("--modes-n", hidden=True, help="Old name of --functions.")
+    ] = None,
     section: Annotated[
         Section,
         typer.Option(
@@ -63,8 +72,11 @@ def model(
     frequency and damping ratio of each mode of the damped model for a damping
     matrix: the seed's eq (18) unless --damping names a file.
     """
-    if not 1 <= modes_n <= MAX_FUNCTIONS:
-        raise UserError(f"--modes-n must be between 1 and {MAX_FUNCTIONS}, got {modes_n}", exit_code=2)
+    given = given_once("--functions", functions, "--modes-n", modes_n)
+    n_functions = DEFAULT_FUNCTIONS if given is None else int(given)  # type: ignore[call-overload]
+    if not 1 <= n_functions <= MAX_FUNCTIONS:
+        flag = "--functions" if modes_n is None else "--modes-n"  # as the user spelled it
+        raise UserError(f"{flag} must be between 1 and {MAX_FUNCTIONS}, got {n_functions}", exit_code=2)
     # Imported here so that `daq --help` does not pay for scipy.
     import numpy as np
     from rich.console import Console
@@ -83,7 +95,7 @@ def model(
         # Finite but extreme inputs (a 1e200 m beam, a 1e300 damping entry) must end
         # in one clear line, not in NaN tables or a LAPACK traceback.
         with np.errstate(over="raise", invalid="raise", divide="raise"):
-            t2, ds, report = build_report(beam, modes_n, section.value, matrix, source)  # type: ignore[arg-type]
+            t2, ds, report = build_report(beam, n_functions, section.value, matrix, source)  # type: ignore[arg-type]
     except (FloatingPointError, np.linalg.LinAlgError, OverflowError, ValueError) as exc:
         raise UserError(f"the model cannot be evaluated with these numbers ({exc})") from None
     if as_json:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import sys
 from typing import Annotated
 
@@ -16,6 +15,7 @@ import typer
 
 from daq.cli.options import (
     DialectOption,
+    OldSimModelOption,
     Scenario,
     SimModel,
     SimModelOption,
@@ -24,6 +24,7 @@ from daq.cli.options import (
     SimTimeScaleOption,
     StoreOption,
     check_dialect,
+    given_once,
 )
 from daq.errors import UserError
 
@@ -47,10 +48,11 @@ def serve(
         ),
     ] = "127.0.0.1",
     port: Annotated[int, typer.Option(metavar="<port>", help="TCP port (0: any free one).")] = 8000,
-    workers: Annotated[
+    jobs: Annotated[
         int | None,
         typer.Option(metavar="<n>", help="Analysis worker processes [default: cores - 1, at least 1]."),
     ] = None,
+    workers: Annotated[int | None, typer.Option("--workers", hidden=True, help="Old name of --jobs.")] = None,
     scheduler: Annotated[
         str | None,
         typer.Option(
@@ -63,7 +65,8 @@ def serve(
     scenario: SimScenarioOption = None,
     seed: SimSeedOption = None,
     time_scale: SimTimeScaleOption = None,
-    model: SimModelOption = None,
+    analyzer: SimModelOption = None,
+    model: OldSimModelOption = None,
 ) -> None:
     """Run the lab service: the analyzer, the store, a live web page and an HTTP API.
 
@@ -76,6 +79,8 @@ def serve(
     from daq.store import resolve_store_dir
     from daq.workflows.connect import configured_resource
 
+    n_jobs = given_once("--jobs", jobs, "--workers", workers)
+    simulated = given_once("--analyzer", analyzer, "--model", model)
     path = token_path()
     try:
         token, created = load_or_create_token(path)
@@ -88,8 +93,9 @@ def serve(
         raise UserError("--sim and --resource exclude each other", exit_code=2)
     if not 0 <= port <= 65535:
         raise UserError("--port must be 0..65535", exit_code=2)
-    if workers is not None and workers < 1:
-        raise UserError("--workers must be at least 1", exit_code=2)
+    if n_jobs is not None and n_jobs < 1:  # type: ignore[operator]
+        flag = "--jobs" if workers is None else "--workers"  # as the user spelled it
+        raise UserError(f"{flag} must be at least 1", exit_code=2)
     real = None if sim else configured_resource(resource)
     if real is None and not sim:
         # Unlike daq capture, never fall back to the simulator: a service left running on
@@ -99,7 +105,10 @@ def serve(
             "in the config file), or --sim for the built-in simulator",
             exit_code=2,
         )
-    sim_options = {"--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--model": model}
+    sim_options = {
+        "--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--analyzer": analyzer,
+        "--model": model,
+    }  # fmt: skip
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
     if time_scale is not None and not time_scale >= 0:
@@ -108,10 +117,10 @@ def serve(
     address = _scheduler(scheduler)
     store_dir, _ = resolve_store_dir(store)
     run_service(
-        store_dir, real, sim, host, port, token, created, path, workers, address,
+        store_dir, real, sim, host, port, token, created, path, n_jobs, address,
         scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
         time_scale=0.05 if time_scale is None else time_scale,
-        model=(model or SimModel.hp35660a).value, dialect=forced,
+        model=(simulated or SimModel.hp35660a).value, dialect=forced,
     )  # fmt: skip
 
 
@@ -283,6 +292,8 @@ def _banner(service, config, store_dir, scheduler, created, token_file, loopback
     else:
         reachable = config.url
         if host in ("0.0.0.0", "::"):  # every address: name the machine, not the wildcard
+            import socket
+
             reachable = f"http://{socket.gethostname()}:{config.port}"
         say(
             f"daq serve: listening on {host}, beyond this machine: EVERY request needs the token "

@@ -2,17 +2,36 @@
 
 from __future__ import annotations
 
-import ipaddress
-import signal
 import sys
-import threading
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from daq.cli.options import MODEL_HELP, MODEL_METAVAR, SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+from daq.cli.options import (
+    MODEL_HELP,
+    MODEL_METAVAR,
+    SCENARIO_HELP,
+    SEED_HELP,
+    TIME_SCALE_HELP,
+    Scenario,
+    given_once,
+)
 from daq.errors import UserError
+
+#: The analyzer simulated unless --analyzer names another.
+DEFAULT_ANALYZER = "35660A"
+AnalyzerOption = Annotated[
+    str | None,
+    typer.Option(
+        "--analyzer",
+        metavar=MODEL_METAVAR,
+        show_default=False,
+        help=f"{MODEL_HELP}  [default: {DEFAULT_ANALYZER}]",
+    ),
+]
+#: --analyzer's old spelling, hidden, for one release.
+OldModelOption = Annotated[str | None, typer.Option("--model", hidden=True, help="Old name of --analyzer.")]
 
 sim_app = typer.Typer(
     help="Run a simulated HP analyzer (35660A, 3562A, 35670A), or list the commands it speaks.\n\n"
@@ -30,14 +49,17 @@ def _sim(ctx: typer.Context) -> None:
         raise typer.Exit()
 
 
-def _model(name: str):
-    """The sims Model called ``name``; a usage error (exit 2) naming the choices if none is."""
+def _model(analyzer: str | None, model: str | None):
+    """The sims Model that --analyzer (or its old spelling --model) names; a usage error
+    (exit 2) naming the choices if none is."""
     from sims.models import get_model
 
+    name = given_once("--analyzer", analyzer, "--model", model)
     try:
-        return get_model(name)
+        return get_model(DEFAULT_ANALYZER if name is None else str(name))
     except ValueError as exc:
-        raise UserError(f"--model: {exc}", exit_code=2) from None
+        flag = "--analyzer" if model is None else "--model"  # as the user spelled it
+        raise UserError(f"{flag}: {exc}", exit_code=2) from None
 
 
 @sim_app.command()
@@ -91,7 +113,8 @@ def serve(
             help="Adjust the simulated hammer, e.g. peak_force_n=3,pulse_width_s=0.001.",
         ),
     ] = None,
-    model: Annotated[str, typer.Option(metavar=MODEL_METAVAR, help=MODEL_HELP)] = "35660A",
+    analyzer: AnalyzerOption = None,
+    model: OldModelOption = None,
 ) -> None:
     """Serve the simulated analyzer until Ctrl-C.
 
@@ -103,7 +126,7 @@ def serve(
     from sims.instrument import Analyzer
     from sims.sources import PhysicsSource, ReplaySource
 
-    instrument = _model(model)
+    instrument = _model(analyzer, model)
     if pty and tcp is not None:
         raise UserError("choose one of --tcp PORT and --pty", exit_code=2)
     if not 0 <= gpib_address <= 30:
@@ -155,6 +178,8 @@ def serve(
             f"analyzer at GPIB address {gpib_address}"
         )
     else:
+        import ipaddress
+
         from sims.tcp_server import TcpServer
 
         try:
@@ -175,6 +200,9 @@ def serve(
             ) from None
         resource = server.resource
         where = f"TCP {server.host}:{server.port}"
+
+    import signal
+    import threading
 
     stop = threading.Event()
     # The handler and the try come before the resource line: a script that reads
@@ -198,7 +226,8 @@ def serve(
 
 @sim_app.command()
 def commands(
-    model: Annotated[str, typer.Option(metavar=MODEL_METAVAR, help=MODEL_HELP)] = "35660A",
+    analyzer: AnalyzerOption = None,
+    model: OldModelOption = None,
 ) -> None:
     """List the commands the simulated analyzer understands.
 
@@ -210,7 +239,7 @@ def commands(
     from rich.console import Console
     from rich.table import Table
 
-    instrument = _model(model)
+    instrument = _model(analyzer, model)
     console = Console()
     if instrument.dialect == "scpi":
         from sims.scpi_table import COMMANDS as SCPI_COMMANDS
