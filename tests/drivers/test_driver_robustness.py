@@ -3,11 +3,11 @@ pyvisa state, threads during recovery, unbounded waits, odd resource spellings."
 
 import sys
 import threading
-import time
 
 import numpy as np
 import pytest
 
+from drivers.base import PROBE_TIMEOUT_S
 from drivers.errors import ConnectionFailed, InstrumentTimeout, ResourceBusy
 from drivers.hp_mnemonic import HPMnemonicAnalyzer as HP35660A
 from drivers.settings import ImpactSettings
@@ -98,12 +98,31 @@ def test_a_silent_instrument_costs_one_timeout_not_one_per_retry(kind):
         resource = server.resource if kind == "tcp" else f"PROLOGIX::{server.port}::11"
         # Opening a Prologix asks the adapter (not the instrument): it answers at once.
         with HP35660A.open(resource, timeout_s=1.0, retries=3, dialect="35660A") as dsa:
-            t0 = time.monotonic()
-            with pytest.raises(InstrumentTimeout):
+            transport = dsa.transport
+            writes, reads = [], []  # what was sent; (timeout_s, outcome) of every read
+            write, read_line = transport.write, transport.read_line
+
+            def counted_write(data: bytes) -> None:
+                writes.append(data)
+                write(data)
+
+            def counted_read_line() -> bytes:
+                try:
+                    line = read_line()
+                except InstrumentTimeout:
+                    reads.append((transport.timeout_s, "timeout"))
+                    raise
+                reads.append((transport.timeout_s, line))
+                return line
+
+            transport.write, transport.read_line = counted_write, counted_read_line
+            with pytest.raises(InstrumentTimeout, match="answers nothing") as caught:
                 dsa.identify()
-            elapsed = time.monotonic() - t0
-    # One timeout, one short ID? probe, the clean-ups: not (retries + 1) timeouts.
-    assert elapsed < 3.5, elapsed
+    # One timeout waited, then one ID? probe with the short probe timeout, also
+    # unanswered: no more attempts, not (retries + 1) timeouts.
+    assert writes == [b"ID?", b"ID?"]
+    assert reads == [(1.0, "timeout"), (PROBE_TIMEOUT_S, "timeout")]
+    assert caught.value.instrument_answers is False
 
 
 @pytest.mark.timeout(30)
