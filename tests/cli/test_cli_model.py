@@ -65,7 +65,7 @@ def test_json_damping_defaults_to_eq18():
 
 
 def test_modes_n_selects_the_ritz_size():
-    rows = _json("--modes-n", "10")["table2"]["rows"]
+    rows = _json("--functions", "10")["table2"]["rows"]
     assert len(rows) == 10
     np.testing.assert_allclose([r["ritz_hz"] for r in rows[:3]], RITZ_N10_HZ, atol=1e-4)
     assert rows[5]["seed_experimental_hz"] is None
