@@ -103,14 +103,14 @@ class Server:
         assert rest == b"", buffer
         return line.decode()
 
-    def stop(self, signum: int, timeout: float = 10.0) -> tuple[int, float]:
-        """Send ``signum``; (exit status, seconds it took). Output is collected."""
-        t0 = time.monotonic()
+    def stop(self, signum: int, timeout: float = 10.0) -> int:
+        """Send ``signum``; the exit status (a server still running after ``timeout``
+        fails the test: TimeoutExpired). Output is collected."""
         self.proc.send_signal(signum)
         out, err = self.proc.communicate(timeout=timeout)
         self.stdout += out
         self.stderr += err
-        return self.proc.returncode, time.monotonic() - t0
+        return self.proc.returncode
 
     def close(self) -> None:
         if self.proc.poll() is None:
@@ -144,12 +144,10 @@ def visa(resource: str):
         rm.close()
 
 
-def assert_stopped_cleanly(server: Server, status: int, seconds: float) -> None:
+def assert_stopped_cleanly(server: Server, status: int) -> None:
+    """Exit 0 with "Stopped." (a hang is stop()'s timeout, not a time checked here)."""
     stderr = server.stderr.decode(errors="replace")
     assert status == 0, stderr
-    # Prompt, not instant: a loaded 2-core machine took 3.02 s once (starting the
-    # interpreter's shutdown under the whole parallel suite); a hang takes the timeout.
-    assert seconds < 8.0
     assert "Stopped." in stderr.splitlines()
     assert "Traceback" not in stderr
     # The resource is the only line on stdout.
@@ -166,8 +164,8 @@ def test_serve_tcp_prints_its_resource_and_stops_on_sigint():
             assert inst.query("ID?") == "HP35660A"
             assert float(inst.query("SIM:TIME?")) == 0.0
         time.sleep(SETTLE_S)
-        status, seconds = server.stop(signal.SIGINT)
-        assert_stopped_cleanly(server, status, seconds)
+        status = server.stop(signal.SIGINT)
+        assert_stopped_cleanly(server, status)
         # The port is released.
         with pytest.raises(ConnectionRefusedError):
             socket.create_connection(("127.0.0.1", int(match.group(1))), timeout=2).close()
@@ -178,8 +176,8 @@ def test_serve_stops_on_sigterm_with_a_client_connected():
         with visa(server.resource) as inst:
             assert inst.query("ID?") == "HP35660A"
             time.sleep(SETTLE_S)
-            status, seconds = server.stop(signal.SIGTERM)
-        assert_stopped_cleanly(server, status, seconds)
+            status = server.stop(signal.SIGTERM)
+        assert_stopped_cleanly(server, status)
 
 
 def test_serve_pty_prints_a_resource_whose_port_speaks_prologix():
@@ -201,8 +199,8 @@ def test_serve_pty_prints_a_resource_whose_port_speaks_prologix():
         finally:
             port.close()
         time.sleep(SETTLE_S)
-        status, seconds = server.stop(signal.SIGINT)
-        assert_stopped_cleanly(server, status, seconds)
+        status = server.stop(signal.SIGINT)
+        assert_stopped_cleanly(server, status)
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
@@ -213,8 +211,8 @@ def test_signal_right_after_the_resource_line(tmp_path, signum):
     (tmp_path / "sitecustomize.py").write_text(STALL_AFTER_STDOUT_FLUSH)
     with serving("--tcp", "0", "--time-scale", "0", pythonpath=str(tmp_path)) as server:
         assert TCP_RESOURCE.match(server.resource), server.resource
-        status, seconds = server.stop(signum)
-        assert_stopped_cleanly(server, status, seconds)
+        status = server.stop(signum)
+        assert_stopped_cleanly(server, status)
 
 
 def _tim1_block(inst) -> bytes:
@@ -245,8 +243,8 @@ def test_serve_with_scenario_seed_and_no_noise():
             assert inst.query("SIM:NOISE?") == "0"
             served = _tim1_block(inst)
         time.sleep(SETTLE_S)
-        status, seconds = server.stop(signal.SIGTERM)
-        assert_stopped_cleanly(server, status, seconds)
+        status = server.stop(signal.SIGTERM)
+        assert_stopped_cleanly(server, status)
     # Same scenario, seed and commands give the same data; the seed matters.
     assert served == _in_process_tim1("realistic", 3)
     assert served != _in_process_tim1("realistic", 0)

