@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from daq.errors import UserError
+from daq.cli.errors import UserError
 from daq.store import Run
 
 SPARK = "▁▂▃▄▅▆▇█"

@@ -3,7 +3,7 @@
 Each layer raises its own error: daq.formats.errors.FormatError (a file that is not
 what it claims), daq.store.StoreError (the run store), daq.workflows.errors.WorkflowError
 (a workflow step), drivers.errors.DriverError (the instrument link), and the command
-line itself daq.errors.UserError (bad input). :func:`exit_code_and_message` is the one
+line itself :class:`UserError` (bad input, defined here). :func:`exit_code_and_message` is the one
 place that turns them into the status and the line ``daq: error: ...`` that main()
 (daq/cli/app.py) prints; anything else is not the user's to fix.
 """
@@ -12,9 +12,21 @@ from __future__ import annotations
 
 import sys
 
-from daq.errors import UserError
 from daq.workflows.errors import WorkflowError
 from drivers.errors import DriverError
+
+
+class UserError(Exception):
+    """Something the user can fix at the command line: a bad option, a missing file, a
+    step that cannot run as asked. Raised only in daq/cli/; the layers below raise
+    their own errors, mapped by :func:`exit_code_and_message`.
+
+    ``exit_code`` follows sysexits loosely: 1 for most, 2 for bad usage.
+    """
+
+    def __init__(self, message: str, exit_code: int = 1) -> None:
+        super().__init__(message)
+        self.exit_code = exit_code
 
 
 def _loaded_class(module: str, name: str) -> type[BaseException] | None:
@@ -31,8 +43,8 @@ def _loaded_class(module: str, name: str) -> type[BaseException] | None:
 def exit_code_and_message(exc: BaseException) -> tuple[int, str] | None:
     """(exit status, one-line message) for an error the user can fix, else None.
 
-    The most specific classes come first: StoreError still derives from UserError,
-    and the answer must not change when it no longer does.
+    Each layer's class is its own (none derives from another's), so the order of the
+    checks does not matter.
     """
     format_error = _loaded_class("daq.formats.errors", "FormatError")
     store_error = _loaded_class("daq.store.errors", "StoreError")

@@ -15,7 +15,7 @@ from typing import Annotated
 
 import typer
 
-from daq.errors import UserError
+from daq.cli.errors import UserError
 
 # ------------------------------------------------------------------ the store
 StoreOption = Annotated[

@@ -1,21 +1,22 @@
 """The one error the run store raises: a one-line message naming the file or run.
 
-The command line turns a :class:`daq.errors.UserError` into ``daq: error: ...`` and
-exit status 1, so every store failure (bad id, damaged file, full disk, bad config)
-reaches the user as one sentence, never as an h5py traceback.
+The command line (daq/cli/errors.py) turns a StoreError into ``daq: error: ...`` and
+exit status 1, and the service into an HTTP answer, so every store failure (bad id,
+damaged file, full disk, bad config) reaches the user as one sentence, never as an h5py
+traceback. The error is the store's own: the store knows nothing of the command line.
 """
 
 from __future__ import annotations
 
-from daq.errors import UserError
 
+class StoreError(Exception):
+    """A run store failure with a one-line message (exit status 1 at the command line)."""
 
-class StoreError(UserError):
-    """A run store failure with a one-line message (exit status 1)."""
+    exit_code = 1
 
     def __init__(self, message: str) -> None:
         # Messages must stay on one line: the CLI prints them after "daq: error: ".
-        super().__init__(" ".join(str(message).split()), exit_code=1)
+        super().__init__(" ".join(str(message).split()))
 
 
 class ConfigError(StoreError):

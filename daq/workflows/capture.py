@@ -130,9 +130,9 @@ def checks_policy(hit: HitArrived) -> tuple[bool, str]:
 
 
 def settings_from_dict(data: dict[str, Any]) -> ImpactSettings:
-    """The inverse of settings_as_dict (e.g. a stored run's settings); UserError if the
+    """The inverse of settings_as_dict (e.g. a stored run's settings); WorkflowError if the
     dict does not describe valid settings."""
-    from daq.errors import UserError
+    from daq.workflows.errors import WorkflowError
 
     try:
         fields = dict(data)
@@ -141,7 +141,7 @@ def settings_from_dict(data: dict[str, Any]) -> ImpactSettings:
                 fields[channel] = ChannelSetup(**fields[channel])
         return ImpactSettings(**fields)
     except (TypeError, ValueError) as exc:
-        raise UserError(f"stored settings do not describe an impact test: {exc}") from None
+        raise WorkflowError(f"stored settings do not describe an impact test: {exc}") from None
 
 
 def utc_now() -> str:

@@ -7,7 +7,7 @@ import tomllib
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from daq.errors import UserError
+from daq.workflows.errors import WorkflowError
 
 if TYPE_CHECKING:
     import numpy as np
@@ -27,15 +27,17 @@ def _check_file(path: Path) -> None:
     try:
         info = path.stat()
     except FileNotFoundError:
-        raise UserError(f"{path}: no such file") from None
+        raise WorkflowError(f"{path}: no such file") from None
     except OSError as exc:
-        raise UserError(f"{path}: cannot read ({exc.strerror})") from None
+        raise WorkflowError(f"{path}: cannot read ({exc.strerror})") from None
     if path.is_dir():
-        raise UserError(f"{path}: is a directory, expected a file")
+        raise WorkflowError(f"{path}: is a directory, expected a file")
     if not path.is_file():
-        raise UserError(f"{path}: not a regular file")
+        raise WorkflowError(f"{path}: not a regular file")
     if info.st_size > MAX_INPUT_BYTES:
-        raise UserError(f"{path}: {info.st_size} bytes is too large for this input (limit {MAX_INPUT_BYTES})")
+        raise WorkflowError(
+            f"{path}: {info.st_size} bytes is too large for this input (limit {MAX_INPUT_BYTES})"
+        )
 
 
 def _read_text(path: Path) -> str:
@@ -44,9 +46,9 @@ def _read_text(path: Path) -> str:
         # utf-8-sig: a spreadsheet's CSV export often starts with a byte-order mark.
         return path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError:
-        raise UserError(f"{path}: not a UTF-8 text file") from None
+        raise WorkflowError(f"{path}: not a UTF-8 text file") from None
     except OSError as exc:
-        raise UserError(f"{path}: cannot read ({exc.strerror})") from None
+        raise WorkflowError(f"{path}: cannot read ({exc.strerror})") from None
 
 
 def read_damping_matrix(path: Path) -> np.ndarray:
@@ -63,17 +65,17 @@ def read_damping_matrix(path: Path) -> np.ndarray:
         try:
             values = np.load(path, allow_pickle=False)
         except (OSError, ValueError, EOFError) as exc:
-            raise UserError(f"{path}: not a readable .npy array ({exc or 'empty file'})") from None
+            raise WorkflowError(f"{path}: not a readable .npy array ({exc or 'empty file'})") from None
         if not isinstance(values, np.ndarray) or values.dtype.kind not in "iuf":
-            raise UserError(f"{path}: the damping matrix must hold real numbers")
+            raise WorkflowError(f"{path}: the damping matrix must hold real numbers")
     elif path.suffix.lower() == ".json":
         try:
             data = json.loads(_read_text(path))
         except json.JSONDecodeError as exc:
-            raise UserError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
+            raise WorkflowError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
         if isinstance(data, dict):
             if "damping_matrix" not in data:
-                raise UserError(f"{path}: a JSON object must hold a 'damping_matrix' list of rows")
+                raise WorkflowError(f"{path}: a JSON object must hold a 'damping_matrix' list of rows")
             data = data["damping_matrix"]
         values = _rows_to_array(data, path)
     else:
@@ -85,7 +87,7 @@ def read_damping_matrix(path: Path) -> np.ndarray:
             try:
                 rows.append([float(tok) for tok in line.split()])
             except ValueError:
-                raise UserError(f"{path}:{lineno}: not a row of numbers: {line!r}") from None
+                raise WorkflowError(f"{path}:{lineno}: not a row of numbers: {line!r}") from None
         values = _rows_to_array(rows, path)
     return _check_matrix(np.asarray(values), path)
 
@@ -94,17 +96,17 @@ def _rows_to_array(rows: object, path: Path) -> np.ndarray:
     import numpy as np
 
     if not isinstance(rows, list) or not rows or not all(isinstance(r, list) for r in rows):
-        raise UserError(f"{path}: expected a non-empty list of rows")
+        raise WorkflowError(f"{path}: expected a non-empty list of rows")
     lengths = {len(r) for r in rows}
     if len(lengths) != 1:
-        raise UserError(f"{path}: rows have different lengths {sorted(lengths)}")
+        raise WorkflowError(f"{path}: rows have different lengths {sorted(lengths)}")
     # JSON true/false and "1.5" would pass np.array(..., float): refuse them.
     if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for r in rows for v in r):
-        raise UserError(f"{path}: every entry must be a number")
+        raise WorkflowError(f"{path}: every entry must be a number")
     try:
         return np.array(rows, dtype=float)
     except (TypeError, ValueError, OverflowError):
-        raise UserError(f"{path}: every entry must be a finite number") from None
+        raise WorkflowError(f"{path}: every entry must be a finite number") from None
 
 
 def _check_matrix(values: np.ndarray, path: Path) -> np.ndarray:
@@ -112,12 +114,12 @@ def _check_matrix(values: np.ndarray, path: Path) -> np.ndarray:
 
     if values.ndim != 2 or values.shape[0] != values.shape[1]:
         shape = "x".join(str(s) for s in values.shape) or "a scalar"
-        raise UserError(f"{path}: the damping matrix must be square, got {shape}")
+        raise WorkflowError(f"{path}: the damping matrix must be square, got {shape}")
     values = values.astype(float)
     if not np.all(np.isfinite(values)):
-        raise UserError(f"{path}: the damping matrix holds non-finite values")
+        raise WorkflowError(f"{path}: the damping matrix holds non-finite values")
     if not 1 <= values.shape[0] <= MAX_FUNCTIONS:
-        raise UserError(f"{path}: the damping matrix must be 1x1 to {MAX_FUNCTIONS}x{MAX_FUNCTIONS}")
+        raise WorkflowError(f"{path}: the damping matrix must be 1x1 to {MAX_FUNCTIONS}x{MAX_FUNCTIONS}")
     return values
 
 
@@ -130,17 +132,17 @@ def read_beam(path: Path) -> BeamProperties:
     try:
         data = json.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)
     except json.JSONDecodeError as exc:
-        raise UserError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
+        raise WorkflowError(f"{path}: invalid JSON at line {exc.lineno}: {exc.msg}") from None
     except tomllib.TOMLDecodeError as exc:
-        raise UserError(f"{path}: invalid TOML: {exc}") from None
+        raise WorkflowError(f"{path}: invalid TOML: {exc}") from None
     if isinstance(data, dict) and isinstance(data.get("beam"), dict):
         outside = sorted(set(data) - {"beam"})
         if outside:
-            raise UserError(f"{path}: keys outside the [beam] table: {', '.join(outside)}")
+            raise WorkflowError(f"{path}: keys outside the [beam] table: {', '.join(outside)}")
         data = data["beam"]
     if not isinstance(data, dict):
-        raise UserError(f"{path}: expected a table of beam properties")
+        raise WorkflowError(f"{path}: expected a table of beam properties")
     try:
         return BeamProperties.from_dict(data)
     except (TypeError, ValueError, OverflowError) as exc:
-        raise UserError(f"{path}: {exc}") from None
+        raise WorkflowError(f"{path}: {exc}") from None

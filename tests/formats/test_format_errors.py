@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from daq.cli.errors import exit_code_and_message
-from daq.errors import UserError
+from daq.cli.errors import UserError, exit_code_and_message
 from daq.formats import FormatError
 from daq.formats.csv_text import read_csv
 from daq.store import Store, StoreError

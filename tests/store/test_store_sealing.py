@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from daq.errors import UserError
+from daq.cli.errors import UserError, exit_code_and_message
 from daq.store import Store, StoreError, open_run, read_result, seal, write_result
 from tests.store.store_helpers import make_hits, make_run
 
@@ -25,10 +25,11 @@ def child_env() -> dict[str, str]:
     return env
 
 
-def test_store_error_is_a_user_error_with_one_line():
+def test_store_error_is_the_stores_own_with_one_line():
     error = StoreError("first line\nsecond line")
-    assert isinstance(error, UserError)
-    assert error.exit_code == 1
+    # The store's own error, which the command line maps (daq/cli/errors.py).
+    assert not isinstance(error, UserError)
+    assert exit_code_and_message(error) == (1, "first line second line")
     assert str(error) == "first line second line"
 
 

@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
-from daq.errors import UserError
 
 if TYPE_CHECKING:
     from daq.batch.executor import Backend, BatchReport

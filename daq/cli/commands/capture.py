@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import (
     DialectOption,
     OldSimModelOption,
@@ -30,7 +31,6 @@ from daq.cli.options import (
     check_dialect,
     given_once,
 )
-from daq.errors import UserError
 
 if TYPE_CHECKING:
     # The driver's settings load with the first function that needs them (the command

@@ -12,8 +12,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
-from daq.errors import UserError
 
 
 def demo(
@@ -30,13 +30,13 @@ def demo(
     the Ritz model's natural frequencies.
     """
     import numpy as np
-    from drivers.analyzer import SignalAnalyzer
     from rich.console import Console
     from rich.progress import Progress
     from rich.table import Table
 
     from analysis.exact_beam import cantilever_frequencies_hz
     from analysis.ritz import ritz_frequencies_hz
+    from drivers.analyzer import SignalAnalyzer
     from drivers.settings import ImpactSettings
     from sims.instrument import Analyzer
     from sims.scenarios import SCENARIOS

@@ -19,8 +19,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import StoreOption
-from daq.errors import UserError
 
 
 class ExportFormat(enum.StrEnum):

@@ -8,8 +8,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
-from daq.errors import UserError
 
 #: FitOptions' field names as the options a user types.
 OPTION_NAMES = (

@@ -16,8 +16,8 @@ from typing import Annotated, Any
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import StoreOption
-from daq.errors import UserError
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 SDF_SUFFIXES = (".sdf",)

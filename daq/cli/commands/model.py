@@ -9,8 +9,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import given_once
-from daq.errors import UserError
 from daq.workflows.model_inputs import MAX_FUNCTIONS
 
 #: The default of --functions (the seed's 3-function model).

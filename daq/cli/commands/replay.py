@@ -18,8 +18,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from daq.cli.errors import UserError, exit_code_and_message
 from daq.cli.options import StoreOption
-from daq.errors import UserError
+from daq.workflows.errors import WorkflowError
 
 if TYPE_CHECKING:
     from drivers.dialects import Dialect
@@ -81,8 +82,8 @@ def replay(
     for name, path in zip(runs, paths, strict=True):
         try:
             replay_one(the_store, path, operator, note)
-        except UserError as exc:
-            if len(runs) == 1:
+        except Exception as exc:
+            if len(runs) == 1 or exit_code_and_message(exc) is None:
                 raise
             sys.stderr.write(f"daq replay: {exc}\n")
             failures.append(name)
@@ -214,7 +215,7 @@ def replay_settings(run: Any, from_dict: Any) -> tuple[str, Any]:
     hits = run.hits
     stored = None
     if run.instrument is not None and run.instrument.settings:
-        with contextlib.suppress(UserError):
+        with contextlib.suppress(WorkflowError):
             stored = from_dict(run.instrument.settings)
     center = hits.center_hz if hits.is_zoom else None
     if (

@@ -9,8 +9,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import StoreOption
-from daq.errors import UserError
 
 
 def register(app: typer.Typer) -> None:

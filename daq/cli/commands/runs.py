@@ -15,8 +15,8 @@ from typing import Annotated, Any
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import JsonOption, StoreOption
-from daq.errors import UserError
 from daq.workflows.run_views import run_dict, summary_dict
 
 runs_app = typer.Typer(

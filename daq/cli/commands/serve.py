@@ -13,6 +13,7 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import (
     DialectOption,
     OldSimModelOption,
@@ -26,7 +27,6 @@ from daq.cli.options import (
     check_dialect,
     given_once,
 )
-from daq.errors import UserError
 
 
 def register(app: typer.Typer) -> None:

@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import (
     MODEL_HELP,
     MODEL_METAVAR,
@@ -17,7 +18,6 @@ from daq.cli.options import (
     Scenario,
     given_once,
 )
-from daq.errors import UserError
 
 #: The analyzer simulated unless --analyzer names another.
 DEFAULT_ANALYZER = "35660A"

@@ -8,8 +8,8 @@ from typing import Annotated
 
 import typer
 
+from daq.cli.errors import UserError
 from daq.cli.options import DialectOption, ResourceOption, TimeoutOption, check_dialect
-from daq.errors import UserError
 
 
 def _open(resource: str | None, timeout: float, dialect: str | None = None, retries: int = 2):
