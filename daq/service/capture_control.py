@@ -24,7 +24,6 @@ from typing import Any
 import numpy as np
 
 from daq.service.events import EventHub
-from daq.service.instrument_link import InstrumentLink
 from daq.store import Run, StoreError
 from daq.workflows.capture import (
     Capture,
@@ -36,6 +35,7 @@ from daq.workflows.capture import (
     HitDecided,
     settings_as_dict,
 )
+from daq.workflows.instrument_link import InstrumentLink
 from daq.workflows.live_frf import live_frf
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings

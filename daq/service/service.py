@@ -19,10 +19,10 @@ from typing import Any
 
 from daq.service.capture_control import CaptureController, Conflict
 from daq.service.events import EventHub, plain
-from daq.service.instrument_link import InstrumentLink, SimSpec
 from daq.service.jobs import JobRunner, analysis_result_name, fit_result_name
 from daq.store import Store, StoreError
 from daq.store.lock import store_lock
+from daq.workflows.instrument_link import InstrumentLink, SimSpec
 
 
 @dataclass

@@ -36,11 +36,14 @@ def open_analyzer(
     time_scale: float = 0.0,
     dialect: str | None = None,
     retries: int = 2,
+    lock_file: bool = True,
 ) -> SignalAnalyzer:
     """An open driver, of the dialect detection finds (``dialect`` forces one): the one way
     the application opens an analyzer. ``sim`` runs the simulated analyzer in this
     process (scenario after the colon, ``seed`` by default), at ``time_scale`` (0: hits
-    land at once). A resource string that names nothing is a ValueError."""
+    land at once). ``lock_file=False`` when the caller holds the resource's lock already
+    (the service, for as long as it runs). A resource string that names nothing is a
+    ValueError."""
     # The drivers (and numpy under them) load here, not with the command line.
     from drivers.family import connect
     from drivers.family import open_analyzer as open_resource
@@ -60,7 +63,7 @@ def open_analyzer(
         except BaseException:
             transport.close()
             raise
-    return open_resource(resource, timeout_s=timeout_s, dialect=dialect, retries=retries)
+    return open_resource(resource, timeout_s=timeout_s, dialect=dialect, retries=retries, lock_file=lock_file)
 
 
 def serve_simulator(

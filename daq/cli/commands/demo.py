@@ -36,7 +36,7 @@ def demo(
 
     from analysis.exact_beam import cantilever_frequencies_hz
     from analysis.ritz import ritz_frequencies_hz
-    from drivers.analyzer import SignalAnalyzer
+    from daq.workflows.connect import open_analyzer
     from drivers.settings import ImpactSettings
     from sims.instrument import Analyzer
     from sims.scenarios import SCENARIOS
@@ -51,7 +51,7 @@ def demo(
         raise UserError("--time-scale must be >= 0", exit_code=2)
     console = Console()
     analyzer = Analyzer(PhysicsSource(scenario.value, seed=seed), time_scale=time_scale)
-    with TcpServer(analyzer) as server, SignalAnalyzer.open(server.resource, timeout_s=5.0) as dsa:
+    with TcpServer(analyzer) as server, open_analyzer(server.resource, timeout_s=5.0) as dsa:
         console.print(
             f"Simulated analyzer ({scenario.value} beam) at [bold]{server.resource}[/]: {dsa.identify()}"
         )

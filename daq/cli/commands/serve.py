@@ -142,10 +142,10 @@ def run_service(
 
     from daq.service.app import create_app
     from daq.service.auth import is_loopback
-    from daq.service.instrument_link import SimSpec
     from daq.service.limits import ConnectionGuard, connection_cap, raise_fd_limit
     from daq.service.service import Service, ServiceConfig
     from daq.store import StoreError
+    from daq.workflows.instrument_link import SimSpec
     from drivers.errors import DriverError
 
     loopback = is_loopback(host)

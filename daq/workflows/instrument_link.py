@@ -1,4 +1,4 @@
-"""The service's hold on the analyzer: the lock for as long as the service runs, a
+"""A long-lived hold on the analyzer, as the lab service keeps it: the lock for as long as the service runs, a
 fresh connection for each capture (so that a dropped link is reconnected at the
 next one), and what is known of its state.
 
@@ -14,7 +14,8 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
-from drivers.analyzer import SignalAnalyzer
+from daq.workflows.connect import open_analyzer, serve_simulator
+from drivers.base import SignalAnalyzer
 from drivers.errors import DriverError
 from drivers.locking import ResourceLock
 from drivers.resources import lock_key_of
@@ -72,7 +73,6 @@ class InstrumentLink:
         another process has it) and probe the analyzer once (a failure is recorded,
         not raised: the service starts, and says so)."""
         if self.sim is not None:
-            from daq.workflows.connect import serve_simulator
             from sims.hammer import HammerModel, adjusted
             from sims.sources import PhysicsSource
 
@@ -93,9 +93,7 @@ class InstrumentLink:
         """A new connection (the lock is ours already: the driver does not take it). The
         dialect found at the first connection is kept, so later ones need not ask."""
         try:
-            dsa = SignalAnalyzer.open(
-                self.resource, timeout_s=IO_TIMEOUT_S, lock_file=False, dialect=self.dialect
-            )
+            dsa = open_analyzer(self.resource, timeout_s=IO_TIMEOUT_S, dialect=self.dialect, lock_file=False)
         except DriverError as exc:
             self.note_error(str(exc))
             raise
