@@ -8,7 +8,7 @@ where |H| is above 1 % of its peak, in two setups:
   (1/32 of the record), against the model's H(jw);
 * impact: the driver's default impact settings (force window on the hammer,
   exponential on the accelerometer), against e^(-pre/tau) H(jw + 1/tau), the model
-  with the exponential window's added damping (tests/sim/test_sim_frf_with_impact_defaults.py).
+  with the exponential window's added damping (tests/sims/test_sim_frf_with_impact_defaults.py).
 
 With uniform windows a response that has not died out within the record
 (400 / span s) shows leakage, as on the instrument.

@@ -3,7 +3,7 @@ faults, front ends and replay (docs/simulator.md, "Models").
 
 Geometry expected here is written out from docs/instrument-scpi.md ("Record
 geometry", "The HP 3562A dialect"), not taken from sims/models.py. The FRF
-tolerance is the one tests/sim/test_physics.py holds the 35660A to: 1 % on every
+tolerance is the one tests/sims/test_physics.py holds the 35660A to: 1 % on every
 line where |H| is above 1 % of its peak, against analysis.response's modal sum.
 """
 
@@ -22,7 +22,7 @@ from sims.instrument import Analyzer
 from sims.prologix import PrologixPty
 from sims.scenarios import build_specimen
 from sims.sources import PhysicsSource, RecordedHit, ReplaySource
-from tests.sim.wire import ask, decode_trace
+from tests.sims.wire import ask, decode_trace
 
 pytestmark = pytest.mark.timeout(60)
 

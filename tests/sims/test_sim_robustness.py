@@ -13,7 +13,7 @@ from sims.instrument import Analyzer
 from sims.prologix import PrologixPty
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
-from tests.sim.wire import decode_trace
+from tests.sims.wire import decode_trace
 
 
 @pytest.mark.parametrize("center", ["6.25", "36"], ids=["baseband", "zoom"])

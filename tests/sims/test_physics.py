@@ -10,7 +10,7 @@ import pytest
 from analysis.response import frequency_response
 from sims.scenarios import build_specimen
 from tests.reference import EXACT_TABULATED_HZ
-from tests.sim.wire import decode_trace
+from tests.sims.wire import decode_trace
 
 
 def _trace(conn, commands: str) -> tuple[np.ndarray, np.ndarray]:

@@ -3,7 +3,7 @@
 import pytest
 
 from sims.hammer import HammerModel, adjusted
-from tests.sim.wire import decode_trace
+from tests.sims.wire import decode_trace
 
 
 @pytest.mark.parametrize(

@@ -2,7 +2,7 @@
 link and through real TCP sockets.
 
 Expectations come from the fault table in sims/faults.py and the status/error
-conventions of docs/instrument.md, decoded on the test side (tests/sim/wire.py).
+conventions of docs/instrument.md, decoded on the test side (tests/sims/wire.py).
 Block-level faults run against a replayed hit whose samples the test made, so
 the bytes that should arrive are known before the simulator sends any.
 """
@@ -25,7 +25,7 @@ from sims.inprocess import InProcessConnection
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
 from sims.tcp_server import TcpServer
-from tests.sim.wire import HEADER_LENGTH, decode_trace
+from tests.sims.wire import HEADER_LENGTH, decode_trace
 
 TYPICAL = "FRS 200 HZ;TSRC CH1;TLVL 2 MV;TDLY -10 MS;STRT"
 IDENT = b"HP35660A\r\n"

@@ -3,9 +3,9 @@
 A golden is a list of exchanges: (fake clock time or None, request, expected), where
 expected is the exact bytes of the reply (b"" for none) or, for the few replies
 whose floats are only known to a tolerance, a check of the bytes. Each dialect
-(tests/sim/goldens/mnemonic.py: the 35660A and the 3562A; tests/sim/goldens/scpi.py:
+(tests/sims/goldens/mnemonic.py: the 35660A and the 3562A; tests/sims/goldens/scpi.py:
 the 35670A and 35665A) writes its goldens by hand from its documentation, never
-read back from the simulator; tests/sim/test_golden_transcripts.py plays them all.
+read back from the simulator; tests/sims/test_golden_transcripts.py plays them all.
 """
 
 from __future__ import annotations

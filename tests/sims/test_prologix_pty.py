@@ -25,7 +25,7 @@ from sims.instrument import Analyzer
 from sims.prologix import PrologixPty
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
-from tests.sim.wire import HEADER_LENGTH, decode_ascii_trace, decode_trace
+from tests.sims.wire import HEADER_LENGTH, decode_ascii_trace, decode_trace
 
 pytestmark = pytest.mark.timeout(30)
 

@@ -29,7 +29,7 @@ from sims.inprocess import InProcessConnection
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
 from tests.cli_helpers import DAQ, assert_one_line_error, run_daq
-from tests.sim.wire import HEADER_LENGTH, decode_trace
+from tests.sims.wire import HEADER_LENGTH, decode_trace
 
 SPAN_HZ = 200.0
 FS_HZ = 2.56 * SPAN_HZ  # 512 Hz

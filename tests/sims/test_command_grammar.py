@@ -12,7 +12,7 @@ from __future__ import annotations
 import pytest
 
 from sims.command_table import grammar
-from tests.sim.wire import ask
+from tests.sims.wire import ask
 
 CRLF = b"\r\n"
 KEYS = {"kind", "source", "argument", "dimension", "choices", "readback"}

@@ -2,8 +2,8 @@
 harness over the dialects.
 
 The goldens are written by hand from the documentation, never read back from the
-simulator: tests/sim/goldens/mnemonic.py (the HP 35660A and HP 3562A, mnemonic
-dialect, docs/instrument.md) and tests/sim/goldens/scpi.py (the HP 35670A and 35665A,
+simulator: tests/sims/goldens/mnemonic.py (the HP 35660A and HP 3562A, mnemonic
+dialect, docs/instrument.md) and tests/sims/goldens/scpi.py (the HP 35670A and 35665A,
 SCPI, docs/instrument-scpi.md). Here each one is played on a fresh in-process
 analyzer, with a fake clock where the golden gives times.
 
@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 
 from sims.command_table import commands_for
-from tests.sim.goldens.common import Dialect, Exchange, FakeClock
-from tests.sim.goldens.mnemonic import HP3562A, HP35660A, SPAN_3562A
-from tests.sim.goldens.scpi import HP35670A, IDN, SPAN200, reply
-from tests.sim.wire import ask, decode_trace
+from tests.sims.goldens.common import Dialect, Exchange, FakeClock
+from tests.sims.goldens.mnemonic import HP3562A, HP35660A, SPAN_3562A
+from tests.sims.goldens.scpi import HP35670A, IDN, SPAN200, reply
+from tests.sims.wire import ask, decode_trace
 
 pytestmark = pytest.mark.timeout(10)
 

@@ -22,7 +22,7 @@ The two models differ in what docs/instrument-scpi.md says: ``ID?`` answers
 (the 35660A: 102.4 kHz / 2^n, 400 lines, 1024-sample records).
 
 Traces whose values must be known in advance come from the replay source (hits of
-tests/sim/goldens/common.py; sample rate 2.56 x span): the 35660A at its 200 Hz
+tests/sims/goldens/common.py; sample rate 2.56 x span): the 35660A at its 200 Hz
 span, 1024 samples at 512 Hz; the 3562A at its 195.3125 Hz span (100 kHz / 2^9),
 2048 samples at 500 Hz.
 """
@@ -32,7 +32,7 @@ from __future__ import annotations
 from sims.command_table import ERRORS, commands_for
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource, ReplaySource
-from tests.sim.goldens.common import (
+from tests.sims.goldens.common import (
     Book,
     Dialect,
     ErrorGolden,

@@ -20,7 +20,7 @@ import pytest
 
 from sims.instrument import Analyzer
 from sims.sources import RecordedHit, ReplaySource
-from tests.sim.wire import ask
+from tests.sims.wire import ask
 
 pytestmark = pytest.mark.timeout(10)
 

@@ -14,8 +14,8 @@ back from the simulator:
 * ``CALC<n>:DATA?`` with ``FORM:DATA REAL,64``: ``#<d><len>`` + big-endian float64 + LF.
 
 Traces whose values must be known come from the replay source (the hits of
-tests/sim/goldens/common.py; 200 Hz span, 400 lines: 1024 samples at 512 Hz).
-tests/sim/test_golden_transcripts.py plays these goldens, and fails when a command is
+tests/sims/goldens/common.py; 200 Hz span, 400 lines: 1024 samples at 512 Hz).
+tests/sims/test_golden_transcripts.py plays these goldens, and fails when a command is
 added to the simulator's SCPI table without a golden here.
 """
 
@@ -30,7 +30,7 @@ from sims.instrument import Analyzer
 from sims.scpi_status import MESSAGES
 from sims.scpi_table import COMMANDS
 from sims.sources import PhysicsSource, ReplaySource
-from tests.sim.goldens.common import TIME_START_S, Book, Dialect, ErrorGolden, FakeClock, Golden, Hits
+from tests.sims.goldens.common import TIME_START_S, Book, Dialect, ErrorGolden, FakeClock, Golden, Hits
 
 IDN = b"HEWLETT-PACKARD,35670A,0000A00000,A.00.00\n"
 NO_ERROR = b'+0,"No error"\n'

@@ -22,7 +22,7 @@ import pyvisa
 from sims.instrument import Analyzer
 from sims.sources import PhysicsSource
 from sims.tcp_server import TcpServer
-from tests.sim.wire import HEADER_LENGTH, decode_ascii_trace, decode_trace, split_block
+from tests.sims.wire import HEADER_LENGTH, decode_ascii_trace, decode_trace, split_block
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -207,7 +207,7 @@ def test_frsp_binary_decodes_to_the_ascii_dump(inst):
     inst.write(SETUP)
     assert inst.query("SMSD") == "1"
     inst.write("FRSP;DDAN")
-    # pyvisa's own HP-block decoder, independent of the simulator and of tests/sim/wire.py.
+    # pyvisa's own HP-block decoder, independent of the simulator and of tests/sims/wire.py.
     values = np.array(
         inst.read_binary_values(
             datatype="d", is_big_endian=True, header_fmt="hp", expect_termination=False, container=list
