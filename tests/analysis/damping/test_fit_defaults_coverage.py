@@ -18,7 +18,7 @@ from analysis.damping.bandlimited import BandLimitedData, batched_residuals, mod
 from analysis.damping.checks import central_jacobian, combined_std, per_hit_std
 from analysis.ritz import RitzBeam
 from analysis.seed import eq18_damping_matrix
-from tests.damping.damping_truth import RATE_HZ, half_sine_force
+from tests.analysis.damping.damping_truth import RATE_HZ, half_sine_force
 
 SEEDS = 16
 PEAKS_N = (100.0, 70.0, 130.0, 85.0, 115.0)

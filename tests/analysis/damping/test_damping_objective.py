@@ -15,7 +15,7 @@ from analysis.damping.objective import (
     residuals_frf,
 )
 from analysis.response import time_response
-from tests.damping.damping_truth import frf_truth, truth
+from tests.analysis.damping.damping_truth import frf_truth, truth
 
 
 def _population(r_true: np.ndarray, size: int = 40, seed: int = 3) -> np.ndarray:

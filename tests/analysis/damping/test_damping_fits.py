@@ -10,7 +10,7 @@ from analysis.damping.ga import bits_per_variable, decode, fit_ga
 from analysis.damping.local import fit_de, fit_least_squares, multi_start
 from analysis.damping.objective import batched_residuals, psi, residuals
 from analysis.modal import damped_modes
-from tests.damping.damping_truth import EQ18_RATIOS, truth
+from tests.analysis.damping.damping_truth import EQ18_RATIOS, truth
 
 
 def _rel(a: np.ndarray, b: np.ndarray) -> float:
