@@ -21,15 +21,13 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import StoreOption
+from daq.workflows.export import SUFFIX, write_run
 
 
 class ExportFormat(enum.StrEnum):
     csv = "csv"
     uff = "uff"
     sdf = "sdf"
-
-
-SUFFIX = {"csv": ".csv", "uff": ".uff", "sdf": ".sdf"}
 
 
 def export_target(output: str | None, default_name: str, force: bool) -> Path:
@@ -82,18 +80,7 @@ def export(
         raise UserError(str(exc)) from None
     _check_holds(the_run, format.value)
     target = export_target(output, f"{the_run.run_id}{SUFFIX[format.value]}", force)
-    if format is ExportFormat.csv:
-        from daq.formats.csv_text import write_csv
-
-        write_csv(the_run, target)
-    elif format is ExportFormat.sdf:
-        from daq.formats.sdf.run_export import write_sdf_run
-
-        write_sdf_run(the_run, target)
-    else:
-        from daq.formats.uff58_export import write_uff
-
-        write_uff(the_run, target)
+    write_run(the_run, target, format.value)
     _note_left_out(the_run, format.value)
     typer.echo(f"Run {the_run.run_id} written as {format.value.upper()}: {target}")
 
