@@ -15,7 +15,6 @@ Linux with glibc only; elsewhere this does nothing.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import sys
 
 # mallopt(3) parameters.
@@ -26,12 +25,25 @@ _MMAP_THRESHOLD_BYTES = 32 * 2**20
 _TRIM_THRESHOLD_BYTES = 2**30
 
 
+def _libc(use_errno: bool = False) -> ctypes.CDLL:
+    """The C library this process runs on: dlopen(NULL), the process's own symbols,
+    which on Linux include its libc. No search by name: ctypes.util.find_library runs
+    ldconfig (a child process) on every command. Should dlopen(NULL) fail, the libc
+    found by name as before; OSError if neither loads."""
+    try:
+        return ctypes.CDLL(None, use_errno=use_errno)
+    except OSError:
+        from ctypes.util import find_library
+
+        return ctypes.CDLL(find_library("c") or "libc.so.6", use_errno=use_errno)
+
+
 def keep_freed_memory() -> bool:
     """Tell glibc's malloc to keep freed memory; True if it accepted."""
     if not sys.platform.startswith("linux"):
         return False
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        libc = _libc()
         mallopt = libc.mallopt
     except (OSError, AttributeError):  # musl and others have no mallopt
         return False
@@ -71,7 +83,7 @@ def die_with_parent(parent_pid: int) -> bool:
     armed = False
     if sys.platform.startswith("linux"):
         try:
-            libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+            libc = _libc(use_errno=True)
             prctl = libc.prctl
             prctl.argtypes = (ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong)
             prctl.restype = ctypes.c_int

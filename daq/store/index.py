@@ -16,7 +16,7 @@ from dataclasses import fields
 from pathlib import Path
 
 from daq.store import layout
-from daq.store.reader import RunSummary
+from daq.store.summary_model import RunSummary
 
 # Bump when the table changes; an index of another version is rebuilt.
 INDEX_VERSION = 2  # 2: summaries check links, declared sizes and file names

@@ -37,11 +37,15 @@ import threading
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from daq.store.errors import StoreError
+
+if TYPE_CHECKING:
+    import numpy as np
+
+# numpy is imported by the functions that need it: the store imports this module for
+# recover(), which every listing calls, and a store without journals needs no numpy.
 
 MAGIC = b"DAQJRNL1"
 PREFIX = ".journal-"
@@ -119,6 +123,8 @@ def _signals_held():
 
 
 def _encode(kind: bytes, meta: dict[str, Any], *arrays: np.ndarray) -> bytes:
+    import numpy as np
+
     text = json.dumps(meta, allow_nan=False, separators=(",", ":")).encode("utf-8")
     raw = [np.ascontiguousarray(a, dtype=a.dtype.newbyteorder("<")).tobytes() for a in arrays]
     body = b"".join([kind, _JSON_LEN.pack(len(text)), text, *raw])
@@ -167,6 +173,8 @@ class Journal:
     def add_hit(self, index: int, info: dict[str, Any], force: np.ndarray, response: np.ndarray) -> None:
         """Append hit ``index`` (its records and ``info``: overload, peak_force_n,
         timestamp_utc, checks, sample_rate_hz, start_s, center_hz) and fsync it."""
+        import numpy as np
+
         force, response = np.asarray(force), np.asarray(response)
         meta = {**info, "index": index, "dtype": force.dtype.str.lstrip("<>="), "n_samples": int(force.size)}
         self._append(_encode(b"H", meta, force, response))
@@ -243,6 +251,8 @@ class JournalContents:
 
 def read_journal(data: bytes) -> JournalContents:
     """Parse a journal's bytes; ValueError if it does not even hold its metadata."""
+    import numpy as np
+
     if not data.startswith(MAGIC):
         raise ValueError("not a hit journal (wrong magic)")
     pos, meta, hits, verdicts, torn = len(MAGIC), None, [], {}, False
@@ -283,6 +293,8 @@ def read_journal(data: bytes) -> JournalContents:
 
 def journal_run(contents: JournalContents, file_name: str):
     """The incomplete Run a journal holds, or None when it holds no hit."""
+    import numpy as np
+
     from daq.store.model import Hits, Instrument, Run, Sample
 
     meta = contents.meta
@@ -333,13 +345,15 @@ def recover(store_dir: Path | str) -> list[str]:
     """Seal every journal in ``store_dir`` that has no live owner as an incomplete run
     and remove it; one line per journal handled, for stderr. Never raises for a bad
     journal: it is left in place and the line says why."""
-    from daq.store.writer import run_path, seal
-
     store_dir = Path(store_dir)
     try:
         names = sorted(e.name for e in os.scandir(store_dir) if is_journal_name(e.name))
     except OSError:
         return []
+    if not names:
+        return []  # the usual case, and a listing's: no need of the writer (h5py) then
+    from daq.store.writer import run_path, seal
+
     lines = []
     for name in names:
         path = store_dir / name
@@ -377,6 +391,8 @@ def recover(store_dir: Path | str) -> list[str]:
 
 
 def _recover_one(store_dir: Path, path: Path, data: bytes, run_path, seal) -> str:
+    import numpy as np
+
     contents = read_journal(data)
     run_id = contents.meta["run_id"]
     if run_path(store_dir, run_id).exists():

@@ -12,7 +12,6 @@ from __future__ import annotations
 import contextlib
 import io
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
@@ -23,27 +22,7 @@ from daq.store.errors import StoreError
 from daq.store.h5io import get_bool, get_group, get_text, refuse_outside_references
 from daq.store.model import Hits, Run
 from daq.store.summary import parse_summary, read_root_summary
-
-
-@dataclass(frozen=True)
-class RunSummary:
-    """What a listing shows about one run file, read without loading the records.
-
-    n_hits and n_accepted are 0 for runs without hits. error is None for a readable
-    run; otherwise it says what is wrong, and the other fields may be empty.
-    """
-
-    file_name: str
-    run_id: str
-    start_time: str
-    kind: str
-    complete: bool
-    n_hits: int
-    n_accepted: int
-    operator: str
-    note: str
-    size_bytes: int
-    error: str | None = None
+from daq.store.summary_model import RunSummary  # here too, under its old name
 
 
 @contextlib.contextmanager

@@ -17,7 +17,7 @@ import sys
 import time
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from daq.store import layout
 from daq.store.config import APP_DIR, load_config
@@ -25,11 +25,13 @@ from daq.store.errors import StoreError
 from daq.store.ids import RUN_ID_PATTERN, validate_run_id_prefix
 from daq.store.index import cached_summaries
 from daq.store.journal import recover
-from daq.store.model import Run
-from daq.store.reader import RunSummary, open_run, read_summary
-from daq.store.results import read_result, write_result
-from daq.store.verify import verify
-from daq.store.writer import seal
+from daq.store.summary_model import RunSummary
+
+if TYPE_CHECKING:
+    from daq.store.model import Run
+
+# What reads or writes HDF5 (numpy, h5py) is imported where it is used, not here: a
+# listing served from the index needs neither, and `daq runs list` starts faster.
 
 #: The name of the newest run in every command that takes a run.
 LATEST = "latest"
@@ -98,6 +100,8 @@ class Store:
 
     def seal(self, run: Run) -> Path:
         """Write ``run`` atomically into the store (never overwriting); its path."""
+        from daq.store.writer import seal
+
         return seal(run, self.path)
 
     def list(self) -> list[RunSummary]:
@@ -139,16 +143,24 @@ class Store:
 
     def open(self, name: str) -> Run:
         """The run picked by id or unique prefix."""
+        from daq.store.reader import open_run
+
         return open_run(self.resolve(name))
 
     def verify(self, name: str) -> list[str]:
         """verify() of the run picked by id or unique prefix."""
+        from daq.store.verify import verify
+
         return verify(self.resolve(name))
 
     def write_result(self, run_id: str, name: str, payload: dict[str, Any], overwrite: bool = False) -> Path:
+        from daq.store.results import write_result
+
         return write_result(self.path, run_id, name, payload, overwrite=overwrite)
 
     def read_result(self, run_id: str, name: str) -> dict[str, Any]:
+        from daq.store.results import read_result
+
         return read_result(self.path, run_id, name)
 
     def temporaries(self) -> list[Path]:
@@ -190,6 +202,8 @@ class Store:
 
 
 def _summary_or_error(path: Path) -> RunSummary:
+    from daq.store.reader import read_summary
+
     try:
         return read_summary(path)
     except StoreError as exc:
