@@ -33,10 +33,10 @@ from daq.workflows.capture import (
     Finished,
     HitArrived,
     HitDecided,
-    settings_as_dict,
 )
 from daq.workflows.instrument_link import InstrumentLink
 from daq.workflows.live_frf import live_frf
+from daq.workflows.setup_codec import settings_to_dict as settings_as_dict
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings
 

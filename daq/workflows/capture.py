@@ -32,9 +32,10 @@ from analysis.beam import TABLE_1
 from analysis.hit_checks import HitCheck, failed_names, run_checks
 from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, Store, StoreError, new_run_id
 from daq.store.journal import Journal, run_bytes_needed
+from daq.workflows.setup_codec import settings_to_dict
 from drivers.analyzer import SignalAnalyzer
 from drivers.dialects import model_of
-from drivers.settings import ChannelSetup, ImpactSettings
+from drivers.settings import ImpactSettings
 
 #: The reason stored for a hit rejected by hand with no reason given.
 OPERATOR_REJECT = "rejected by operator"
@@ -129,33 +130,9 @@ def checks_policy(hit: HitArrived) -> tuple[bool, str]:
     return hit.passed, hit.suggested_reason
 
 
-def settings_from_dict(data: dict[str, Any]) -> ImpactSettings:
-    """The inverse of settings_as_dict (e.g. a stored run's settings); WorkflowError if the
-    dict does not describe valid settings."""
-    from daq.workflows.errors import WorkflowError
-
-    try:
-        fields = dict(data)
-        for channel in ("hammer", "accelerometer"):
-            if channel in fields:
-                fields[channel] = ChannelSetup(**fields[channel])
-        return ImpactSettings(**fields)
-    except (TypeError, ValueError) as exc:
-        raise WorkflowError(f"stored settings do not describe an impact test: {exc}") from None
-
-
 def utc_now() -> str:
     """Now, ISO 8601 UTC to the millisecond, ending in Z."""
     return datetime.now(UTC).isoformat(timespec="milliseconds").replace("+00:00", "Z")
-
-
-def settings_as_dict(settings: ImpactSettings) -> dict[str, Any]:
-    """JSON- and TOML-friendly dict of ``settings`` (windows as their mnemonics)."""
-    out = asdict(settings)
-    out.pop("defaulted")  # how the settings were made, not what they are
-    for channel in ("hammer", "accelerometer"):
-        out[channel]["window"] = str(getattr(settings, channel).window.value)
-    return out
 
 
 def table1_sample() -> Sample:
@@ -414,7 +391,7 @@ class Capture:
             resource=self.resource,
             transport=self.transport,
             dialect=self.driver.dialect.name,
-            settings=settings_as_dict(self.actual),
+            settings=settings_to_dict(self.actual),
         )
 
     def _provenance(self) -> dict[str, Any]:

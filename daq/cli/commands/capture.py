@@ -10,10 +10,9 @@ in daq/workflows/capture.py; every hit is journaled in the store as it is taken.
 from __future__ import annotations
 
 import contextlib
-import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -35,127 +34,18 @@ from daq.cli.options import (
 if TYPE_CHECKING:
     # The driver's settings load with the first function that needs them (the command
     # line's start-up stays light): `from drivers.settings import ...` in each.
-    from drivers.settings import ChannelSetup, ImpactSettings
-
-#: Keys of a setup file: top level, and of each [hammer] / [accelerometer] table.
-TOP_KEYS = {
-    "span_hz": float, "center_hz": float, "averages": int, "trigger_source": str,
-    "trigger_level_eu": float, "trigger_slope": str, "pre_trigger_s": float, "lines": int,
-}  # fmt: skip
-CHANNEL_KEYS = {
-    "window": str, "sensitivity_v_per_eu": float, "range_v": (float, str), "force_width_s": float,
-    "exp_decay_s": float, "ac_coupled": bool,
-}  # fmt: skip
-#: Sized to the record when left out (drivers/settings.py); printed as comments.
-RECORD_SIZED = {"pre_trigger_s": "1/32", "force_width_s": "1/16", "exp_decay_s": "1/6"}
+    from drivers.settings import ImpactSettings
 
 
 def register(app: typer.Typer) -> None:
     app.command(name="capture")(capture)
 
 
-def setup_toml(settings: ImpactSettings) -> str:
-    """``settings`` as a setup file; record-sized values appear as comments."""
-
-    def value(v: object) -> str:
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if isinstance(v, str):
-            return f'"{v}"'
-        return repr(float(v)) if isinstance(v, float) else str(v)
-
-    def line(key: str, v: object, comment: str = "") -> str:
-        if key in RECORD_SIZED:
-            return f"# {key} = {value(v)}  # default: {RECORD_SIZED[key]} of the record, uncomment to fix it"
-        return f"{key} = {value(v)}" + (f"  # {comment}" if comment else "")
-
-    lines = [
-        "# daq capture setup (SI units; EU = N for the hammer, m/s^2 for the accelerometer)",
-        line("span_hz", settings.span_hz, "the analyzer rounds up (35660A: to 102.4 kHz / 2^n)"),
-        "# lines = 400  # default: the analyzer's own (35660A 400, 3562A 800); a 35670A takes 100 to 1600",
-        line("center_hz", settings.center_hz or 0.0, "0 = baseband, else a zoom around it"),
-        line("averages", settings.averages, "accepted hits wanted (--hits overrides)"),
-        line("trigger_source", settings.trigger_source),
-        line("trigger_level_eu", settings.trigger_level_eu, "N on CH1"),
-        line("trigger_slope", settings.trigger_slope),
-        line("pre_trigger_s", settings.pre_trigger_s),
-    ]
-    for name in ("hammer", "accelerometer"):
-        ch: ChannelSetup = getattr(settings, name)
-        lines += [
-            "",
-            f"[{name}]",
-            line("window", ch.window.value, "UNIF, HANN, FLAT, FORC or EXPO"),
-            line("sensitivity_v_per_eu", ch.sensitivity_v_per_eu),
-            line("range_v", "auto" if ch.range_v is None else ch.range_v, 'full scale, V, or "auto"'),
-            line("force_width_s", ch.force_width_s),
-            line("exp_decay_s", ch.exp_decay_s),
-            line("ac_coupled", ch.ac_coupled),
-        ]
-    return "\n".join(lines) + "\n"
-
-
-def _typed(where: str, key: str, raw: object, kind: Any) -> object:
-    kinds = kind if isinstance(kind, tuple) else (kind,)
-    if float in kinds and isinstance(raw, int) and not isinstance(raw, bool):
-        raw = float(raw)
-    if not isinstance(raw, kinds) or (isinstance(raw, bool) and bool not in kinds):
-        names = " or ".join("a number" if k is float else k.__name__ for k in kinds)
-        raise UserError(f"{where}: {key} must be {names}, got {raw!r}")
-    if isinstance(raw, float) and not math.isfinite(raw):
-        raise UserError(f"{where}: {key} must be finite")
-    return raw
-
-
-def settings_from_setup(data: dict[str, Any], where: str) -> ImpactSettings:
-    """ImpactSettings from a parsed setup file; UserError names the bad key."""
-    from drivers.settings import ChannelSetup, ImpactSettings
-
-    kwargs: dict[str, Any] = {}
-    for key, raw in data.items():
-        if key in ("hammer", "accelerometer"):
-            if not isinstance(raw, dict):
-                raise UserError(f"{where}: [{key}] must be a table")
-            channel: dict[str, Any] = {}
-            defaults = ImpactSettings.__dataclass_fields__[key].default_factory()
-            for ckey, craw in raw.items():
-                if ckey not in CHANNEL_KEYS:
-                    raise UserError(f"{where}: unknown key {key}.{ckey}; known: {', '.join(CHANNEL_KEYS)}")
-                v = _typed(where, f"{key}.{ckey}", craw, CHANNEL_KEYS[ckey])
-                if ckey == "range_v" and isinstance(v, str):
-                    if v != "auto":
-                        raise UserError(f'{where}: {key}.range_v must be a number or "auto", got {v!r}')
-                    v = None
-                channel[ckey] = v
-            try:
-                kwargs[key] = ChannelSetup(**{**defaults.__dict__, **channel})
-            except ValueError as exc:
-                raise UserError(f"{where}: [{key}] {exc}") from None
-        elif key in TOP_KEYS:
-            kwargs[key] = _typed(where, key, raw, TOP_KEYS[key])
-        else:
-            known = ", ".join([*TOP_KEYS, "[hammer]", "[accelerometer]"])
-            raise UserError(f"{where}: unknown key {key}; known: {known}")
-    if kwargs.get("center_hz") == 0.0:
-        kwargs["center_hz"] = None
-    try:
-        return ImpactSettings(**kwargs)
-    except ValueError as exc:
-        raise UserError(f"{where}: {exc}") from None
-
-
 def read_setup(path: Path) -> ImpactSettings:
-    import tomllib
+    """The setup file at ``path`` (the codec: daq/workflows/setup_codec.py)."""
+    from daq.workflows.setup_codec import read_setup_file
 
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise UserError(f"setup file {path}: cannot read it ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise UserError(f"setup file {path}: not UTF-8 text") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise UserError(f"setup file {path}: not valid TOML ({exc})") from None
-    return settings_from_setup(data, f"setup file {path}")
+    return read_setup_file(path)
 
 
 def capture(
@@ -217,7 +107,9 @@ def capture(
 
     simulated = given_once("--analyzer", analyzer, "--model", model)
     if print_setup:
-        sys.stdout.write(setup_toml(ImpactSettings()))
+        from daq.workflows.setup_codec import settings_to_toml
+
+        sys.stdout.write(settings_to_toml(ImpactSettings()))
         return
     check_operator_and_note(operator, note)
     settings = read_setup(setup) if setup is not None else ImpactSettings()

@@ -114,9 +114,10 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
 
     from daq.cli.capture_session import drive
     from daq.store import StoreError, open_run
-    from daq.workflows.capture import Capture, settings_from_dict
+    from daq.workflows.capture import Capture
     from daq.workflows.connect import open_analyzer, serve_simulator
     from daq.workflows.recorded_hits import recorded_hits
+    from daq.workflows.setup_codec import settings_from_stored as settings_from_dict
     from sims.sources import ReplaySource
 
     try:
