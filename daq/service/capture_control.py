@@ -36,7 +36,7 @@ from daq.workflows.capture import (
 )
 from daq.workflows.instrument_link import InstrumentLink
 from daq.workflows.live_frf import live_frf
-from daq.workflows.setup_codec import settings_to_dict as settings_as_dict
+from daq.workflows.setup_codec import settings_to_dict
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings
 
@@ -292,7 +292,7 @@ class CaptureController:
                 self.link.note_ok(event.identification)
                 self.hub.publish("instrument", self.link.status())
             elif isinstance(event, Configured):
-                settings = settings_as_dict(event.settings)
+                settings = settings_to_dict(event.settings)
                 with self._cond:
                     self.actual_settings = settings
                     self.center_hz = float(event.settings.center_hz or 0.0)

@@ -117,7 +117,7 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
     from daq.workflows.capture import Capture
     from daq.workflows.connect import open_analyzer, serve_simulator
     from daq.workflows.recorded_hits import recorded_hits
-    from daq.workflows.setup_codec import settings_from_stored as settings_from_dict
+    from daq.workflows.setup_codec import settings_from_stored
     from sims.sources import ReplaySource
 
     try:
@@ -127,7 +127,7 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
     if original.hits is None:
         raise UserError(f"run {original.run_id} holds FRFs only, no time records: nothing to replay")
     hits = original.hits
-    model, settings = replay_settings(original, settings_from_dict)
+    model, settings = replay_settings(original, settings_from_stored)
     n_accepted = int(hits.accepted.sum())
     import hashlib
 
