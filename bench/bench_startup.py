@@ -37,47 +37,13 @@ REPO = Path(__file__).resolve().parent.parent
 
 
 def make_store(folder: Path, runs: int = 5) -> None:
-    """``runs`` small sealed runs in ``folder``."""
-    import numpy as np
+    """``runs`` small sealed runs in ``folder`` (bench_store's runs: 10 hits of 1,024 samples)."""
+    from bench_store import make_run
 
-    from daq.store import Hits, Instrument, Run, Sample, new_run_id, seal
+    from daq.store import seal
 
     for seed in range(runs):
-        rng = np.random.default_rng(seed)
-        n_hits, n_samples = 10, 1024
-        t = np.arange(n_samples) / 2560.0
-        response = np.sin(2 * np.pi * 27.3 * t) * np.exp(-t / 0.4) * 20 + rng.normal(
-            0, 0.05, (n_hits, n_samples)
-        )
-        force = np.zeros((n_hits, n_samples))
-        force[:, 32:40] = 150.0
-        run = Run(
-            run_id=new_run_id(),
-            kind="simulated",
-            complete=True,
-            start_time="2026-11-23T10:15:03.123Z",
-            end_time="2026-11-23T10:16:03.123Z",
-            operator="bench",
-            note=f"bench run {seed}",
-            instrument=Instrument(
-                "HP 35660A", "HEWLETT-PACKARD,35660A", "sim", "tcp", "35660A", {"span_hz": 1000.0}
-            ),
-            sample=Sample(2700.0, 69e9, 0.025, 0.003, 0.3, 7.5e-5, 5.625e-11),
-            hits=Hits(
-                force_n=force,
-                response_m_s2=response,
-                sample_rate_hz=2560.0,
-                start_s=-32 / 2560.0,
-                center_hz=0.0,
-                accepted=np.ones(n_hits, bool),
-                reject_reason=[""] * n_hits,
-                overload=np.zeros((n_hits, 2), bool),
-                peak_force_n=force.max(axis=1),
-                timestamp_utc=["2026-11-23T10:15:03.123Z"] * n_hits,
-                checks=[{"double_hit": False}] * n_hits,
-            ),
-        )
-        seal(run, folder)
+        seal(make_run(10, 1024, seed), folder)
 
 
 def timed(argv: list[str], repo: Path) -> float:
