@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import threading
 import time
 from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
@@ -31,6 +32,12 @@ def _init_worker() -> None:
     (a capture's, a request's)."""
     from daq.batch.memory_tuning import keep_freed_memory
 
+    # Ctrl-C in the terminal reaches the whole process group: the service stops its
+    # workers itself (close), and a worker interrupted mid-run would send a
+    # KeyboardInterrupt back through the pool as a traceback. SIGINT came blocked
+    # from the spawning thread (submit), so none lands before this line.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     keep_freed_memory()
     threading.Thread(target=_exit_with_parent, args=(os.getppid(),), name="parent-watch", daemon=True).start()
 
@@ -81,7 +88,13 @@ class QueueBackend:
         with self._lock:
             self._closed = True
         if self._pool is not None:
+            # A run half analysed is analysed again at the next start (results are
+            # written atomically), so the workers end now instead of keeping the
+            # service's process alive until their runs are done.
+            workers = list((getattr(self._pool, "_processes", None) or {}).values())
             self._pool.shutdown(wait=False, cancel_futures=True)
+            for worker in workers:
+                worker.terminate()
         if self._cluster_calls is not None:
             self._cluster_calls.shutdown(wait=False, cancel_futures=True)
 
@@ -93,7 +106,13 @@ class QueueBackend:
             return self._cluster_calls.submit(on_cluster, self.scheduler, task)
         assert self._pool is not None
         try:
-            return self._pool.submit(run_task, task)
+            # A worker is spawned by the submitting thread and inherits its signal
+            # mask: SIGINT stays blocked in it until its initializer ignores it.
+            blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+            try:
+                return self._pool.submit(run_task, task)
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
         except BrokenProcessPool:  # a worker was killed: later runs get a new pool
             with self._lock:
                 if self._closed:

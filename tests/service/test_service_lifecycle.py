@@ -3,13 +3,14 @@ what the API says about hits a Stop or an Abort leaves undecided."""
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 
 import pytest
 
 from daq.store import Store
-from tests.cli_helpers import DAQ, assert_one_line_error
+from tests.cli_helpers import DAQ, assert_one_line_error, capture_sim
 from tests.service.service_helpers import EventReader, service_env, serving, wait_for
 
 pytestmark = pytest.mark.slow
@@ -100,3 +101,18 @@ def test_a_run_another_process_seals_into_the_store_is_analysed_while_the_servic
         (row,) = served.get("/api/runs").json()
         assert (row["run_id"], row["analysis"], row["fit"]) == (run_id, "done", "done")
         events.close()
+
+
+def test_ctrl_c_in_the_terminal_stops_the_service_at_once_even_with_a_worker_busy(tmp_path):
+    # A terminal's Ctrl-C goes to the whole process group, the analysis workers too: they
+    # must leave stopping to the service (no KeyboardInterrupt traceback through the
+    # pool) and end with it, not keep it alive until their runs are done.
+    store = tmp_path / "store"
+    for seed in (1, 2, 3):
+        capture_sim(store, "realistic", seed)
+    with serving(tmp_path, "--sim", "--jobs", "1", store=store) as served:
+        wait_for(lambda: served.get("/api/health").json()["jobs"]["running"] >= 1, 60, "an analysis running")
+        os.killpg(served.proc.pid, signal.SIGINT)
+        assert served.proc.wait(10) == 0
+        assert "daq serve: stopped\n" in served.stderr_lines
+        assert not any("Traceback" in line or "not stopped after" in line for line in served.stderr_lines)
