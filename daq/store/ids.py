@@ -66,7 +66,7 @@ def validate_run_id_prefix(text: object) -> str:
     """``text`` if it could be the start of a run id (for picking a run by prefix)."""
     if not isinstance(text, str) or _PREFIX_PATTERN.fullmatch(text) is None:
         shown = _show(text) if isinstance(text, str) else type(text).__name__
-        raise StoreError(f"invalid run id or prefix {shown}: expected e.g. 20261123T1015")
+        raise StoreError(f"invalid run id or prefix {shown}: expected e.g. 20261123T1015, or latest")
     return text
 
 

@@ -412,7 +412,7 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
         )
         out.append(
             f"{which} by these data (marked ?): only the combinations the data fix are (the modal "
-            "dampings above); more measurement points or fewer --functions determine more"
+            "dampings the fit reports); more measurement points or fewer --functions determine more"
         )
     return out
 

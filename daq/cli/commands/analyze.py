@@ -69,7 +69,7 @@ def parse_frequencies(text: str | None) -> tuple[float, ...] | None:
 def analyze(
     runs: Annotated[
         list[str] | None,
-        typer.Argument(metavar="[RUN]...", show_default=False, help="Run ids or unique prefixes."),
+        typer.Argument(metavar="[RUN]...", show_default=False, help="Run ids, unique prefixes, or latest."),
     ] = None,
     all_runs: Annotated[bool, typer.Option("--all", help="Analyse every run of the store.")] = False,
     band: Annotated[

@@ -25,7 +25,7 @@ def register(app: typer.Typer) -> None:
 def fit(
     runs: Annotated[
         list[str] | None,
-        typer.Argument(metavar="[RUN]...", show_default=False, help="Run ids or unique prefixes."),
+        typer.Argument(metavar="[RUN]...", show_default=False, help="Run ids, unique prefixes, or latest."),
     ] = None,
     all_runs: Annotated[bool, typer.Option("--all", help="Fit every run of the store.")] = False,
     method: Annotated[
