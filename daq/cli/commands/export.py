@@ -57,7 +57,9 @@ def register(app: typer.Typer) -> None:
 
 
 def export(
-    run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="Run id, unique prefix, or latest.")],
+    run: Annotated[
+        str, typer.Argument(metavar="RUN", show_default=False, help="Run id, unique prefix, or latest.")
+    ],
     format: Annotated[
         ExportFormat, typer.Option("--format", "-f", help="csv, uff (dataset 58) or sdf (HP SDF revision 3).")
     ],

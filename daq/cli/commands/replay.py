@@ -49,7 +49,9 @@ def replay(
     runs: Annotated[
         list[str],
         typer.Argument(
-            metavar="RUN...", show_default=False, help="Run ids, unique prefixes, latest, or paths of run files."
+            metavar="RUN...",
+            show_default=False,
+            help="Run ids, unique prefixes, latest, or paths of run files.",
         ),
     ],
     store: StoreOption = None,

@@ -18,7 +18,9 @@ def register(app: typer.Typer) -> None:
 
 
 def report(
-    run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="Run id, unique prefix, or latest.")],
+    run: Annotated[
+        str, typer.Argument(metavar="RUN", show_default=False, help="Run id, unique prefix, or latest.")
+    ],
     output: Annotated[
         Path | None,
         typer.Option("--output", "-o", metavar="<dir>", help="Folder to write [default: ./report-<run id>]."),

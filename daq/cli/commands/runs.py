@@ -155,7 +155,10 @@ def _print_table(summaries, store_dir: Path) -> None:
 @runs_app.command()
 def show(
     run: Annotated[
-        str, typer.Argument(metavar="RUN", help="A run id, any unique start of one (e.g. 20261123T1015), or latest.")
+        str,
+        typer.Argument(
+            metavar="RUN", help="A run id, any unique start of one (e.g. 20261123T1015), or latest."
+        ),
     ],
     store: StoreOption = None,
     as_json: JsonOption = False,
