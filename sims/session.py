@@ -14,10 +14,22 @@ Simulator control travels in-band, in a namespace no instrument command uses
 | ``SIM:FAULT?``          | the armed faults, ``;``-separated, or NONE                    |
 | ``SIM:NOISE 0|1``       | sensor noise off/on (physics source)                          |
 | ``SIM:SEED n``          | restart the physics random stream                             |
-| ``SIM:SCEN name``       | switch the specimen (seed, realistic)                         |
+| ``SIM:SCEN name``       | switch the specimen (seed, realistic; custom after SIM:DAMP), |
+|                         | the hammer and the accelerometer staying where they are       |
+| ``SIM:FORCE x``         | move the hammer to x metres from the clamp (0 < x <= L)       |
+| ``SIM:SENSOR x``        | move the accelerometer to x metres from the clamp             |
+| ``SIM:FORCE?``          | the hammer's position, m from the clamp (L: the tip)          |
+| ``SIM:SENSOR?``         | the accelerometer's position, m from the clamp                |
+| ``SIM:DAMP c11,...,c33``| scenario custom: the seed's Ritz N=3 beam with this damping   |
+|                         | matrix, 9 numbers row by row, N s/m, symmetric PSD            |
+| ``SIM:DAMP?``           | the damping matrix now simulated, N x N numbers row by row    |
 | ``SIM:TIME scale``      | time scale: 1 real time, 0 instant                            |
 | ``SIM:HAMMER k=v,...``  | peak_force_n, pulse_width_s, double_hit_probability, rel_spread |
 | ``SIM:HITS?``           | hits the hammer has struck so far                             |
+
+Positions and damping take effect from the next hit drawn (the analyzer draws a hit
+when it arms: ``STRT``, or the next average); a position off the beam or a matrix
+that is not symmetric positive semi-definite changes nothing and queues an error.
 """
 
 from __future__ import annotations
@@ -29,6 +41,7 @@ from dataclasses import dataclass
 from sims.faults import Fault, garbage_bytes, parse_fault
 from sims.hammer import adjusted
 from sims.instrument import Analyzer, Reply
+from sims.scenarios import CUSTOM, build_specimen, parse_damping_matrix
 from sims.scpi_table import split_units
 from sims.sources import PhysicsSource
 
@@ -210,7 +223,29 @@ class Session:
             elif head == "SIM:SCEN?":
                 return source.specimen.name
             elif head == "SIM:SCEN":
-                analyzer.source = PhysicsSource(arg.lower(), source.hammer, source.noise, source.seed)
+                name, spec = arg.lower(), source.specimen
+                analyzer.source = PhysicsSource(
+                    name,
+                    source.hammer,
+                    source.noise,
+                    source.seed,
+                    force_at_m=spec.force_at_m,
+                    sensor_at_m=spec.sensor_at_m,
+                    damping=spec.damping if name == CUSTOM and spec.name == CUSTOM else None,
+                )
+            elif head in ("SIM:FORCE?", "SIM:SENSOR?"):
+                spec = source.specimen
+                return repr(spec.force_at_m if head == "SIM:FORCE?" else spec.sensor_at_m)
+            elif head == "SIM:FORCE":
+                source.move(force_at_m=_metres(head, arg))
+            elif head == "SIM:SENSOR":
+                source.move(sensor_at_m=_metres(head, arg))
+            elif head == "SIM:DAMP?":
+                return ",".join(repr(float(v)) for v in source.specimen.damping.ravel())
+            elif head == "SIM:DAMP":
+                spec = source.specimen
+                damping = parse_damping_matrix(arg)
+                source.use(build_specimen(CUSTOM, spec.force_at_m, spec.sensor_at_m, damping=damping))
             elif head == "SIM:HAMMER":
                 source.hammer = adjusted(source.hammer, arg)
             else:
@@ -219,3 +254,15 @@ class Session:
             with analyzer.lock:
                 analyzer.push_error(3, str(exc))
         return None
+
+
+def _metres(head: str, arg: str) -> float:
+    """A position as ``SIM:FORCE``/``SIM:SENSOR`` take it: metres, a bare number or one
+    followed by ``M``; ValueError naming the command otherwise (the beam checks the range)."""
+    text = arg.strip().upper()
+    if text.endswith("M"):
+        text = text[:-1].strip()
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"{head} takes a position in metres from the clamp, got {arg!r}") from None

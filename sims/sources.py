@@ -36,7 +36,15 @@ class TimedRecord:
 
 
 class PhysicsSource:
-    """Hits on a specimen from the beam model, with a random hammer and sensor noise."""
+    """Hits on a specimen from the beam model, with a random hammer and sensor noise.
+
+    specimen : a Specimen, or a scenario's name (``sims.scenarios``: seed, realistic,
+        custom) built with the positions and damping given here.
+    force_at_m, sensor_at_m : hammer and accelerometer, m from the clamp (0 < x <= L;
+        None: the tip). Only with a scenario's name; ``move`` changes them later.
+    damping : (3, 3) N s/m, a symmetric positive semi-definite damping matrix of your
+        own on the seed's Ritz beam (scenario ``custom``). Only with a scenario's name.
+    """
 
     def __init__(
         self,
@@ -44,14 +52,32 @@ class PhysicsSource:
         hammer: HammerModel | None = None,
         noise: NoiseModel | None = None,
         seed: int = 0,
+        force_at_m: float | None = None,
+        sensor_at_m: float | None = None,
+        damping: np.ndarray | None = None,
     ) -> None:
-        self.specimen = build_specimen(specimen) if isinstance(specimen, str) else specimen
+        if isinstance(specimen, str):
+            specimen = build_specimen(specimen, force_at_m, sensor_at_m, damping=damping)
+        elif force_at_m is not None or sensor_at_m is not None or damping is not None:
+            raise ValueError("positions and damping go with a scenario's name, not a built Specimen")
         self.hammer = hammer or HammerModel()
         self.noise = noise or NoiseModel()
         self.reseed(seed)
-        self._accel: PoleResidueSystem = self.specimen.acceleration_system()
         self._cache: dict[tuple, ChannelChains] = {}
+        self.use(specimen)
         self.hits_drawn = 0
+
+    def use(self, specimen: Specimen) -> None:
+        """Strike ``specimen`` from the next hit drawn on (the random stream goes on)."""
+        self.specimen = specimen
+        self._accel: PoleResidueSystem = specimen.acceleration_system()
+        self._cache.clear()
+
+    def move(self, force_at_m: float | None = None, sensor_at_m: float | None = None) -> None:
+        """Put the hammer and/or the accelerometer elsewhere, m from the clamp (None keeps
+        one where it is); the next hit drawn is struck and measured there. ValueError
+        (nothing changes) for a position off the beam."""
+        self.use(self.specimen.moved(force_at_m, sensor_at_m))
 
     def reseed(self, seed: int) -> None:
         self.seed = int(seed)

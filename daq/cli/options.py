@@ -118,6 +118,27 @@ SimModelOption = Annotated[
         help="Simulator only: the analyzer model simulated [default: 35660A].",
     ),
 ]
+#: Where the simulated hammer strikes and the simulated accelerometer sits on the beam.
+ForceAtOption = Annotated[
+    float | None,
+    typer.Option(
+        "--force-at",
+        metavar="<metres>",
+        show_default=False,
+        help="Simulator only: where the hammer strikes, metres from the clamp "
+        "(0 < x <= 0.7, the beam's length) [default: the tip].",
+    ),
+]
+SensorAtOption = Annotated[
+    float | None,
+    typer.Option(
+        "--sensor-at",
+        metavar="<metres>",
+        show_default=False,
+        help="Simulator only: where the accelerometer sits, metres from the clamp "
+        "(0 < x <= 0.7, the beam's length) [default: the tip].",
+    ),
+]
 #: --analyzer's old spelling, hidden; the commands take it as given_once("--analyzer", ...).
 OldSimModelOption = Annotated[
     SimModel | None, typer.Option("--model", hidden=True, help="Old name of --analyzer.")

@@ -299,3 +299,94 @@ def test_sim_commands_lists_every_mnemonic():
 def test_serve_hammer_option_is_validated():
     assert_one_line_error(invoke_daq("sim", "serve", "--tcp", "0", "--hammer", "peak=3"), "--hammer")
     assert_one_line_error(invoke_daq("sim", "serve", "--tcp", "0", "--hammer", "peak_force_n=-1"), "positive")
+
+
+# ------------------------------------------------------- hammer and sensor positions
+def _in_process_tim2(scenario: str, seed: int, **kwargs) -> bytes:
+    source = PhysicsSource(scenario, seed=seed, **kwargs)
+    source.set_noise(False)
+    analyzer = Analyzer(source, time_scale=0.0)
+    analyzer.execute(SETUP)
+    assert analyzer.execute("SMSD")[0].data == b"1\r\n"
+    return analyzer.execute("TIM2;DDAN")[0].data
+
+
+def _tim2_block(inst) -> bytes:
+    inst.write(SETUP)
+    assert inst.query("SMSD") == "1"
+    inst.write("TIM2;DDAN")
+    head = inst.read_bytes(4)
+    assert head[:2] == b"#A"
+    return head + inst.read_bytes(struct.unpack(">H", head[2:])[0])
+
+
+def test_serve_with_positions_moves_the_hammer_and_sensor_and_sim_controls_move_them_again():
+    with serving(
+        "--tcp",
+        "0",
+        "--time-scale",
+        "0",
+        "--scenario",
+        "realistic",
+        "--seed",
+        "4",
+        "--no-noise",
+        "--force-at",
+        "0.3",
+        "--sensor-at",
+        "0.55",
+    ) as server:
+        with visa(server.resource) as inst:
+            assert inst.query("SIM:FORCE?") == "0.3"
+            assert inst.query("SIM:SENSOR?") == "0.55"
+            served = _tim2_block(inst)
+            # Between hits the capture moves on, point by point.
+            inst.write("SIM:FORCE 0.1")
+            assert inst.query("SIM:FORCE?") == "0.1"
+            inst.write("SIM:SENSOR 0.9")  # off the 0.7 m beam: refused, one error, nothing moves
+            assert inst.query("ERR?").startswith("3,")
+            assert inst.query("ERR?") == '0,"No error"'
+            assert inst.query("SIM:SENSOR?") == "0.55"
+            moved = _tim2_block(inst)
+        time.sleep(SETTLE_S)
+        status = server.stop(signal.SIGTERM)
+        assert_stopped_cleanly(server, status)
+    assert served == _in_process_tim2("realistic", 4, force_at_m=0.3, sensor_at_m=0.55)
+    assert served != _in_process_tim2("realistic", 4)
+    assert moved != served
+    assert "hammer at 0.3 m, accelerometer at 0.55 m" in server.stderr.decode()
+
+
+def test_serve_with_a_damping_matrix_of_your_own(tmp_path):
+    matrix = tmp_path / "r.txt"
+    matrix.write_text("# N s/m\n3, 1, -0.5\n1, 2, 0.4\n-0.5, 0.4, 1.5\n")
+    with serving("--tcp", "0", "--time-scale", "0", "--damping-matrix", str(matrix)) as server:
+        with visa(server.resource) as inst:
+            assert inst.query("SIM:SCEN?") == "custom"
+            assert inst.query("SIM:DAMP?") == "3.0,1.0,-0.5,1.0,2.0,0.4,-0.5,0.4,1.5"
+        time.sleep(SETTLE_S)
+        status = server.stop(signal.SIGTERM)
+        assert_stopped_cleanly(server, status)
+    assert "scenario custom" in server.stderr.decode()
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("--force-at", "0"), "--force-at"),
+        (("--force-at", "-0.2"), "--force-at"),
+        (("--sensor-at", "0.71"), "--sensor-at"),
+        (("--sensor-at", "nan"), "--sensor-at"),
+        (("--force-at", "tip"), "--force-at"),
+        (("--damping-matrix", "1,2,3"), "9 numbers"),
+        (("--damping-matrix", "1,2,0,0,1,0,0,0,1"), "symmetric"),
+        (("--damping-matrix", "1,0,0,0,-2,0,0,0,1"), "positive semi-definite"),
+        (("--scenario", "realistic", "--damping-matrix", "1,0,0,0,1,0,0,0,1"), "--damping-matrix"),
+        (("--replay", "/nonexistent.h5", "--sensor-at", "0.3"), "--sensor-at"),
+    ],
+)
+def test_serve_refuses_bad_positions_and_matrices_in_one_line(args, fragment):
+    result = invoke_daq("sim", "serve", "--tcp", "0", "--time-scale", "0", *args)
+    assert_one_line_error(result, fragment)
+    assert result.returncode == 2
+    assert result.stdout == ""

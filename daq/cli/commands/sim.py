@@ -15,7 +15,9 @@ from daq.cli.options import (
     SCENARIO_HELP,
     SEED_HELP,
     TIME_SCALE_HELP,
+    ForceAtOption,
     Scenario,
+    SensorAtOption,
     given_once,
 )
 
@@ -113,6 +115,18 @@ def serve(
             help="Adjust the simulated hammer, e.g. peak_force_n=3,pulse_width_s=0.001.",
         ),
     ] = None,
+    force_at: ForceAtOption = None,
+    sensor_at: SensorAtOption = None,
+    damping_matrix: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<9 numbers|file>",
+            show_default=False,
+            help="Simulate the seed's 3-function beam with this damping matrix instead of eq (18): "
+            "9 numbers in N s/m, row by row, comma separated (or a file holding them); "
+            "symmetric positive semi-definite. The scenario is then custom.",
+        ),
+    ] = None,
     analyzer: AnalyzerOption = None,
     model: OldModelOption = None,
 ) -> None:
@@ -144,6 +158,33 @@ def serve(
         except ValueError as exc:
             raise UserError(f"--fault {spec}: {exc}", exit_code=2) from None
 
+    if replay is not None:
+        given = [
+            flag
+            for flag, value in (
+                ("--force-at", force_at),
+                ("--sensor-at", sensor_at),
+                ("--damping-matrix", damping_matrix),
+            )
+            if value is not None
+        ]
+        if given:
+            verb = "applies" if len(given) == 1 else "apply"
+            raise UserError(f"{', '.join(given)} only {verb} to the physics, not to --replay", exit_code=2)
+    damping = None
+    if damping_matrix is not None:
+        if scenario is not Scenario.seed:
+            raise UserError(
+                f"--damping-matrix goes with the seed's beam (--scenario seed), not {scenario.value}",
+                exit_code=2,
+            )
+        from sims.scenarios import read_damping_matrix
+
+        try:
+            damping = read_damping_matrix(damping_matrix)
+        except ValueError as exc:
+            raise UserError(f"--damping-matrix: {exc}", exit_code=2) from None
+
     console = Console(stderr=True)
     if replay is not None:
         from daq.workflows.recorded_hits import load_recorded_hits
@@ -155,7 +196,13 @@ def serve(
             raise UserError(f"--replay {replay}: {exc}", exit_code=2) from None
         what = f"replay of {replay} ({len(hits)} hits)"
     else:
-        source = PhysicsSource(scenario.value, seed=seed)
+        try:
+            source = PhysicsSource(
+                scenario.value, seed=seed, force_at_m=force_at, sensor_at_m=sensor_at, damping=damping
+            )
+        except ValueError as exc:
+            flag = "--force-at" if str(exc).startswith("force") else "--sensor-at"
+            raise UserError(f"{flag}: {exc}", exit_code=2) from None
         source.set_noise(noise)
         if hammer:
             from sims.hammer import adjusted
@@ -164,7 +211,13 @@ def serve(
                 source.hammer = adjusted(source.hammer, hammer)
             except ValueError as exc:
                 raise UserError(f"--hammer: {exc}", exit_code=2) from None
-        what = f"scenario {scenario.value}, seed {seed}{'' if noise else ', no noise'}"
+        spec = source.specimen
+        at = (
+            ""
+            if force_at is None and sensor_at is None
+            else f", hammer at {spec.force_at_m:g} m, accelerometer at {spec.sensor_at_m:g} m"
+        )
+        what = f"scenario {spec.name}{at}, seed {seed}{'' if noise else ', no noise'}"
     analyzer = Analyzer(source, time_scale=time_scale, model=instrument)
 
     server: object
