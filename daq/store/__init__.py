@@ -9,7 +9,9 @@ Everything that reads or writes runs goes through this package:
   records (what replay needs), checked as open_run checks the whole run;
 - :func:`verify` (verify.py) — list what is wrong with a file;
 - :class:`Store` (store.py) — a folder of runs: list, resolve by prefix, results;
-- :func:`write_result` / :func:`read_result` (results.py) — analysis beside a run.
+- :func:`write_result` / :func:`read_result` (results.py) — analysis beside a run;
+- :func:`create_test`, :func:`load_test`, :func:`list_tests`, :func:`join_run`,
+  :func:`next_point` (modal_tests.py) — multi-point modal tests, one TOML file each.
 
 docs/run-format.md documents the file layout.
 """
@@ -35,9 +37,18 @@ _LAZY = {
     "Hits": "model",
     "Instrument": "model",
     "MeasuredFrf": "model",
+    "Point": "model",
     "Run": "model",
+    "RunPoints": "model",
     "Sample": "model",
     "Spectra": "model",
+    "JoinedRun": "modal_tests",
+    "ModalTest": "modal_tests",
+    "create_test": "modal_tests",
+    "join_run": "modal_tests",
+    "list_tests": "modal_tests",
+    "load_test": "modal_tests",
+    "next_point": "modal_tests",
     "RunSummary": "reader",
     "open_run": "reader",
     "open_run_bytes": "reader",
@@ -55,7 +66,16 @@ if TYPE_CHECKING:  # what type checkers and readers see; nothing of it runs
     from daq.store.errors import ConfigError, NotARunError, StoreError
     from daq.store.ids import new_run_id, validate_run_id
     from daq.store.layout import SCHEMA_NAME, SCHEMA_VERSION
-    from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample, Spectra
+    from daq.store.modal_tests import (
+        JoinedRun,
+        ModalTest,
+        create_test,
+        join_run,
+        list_tests,
+        load_test,
+        next_point,
+    )
+    from daq.store.model import Hits, Instrument, MeasuredFrf, Point, Run, RunPoints, Sample, Spectra
     from daq.store.reader import RunSummary, open_run, open_run_bytes, read_hits, read_summary
     from daq.store.results import read_result, write_result
     from daq.store.store import Store, resolve_store_dir
@@ -107,15 +127,24 @@ __all__ = [
     "ConfigError",
     "Hits",
     "Instrument",
+    "JoinedRun",
     "MeasuredFrf",
+    "ModalTest",
     "NotARunError",
+    "Point",
     "Run",
+    "RunPoints",
     "RunSummary",
     "Sample",
     "Spectra",
     "Store",
     "StoreError",
+    "create_test",
+    "join_run",
+    "list_tests",
+    "load_test",
     "new_run_id",
+    "next_point",
     "open_run",
     "open_run_bytes",
     "read_hits",

@@ -21,7 +21,7 @@ from daq.store.h5io import (
     get_text,
     get_text_array,
 )
-from daq.store.model import Hits, Instrument, MeasuredFrf, Run, Sample, Spectra
+from daq.store.model import Hits, Instrument, MeasuredFrf, Point, Run, RunPoints, Sample, Spectra
 
 
 def check_schema(f: h5py.File) -> int:
@@ -67,6 +67,7 @@ def decode_run(f: h5py.File) -> Run:
     # Optional, and absent from runs written before spectra had a place: None then.
     group = get_group(f, layout.SPECTRA, required=False)
     spectra = _decode_spectra(group) if group is not None else None
+    points = decode_points(entry)
     return _build(
         Run,
         **{n: get_text(entry, n) for n in ("run_id", "kind", "start_time", "end_time", "operator", "note")},
@@ -79,7 +80,35 @@ def decode_run(f: h5py.File) -> Run:
         analyzer=analyzer,
         measured_frfs=measured,
         spectra=spectra,
+        points=points,
     )
+
+
+def decode_points(entry: h5py.Group) -> RunPoints | None:
+    """The run's points from ``/entry``'s attributes; None when the run has none (written
+    before points existed, or by other software): Run.resolved_points then gives
+    default_points of its sample, the seed's beam with hammer and sensor at the tip."""
+    present = [name for name in layout.POINTS_ATTRS if name in entry.attrs]
+    if not present:
+        return None
+    if len(present) != len(layout.POINTS_ATTRS):
+        missing = sorted(set(layout.POINTS_ATTRS) - set(present))
+        raise StoreError(f"attribute {entry.name}@{missing[0]} is missing (the run's points come together)")
+    test = get_text(entry, layout.ATTR_TEST) if layout.ATTR_TEST in entry.attrs else ""
+    article = get_json(entry, layout.ATTR_ARTICLE)
+    force = get_json(entry, layout.ATTR_FORCE_POINT)
+    responses = get_json(entry, layout.ATTR_RESPONSE_POINTS)
+    try:
+        if not isinstance(responses, list):
+            raise ValueError(f"{layout.ATTR_RESPONSE_POINTS} must be a list")
+        return RunPoints(
+            article=article,
+            force_point=Point.from_dict(force, "force point"),
+            response_points=tuple(Point.from_dict(p, "response point") for p in responses),
+            test=test,
+        )
+    except ValueError as exc:
+        raise StoreError(f"inconsistent points data: {exc}") from None
 
 
 def _shape(group: h5py.Group, name: str, required: bool = True) -> tuple[int, ...] | None:

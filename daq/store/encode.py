@@ -7,7 +7,15 @@ import numpy as np
 
 from daq.store import layout
 from daq.store.h5io import add_dataset, compact_json, nx_group, set_json, set_number, set_text, text_array
-from daq.store.model import FRF_FORM_UNITS, SOFTWARE, Hits, MeasuredFrf, Run, Spectra
+from daq.store.model import (
+    FRF_FORM_UNITS,
+    SOFTWARE,
+    Hits,
+    MeasuredFrf,
+    Run,
+    Spectra,
+    check_points_against_sample,
+)
 
 
 def encode_run(f: h5py.File, run: Run) -> None:
@@ -25,6 +33,12 @@ def encode_run(f: h5py.File, run: Run) -> None:
     set_number(entry, "complete", run.complete)
     set_text(entry, layout.ATTR_SOFTWARE, run.software)
     set_json(entry, layout.ATTR_PROVENANCE, run.provenance)
+    if run.points is not None:  # a run that does not say writes nothing: it reads back the same
+        check_points_against_sample(run.points, run.sample)  # the sample may have changed since
+        set_text(entry, layout.ATTR_TEST, run.points.test)
+        set_json(entry, layout.ATTR_ARTICLE, run.points.article)
+        set_json(entry, layout.ATTR_FORCE_POINT, run.points.force_point.to_dict())
+        set_json(entry, layout.ATTR_RESPONSE_POINTS, [p.to_dict() for p in run.points.response_points])
     # What a viewer plots when the file is opened: the hits if there are any, else the
     # FRFs, else the spectra.
     default = next(

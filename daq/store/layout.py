@@ -70,6 +70,14 @@ SPECTRA = "entry/spectra"
 ENTRY_ATTRS = ("run_id", "kind", "complete", "start_time", "end_time", "operator", "note")
 ATTR_SOFTWARE = "software"
 ATTR_PROVENANCE = "provenance_json"
+# Where the run was measured (model.RunPoints), optional: absent from runs written before
+# points existed, which read as model.default_points of their sample (the seed's beam,
+# hammer and sensor at the tip). The last three come together or not at all.
+ATTR_TEST = "test"  # text: the modal test the run was measured for, "" when none
+ATTR_ARTICLE = "article_json"  # JSON object: the test article (model.check_article)
+ATTR_FORCE_POINT = "force_point_json"  # JSON object: {name, position_m | node, direction}
+ATTR_RESPONSE_POINTS = "response_points_json"  # JSON list of such objects, one per response
+POINTS_ATTRS = (ATTR_ARTICLE, ATTR_FORCE_POINT, ATTR_RESPONSE_POINTS)
 
 # --- /entry/instrument attributes -------------------------------------------
 INSTRUMENT_ATTRS = ("model", "identification", "resource", "transport", "dialect")
