@@ -132,6 +132,14 @@ def test_join_counts_the_newest_accepted_run(tmp_path):
     assert test.counted_runs() == {"p1": first, "p2": None, "p3": None, "tip": tip}
 
 
+def test_a_run_that_records_no_points_joins_a_seed_beam_test_at_the_tip(tmp_path):
+    create_test(tmp_path, "seed", {"kind": "seed-beam"}, [Point("mid", 0.35), Point("tip", 0.7)], "tip")
+    old = seal_at(tmp_path, None)
+    assert join_run(tmp_path, "seed", "tip", old).counted_run("tip") == old
+    with pytest.raises(StoreError, match=r"has its force at 0\.7 m, but test seed puts it at 0\.35 m"):
+        join_run(tmp_path, "seed", "mid", seal_at(tmp_path, None, seed=1))
+
+
 def test_every_point_measured_leaves_no_next(tmp_path):
     test = create_test(tmp_path, "one", {"kind": "seed-beam"}, [Point("tip", 0.7)], "tip")
     test = join_run(tmp_path, "one", "tip", seal_at(tmp_path, test.run_points("tip")))
