@@ -51,8 +51,7 @@ def near(f_ours: float, f_ref: float, line_hz: float) -> bool:
 #: measured data nobody here made".
 KNOWN_SHORT = {
     ("found", "lvm-2ch-m1"): "the peer's 146.2 and 183.0 Hz (2 %, 1.4 %, no peak in m1) move with the band "
-    "by more than 0.2 %: the peer's own LSCF gives 147.05 and 181.56 Hz on 5-400 Hz (ours: 1.75-400 Hz); "
-    "163.0 Hz, overlapping 160.4 Hz, is stable over 8 to 26 orders as the zone boundary falls",
+    "by more than 0.2 %: the peer's own LSCF gives 147.05 and 181.56 Hz on 5-400 Hz (ours: 1.75-400 Hz)",
     ("found", "lvm-2ch-m2"): "214.6 Hz (no peak in m2) and the 0.09-0.15 % damping of 39.97 Hz come from a "
     "reference fitted to the receptance (pyFRF get_H1); on the accelerance of the same hits the peer gives "
     "215.13 Hz and 0.128-0.200 % (ours 0.200 %)",
