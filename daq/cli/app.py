@@ -61,6 +61,9 @@ from daq.cli.commands import (
     serve as serve_command,
 )
 from daq.cli.commands import talk
+from daq.cli.commands import (
+    test as test_command,
+)
 from daq.cli.commands.demo import demo
 from daq.cli.commands.model import model
 from daq.cli.commands.sim import sim_app
@@ -151,6 +154,7 @@ fit_command.register(app)
 report_command.register(app)
 config_command.register(app)
 serve_command.register(app)
+test_command.register(app)
 
 
 def _fail(message: str, exit_code: int) -> int:

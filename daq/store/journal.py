@@ -330,7 +330,23 @@ def journal_run(contents: JournalContents, file_name: str):
         provenance=provenance,
         instrument=Instrument(**meta["instrument"]) if meta.get("instrument") else None,
         sample=Sample(**meta["sample"]) if meta.get("sample") else None,
+        points=_points(meta.get("points")),
         hits=records,
+    )
+
+
+def _points(value: Any) -> Any:
+    """The journaled run's points (RunPoints.to_dicts), so a recovered capture keeps its
+    test: a daq.store.model.RunPoints, or None when the capture had none."""
+    from daq.store.model import Point, RunPoints
+
+    if not value:
+        return None
+    return RunPoints(
+        value["article"],
+        Point.from_dict(value["force_point"], "force point"),
+        tuple(Point.from_dict(p, "response point") for p in value["response_points"]),
+        value.get("test", ""),
     )
 
 

@@ -30,8 +30,9 @@ import numpy as np
 
 from analysis.beam import TABLE_1
 from analysis.hit_checks import HitCheck, failed_names, run_checks
-from daq.store import Hits, Instrument, MeasuredFrf, Run, Sample, Store, StoreError, new_run_id
+from daq.store import Hits, Instrument, MeasuredFrf, Run, RunPoints, Sample, Store, StoreError, new_run_id
 from daq.store.journal import Journal, run_bytes_needed
+from daq.workflows.article import sample_for
 from daq.workflows.setup_codec import settings_to_dict
 from drivers.analyzer import SignalAnalyzer
 from drivers.dialects import model_of
@@ -164,6 +165,8 @@ class Capture:
     stop_after_hits : end after this many hits even if fewer were accepted (replay of
         an incomplete run); the run is then incomplete, without the analyzer's FRF.
     replayed_from : the original run's provenance when this is a replay (kind "replayed").
+    points : where the run is measured (a test's point: its article, force and response
+        points); None records ``sample`` (default the seed's beam at the tip).
     store_dir : the run store; when set, the hits are journaled there as they are taken
         (and the store is checked for room for the whole run before the first hit).
     """
@@ -178,6 +181,7 @@ class Capture:
     operator: str = ""
     note: str = ""
     sample: Sample = field(default_factory=table1_sample)
+    points: RunPoints | None = None
     max_hits: int | None = None
     hit_timeout_s: float | None = None
     stop_after_hits: int | None = None
@@ -187,6 +191,9 @@ class Capture:
     def __post_init__(self) -> None:
         if not 1 <= self.hits_wanted <= 9999:
             raise ValueError(f"hits_wanted must be 1..9999, got {self.hits_wanted}")
+        if self.points is not None:
+            # A run at a test's point records that beam with force and sensor where they are.
+            self.sample = sample_for(self.points) or self.sample
         self.max_hits = self.max_hits or 4 * self.hits_wanted + 10
         self.run_id = new_run_id()
         self.start_time = utc_now()
@@ -287,6 +294,7 @@ class Capture:
             "run_id": self.run_id, "kind": self._kind(), "start_time": self.start_time,
             "operator": self.operator, "note": self.note, "provenance": self._provenance(),
             "instrument": asdict(self._instrument()), "sample": asdict(self.sample),
+            "points": self.points.to_dicts() if self.points is not None else None,
         }  # fmt: skip
         self.journal = Journal.create(self.store_dir, self.run_id, meta, need_bytes=need)
 
@@ -379,6 +387,7 @@ class Capture:
             provenance=self._provenance(),
             instrument=self._instrument(),
             sample=self.sample,
+            points=self.points,
             hits=hits,
             analyzer=analyzer,
         )

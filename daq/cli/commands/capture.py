@@ -19,8 +19,10 @@ import typer
 from daq.cli.errors import UserError
 from daq.cli.options import (
     DialectOption,
+    ForceAtOption,
     OldSimModelOption,
     Scenario,
+    SensorAtOption,
     SimModel,
     SimModelOption,
     SimScenarioOption,
@@ -91,6 +93,18 @@ def capture(
     ] = None,
     analyzer: SimModelOption = None,
     model: OldSimModelOption = None,
+    force_at: ForceAtOption = None,
+    sensor_at: SensorAtOption = None,
+    test: Annotated[
+        str | None,
+        typer.Option(metavar="<name>", help="Capture one point of this multi-point test (daq test new)."),
+    ] = None,
+    point: Annotated[
+        str | None, typer.Option(metavar="<name>", help="With --test: the point to measure.")
+    ] = None,
+    next_point: Annotated[
+        bool, typer.Option("--next", help="With --test: the first point without an accepted run.")
+    ] = False,
     print_setup: Annotated[
         bool, typer.Option("--print-setup", help="Print the default setup file and exit.")
     ] = False,
@@ -127,18 +141,64 @@ def capture(
         )
     sim_options = {
         "--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--hammer": hammer,
-        "--analyzer": analyzer, "--model": model,
+        "--analyzer": analyzer, "--model": model, "--force-at": force_at, "--sensor-at": sensor_at,
     }  # fmt: skip
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
     if time_scale is not None and not time_scale >= 0:
         raise UserError("--time-scale must be >= 0", exit_code=2)
+    where = None
+    if test is None and (point is not None or next_point):
+        raise UserError("--point and --next need --test NAME", exit_code=2)
+    if test is not None:
+        if force_at is not None or sensor_at is not None:
+            raise UserError("--force-at and --sensor-at come from the test's point with --test", exit_code=2)
+        where = test_point(store, test, point, next_point)
+        force_at, sensor_at = where.force_at_m, where.sensor_at_m
     run_capture(
         real, settings, hits_wanted, yes, operator, note, store,
         scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
         time_scale=0.05 if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
         dialect=check_dialect(dialect), model=(simulated or SimModel.hp35660a).value,
+        force_at_m=force_at if real is None else None, sensor_at_m=sensor_at if real is None else None,
+        where=where,
     )  # fmt: skip
+
+
+def test_point(store: str | None, test: str, point: str | None, next_point: bool):
+    """The test's point a capture or an import measures (daq.workflows.test.TestPoint);
+    UserError (one line) on a bad test or point."""
+    from daq.store import resolve_store_dir
+    from daq.workflows.errors import WorkflowError
+    from daq.workflows.test import point_to_measure
+
+    store_dir, _ = resolve_store_dir(store)
+    try:
+        return point_to_measure(store_dir, test, point, next_point)
+    except WorkflowError as exc:
+        raise UserError(str(exc), exit_code=exc.exit_code) from None
+
+
+def join_test(store_dir: Path, where, run_id: str) -> None:
+    """Join the sealed run to its test and say so; UserError when it could not be joined."""
+    from daq.workflows.errors import WorkflowError
+    from daq.workflows.test import join
+
+    try:
+        test = join(store_dir, where, run_id)
+    except WorkflowError as exc:
+        raise UserError(str(exc)) from None
+    left = [p.name for p in test.points if test.counted_run(p.name) is None]
+    rest = f"; next: {left[0]} ({len(left)} left)" if left else "; every point is measured"
+    typer.echo(f"Run {run_id} joined test {where.test} at point {where.point}{rest}")
+
+
+def moved_points(force_at_m: float, sensor_at_m: float):
+    """The points of a simulated run with the hammer and accelerometer moved (no test):
+    the seed's beam, force at ``force_at_m``, response at ``sensor_at_m`` (m from the clamp)."""
+    from daq.store import Point, RunPoints
+
+    return RunPoints({"kind": "seed-beam"}, Point("force", force_at_m), (Point("response", sensor_at_m),))
 
 
 def check_operator_and_note(operator: str, note: str) -> None:
@@ -168,6 +228,9 @@ def run_capture(
     sim_asked: bool = False,
     dialect: str | None = None,
     model: str = "35660A",
+    force_at_m: float | None = None,
+    sensor_at_m: float | None = None,
+    where=None,
 ) -> None:
     """Open the analyzer (or start the simulator when ``resource`` is None), run the
     capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
@@ -176,7 +239,7 @@ def run_capture(
     from daq.cli.capture_session import drive
     from daq.store import Store, StoreError, resolve_store_dir
     from daq.workflows.capture import Capture
-    from daq.workflows.connect import open_analyzer, serve_simulator
+    from daq.workflows.connect import open_analyzer, serve_simulator, simulator_source
 
     console = Console(highlight=False, soft_wrap=True)
     store_dir, _ = resolve_store_dir(store)
@@ -184,23 +247,32 @@ def run_capture(
         Store(store_dir).ensure_writable()
     except StoreError as exc:
         raise UserError(str(exc)) from None
+    points = where.points if where is not None else None
     with contextlib.ExitStack() as stack:
         simulator = None
         if resource is None:
-            from sims.hammer import HammerModel, adjusted
-            from sims.sources import PhysicsSource
-
             try:
-                hammer_model = adjusted(HammerModel(), hammer) if hammer else HammerModel()
+                source = simulator_source(scenario, seed, hammer or "")
             except ValueError as exc:
                 raise UserError(f"--hammer: {exc}", exit_code=2) from None
-            source = PhysicsSource(scenario, hammer=hammer_model, seed=seed)
-            resource = serve_simulator(stack, source, time_scale, model)
+            try:
+                resource = serve_simulator(stack, source, time_scale, model, force_at_m, sensor_at_m)
+            except ValueError as exc:
+                raise UserError(str(exc), exit_code=2) from None
             simulator = {
                 "scenario": scenario, "seed": seed, "time_scale": time_scale, "hammer": hammer or "",
-                "model": model,
+                "model": model, "force_at_m": source.specimen.force_at_m,
+                "sensor_at_m": source.specimen.sensor_at_m,
             }  # fmt: skip
-            console.print(f"Simulated {model} ({scenario} beam) at {resource}: --sim")
+            moved = ""
+            if force_at_m is not None or sensor_at_m is not None:
+                moved = (
+                    f", hammer at {source.specimen.force_at_m:g} m, accelerometer at "
+                    f"{source.specimen.sensor_at_m:g} m"
+                )
+            console.print(f"Simulated {model} ({scenario} beam{moved}) at {resource}: --sim")
+            if points is None and (force_at_m is not None or sensor_at_m is not None):
+                points = moved_points(source.specimen.force_at_m, source.specimen.sensor_at_m)
         try:
             dsa = stack.enter_context(open_analyzer(resource, dialect=dialect))
         except ValueError as exc:
@@ -208,5 +280,8 @@ def run_capture(
         job = Capture(
             dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
             simulator=simulator, operator=operator, note=note, store_dir=store_dir,
+            points=points,
         )  # fmt: skip
-        drive(console, job, store_dir, ask=not yes)
+        run = drive(console, job, store_dir, ask=not yes)
+    if where is not None:
+        join_test(store_dir, where, run.run_id)

@@ -89,6 +89,36 @@ def import_file(
     ] = None,
     operator: Annotated[str, typer.Option(metavar="<name>", help="Stored with the run.")] = "",
     note: Annotated[str, typer.Option(metavar="<text>", help="Stored with the run.")] = "",
+    test: Annotated[
+        str | None,
+        typer.Option(metavar="<name>", help="Import one point of this multi-point test (daq test new)."),
+    ] = None,
+    point: Annotated[
+        str | None, typer.Option(metavar="<name>", help="With --test: the point measured.")
+    ] = None,
+    next_point: Annotated[
+        bool, typer.Option("--next", help="With --test: the first point without an accepted run.")
+    ] = False,
+    force_at: Annotated[
+        float | None,
+        typer.Option(
+            "--force-at",
+            metavar="<metres>",
+            show_default=False,
+            help="Without --test: where the hammer struck the seed's beam, m from the clamp "
+            "[default: the tip].",
+        ),
+    ] = None,
+    sensor_at: Annotated[
+        float | None,
+        typer.Option(
+            "--sensor-at",
+            metavar="<metres>",
+            show_default=False,
+            help="Without --test: where the accelerometer sat on the seed's beam, m from the clamp "
+            "[default: the tip].",
+        ),
+    ] = None,
     store: StoreOption = None,
 ) -> None:
     """Import a CSV, FRF table, UFF 58, SDF or run file into the store as a new run (kind "imported").
@@ -108,6 +138,7 @@ def import_file(
     from daq.workflows.capture import utc_now
 
     check_operator_and_note(operator, note)  # before the file is even read
+    where, points = import_points(store, test, point, next_point, force_at, sensor_at)
     if format is ImportFormat.auto:
         chosen, why = detect_format(file)
         how = f"detected: {why}"
@@ -153,6 +184,11 @@ def import_file(
             **parts.pop("details"),
         }
     }
+    if points is not None:
+        from daq.workflows.article import sample_for
+
+        parts["sample"] = sample_for(points)
+        parts["points"] = points
     try:
         run = Run(
             run_id=new_run_id(), kind="imported", complete=True, start_time=started, end_time=utc_now(),
@@ -182,6 +218,35 @@ def import_file(
         typer.echo(line)
     for warning in unit_warnings(provenance["imported_from"]):
         typer.echo(f"warning: {warning}", err=True)
+    if where is not None:
+        from daq.cli.commands.capture import join_test
+
+        join_test(store_dir, where, run.run_id)
+
+
+def import_points(store, test, point, next_point, force_at, sensor_at):
+    """(the test's point or None, the run's points or None) from --test/--point/--next or
+    --force-at/--sensor-at; UserError (exit 2) on a bad combination."""
+    from daq.cli.commands.capture import moved_points, test_point
+
+    if test is None and (point is not None or next_point):
+        raise UserError("--point and --next need --test NAME", exit_code=2)
+    if test is not None:
+        if force_at is not None or sensor_at is not None:
+            raise UserError("--force-at and --sensor-at come from the test's point with --test", exit_code=2)
+        where = test_point(store, test, point, next_point)
+        return where, where.points
+    if force_at is None and sensor_at is None:
+        return None, None
+    from daq.store.model import article_length_m
+
+    length = article_length_m({"kind": "seed-beam"})
+    try:
+        return None, moved_points(
+            length if force_at is None else force_at, length if sensor_at is None else sensor_at
+        )
+    except ValueError as exc:
+        raise UserError(f"--force-at/--sensor-at: {exc}", exit_code=2) from None
 
 
 def counted(n: int, one: str, many: str | None = None) -> str:
