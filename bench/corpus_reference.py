@@ -4,7 +4,8 @@ The corpus itself lives outside the repository (data we did not make and may not
 tests/data/README.md for each set's source, commit, licence and conversion. This script reads the
 *converted* files (the ones `daq import` reads) and computes, with third-party tools only:
 
-* time records: the H1 FRF and coherence with pyFRF (no window, linear averaging over the hits);
+* time records: the H1 FRF and coherence with pyFRF (no window, linear averaging over the hits),
+  taken as ACCELERANCE (acceleration over force, see "FRF form" below);
 * every set: LSCF poles with sdypy-EMA (``Model(...).get_poles()``) for orders 2..2*ORDER_HIGH,
   reduced to "peer stable modes" by the rule below;
 * half-power (-3 dB) frequency and damping on |H| for peer modes that are isolated.
@@ -28,6 +29,20 @@ Half-power: the peak of |H| (sum over FRFs of |H|^2, square-rooted) nearest the 
 -3 dB crossings interpolated linearly; reported only when the peak lies within one bandwidth
 (or 2 lines) of the peer frequency and no other peer mode lies within
 +-5 half-power bandwidths, and flagged ``resolution_limited`` when the bandwidth spans < 4 lines.
+
+FRF form. Every set is fitted as accelerance, (m/s^2)/N, and sdypy-EMA is told so
+(``frf_form="accelerance"``), because that is what the data are and what ``daq analyze``
+analyses: the time records' responses are accelerometer signals (``resp_type='a'``, pyFRF's
+default) and the UFF sets store accelerance (ordinate data type 12, which is also what
+sdypy-EMA's own ``read_uff`` maps to "accelerance"). pyFRF's ``get_H1()`` does NOT return that:
+for ``resp_type='a'`` it multiplies H1 by (-j/omega)^2, i.e. returns receptance (displacement
+over force, its docstring says "(receptance)"); only ``get_FRF(frf_estimator="H1",
+frf_form="accelerance")`` multiplies back by (j omega)^2. Until issue 20 this script took
+``get_H1()`` and fitted the receptance while telling sdypy "accelerance": the LSCF poles do not
+depend on ``frf_form`` (it only selects the LSFD residual terms), but they do depend on which
+FRF is fitted -- the 1/omega^2 weighting moves broad, peakless features (lvm-2ch m2's 214.5 Hz
+becomes 215.1 Hz on the accelerance) and the damping of resolution-limited peaks -- and the
+half-power and peak readings of |H| changed with it.
 
 Usage::
 
@@ -54,6 +69,8 @@ Z_TOL = 0.05  # stability in damping between consecutive orders (relative)
 CLUSTER_TOL = 0.005  # clustering of stable poles in frequency (relative to running median)
 MIN_SHARE = 0.4  # a peer mode is present in at least this share of the orders
 MIN_ORDERS = 5
+#: The form every set is fitted in and sdypy-EMA is told: the data's and daq analyze's own.
+FRF_FORM = "accelerance"
 
 
 @dataclass(frozen=True)
@@ -125,14 +142,22 @@ def _header_rows(path: Path) -> int:
 
 
 def h1_from_hits(fs: float, force: np.ndarray, resp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """pyFRF H1 and coherence, no window, linear averaging over the hits. Returns f, H (1, nf), coh."""
+    """pyFRF H1 as accelerance and coherence, no window, linear averaging over the hits.
+
+    Returns f, H (1, nf), coh. ``get_H1()`` alone would be receptance (module docstring); the
+    0 Hz line comes back NaN (pyFRF divides by omega = 0), as get_H1's did; lscf_poles zeroes it,
+    and it lies below every band.
+    """
     import pyFRF
 
     fs_int = round(fs)  # pyFRF takes an int rate; the corpus rates are whole numbers of Hz
     if abs(fs - fs_int) > 1e-6 * fs:
         raise ValueError(f"sample rate {fs} Hz is not a whole number of Hz")
-    frf = pyFRF.FRF(fs_int, exc=force, resp=resp, window="none", weighting="linear")
-    h = np.atleast_2d(np.squeeze(frf.get_H1()))
+    frf = pyFRF.FRF(
+        fs_int, exc=force, resp=resp, exc_type="f", resp_type="a", window="none", weighting="linear"
+    )
+    with np.errstate(invalid="ignore"):  # inf * 0 at 0 Hz
+        h = np.atleast_2d(np.squeeze(frf.get_FRF(frf_estimator="H1", frf_form=FRF_FORM)))
     coh = np.squeeze(frf.get_coherence())
     return np.asarray(frf.get_f_axis()), h, np.atleast_1d(coh)
 
@@ -146,6 +171,9 @@ def read_uff_frf(path: Path) -> tuple[np.ndarray, np.ndarray]:
     sets = uff.read_sets([i for i, t in enumerate(types) if t == 58])
     sets = sets if isinstance(sets, list) else [sets]
     frfs = [s for s in sets if s["func_type"] == 4]
+    forms = {s.get("ordinate_spec_data_type") for s in frfs}
+    if forms != {12}:  # 12: acceleration (over force): accelerance, the form fitted (FRF_FORM)
+        raise ValueError(f"{path}: ordinate data types {sorted(forms)}, not accelerance (12)")
     f = np.asarray(frfs[0]["x"], dtype=float)
     return f, np.array([np.asarray(s["data"], dtype=complex) for s in frfs])
 
@@ -164,7 +192,7 @@ def lscf_poles(
         lower=band[0],
         upper=band[1],
         pol_order_high=ORDER_HIGH,
-        frf_form="accelerance",
+        frf_form=FRF_FORM,  # what the FRF handed over is (module docstring, "FRF form")
     )
     model.get_poles(method="lscf", show_progress=False)
     out = []
@@ -297,7 +325,8 @@ def reference(corpus: Path, spec: SetSpec) -> dict:
                 "sample_rate_hz": fs,
                 "hits": int(force.shape[0]),
                 "samples_per_hit": int(force.shape[1]),
-                "frf_method": "pyFRF H1, window none, linear averaging over all hits",
+                "frf_method": "pyFRF H1 (get_FRF frf_form='accelerance'), window none, "
+                "linear averaging over all hits",
                 "coherence_in_band": {
                     "min": round(float(coh[sel].min()), 4),
                     "median": round(float(np.median(coh[sel])), 4),
@@ -310,15 +339,16 @@ def reference(corpus: Path, spec: SetSpec) -> dict:
             {
                 "frfs": int(h.shape[0]),
                 "lines": int(h.shape[1]),
-                "frf_method": "as stored in the file (UFF 58, function type 4)",
+                "frf_method": "as stored (UFF 58, function type 4, ordinate type 12: accelerance)",
             }
         )
     entry["frequency_step_hz"] = round(float(f[1] - f[0]), 6)
     peaks = resonance_peaks(f, h, spec.band, coh if spec.kind == "csv-hits" else None)
     orders = lscf_poles(f, h, spec.band)
     modes = stable_modes(orders)
+    entry["frf_form"] = FRF_FORM
     entry["lscf"] = {
-        "tool": "sdypy-EMA Model.get_poles(method='lscf')",
+        "tool": "sdypy-EMA Model(frf_form='accelerance').get_poles(method='lscf')",
         "pol_order_high": ORDER_HIGH,
         "orders_computed": len(orders),
         "rule": {

@@ -50,11 +50,13 @@ def near(f_ours: float, f_ref: float, line_hz: float) -> bool:
 #: entry (the peer's own tools re-run on the same hits) is in docs/analysis.md, "On
 #: measured data nobody here made".
 KNOWN_SHORT = {
-    ("found", "lvm-2ch-m1"): "the peer's 146.2 and 183.0 Hz (2 %, 1.4 %, no peak in m1) move with the band "
-    "by more than 0.2 %: the peer's own LSCF gives 147.05 and 181.56 Hz on 5-400 Hz (ours: 1.75-400 Hz)",
-    ("found", "lvm-2ch-m2"): "214.6 Hz (no peak in m2) and the 0.09-0.15 % damping of 39.97 Hz come from a "
-    "reference fitted to the receptance (pyFRF get_H1); on the accelerance of the same hits the peer gives "
-    "215.13 Hz and 0.128-0.200 % (ours 0.200 %)",
+    ("found", "lvm-2ch-m1"): "the peer's 146.2 and 182.9 Hz (2.3 %, 1.2 %, no peak in m1) move with the band "
+    "by more than 0.2 %: the peer's own LSCF gives 147.06 and 181.57 Hz on 5-400 Hz (ours: 1.75-400 Hz)",
+    ("found", "lvm-2ch-m2"): "7 of 10: on 5-250 Hz the peer splits the one 160.8 Hz peak (half power 0.48 %) "
+    "into 159.92 and 160.75 Hz from order 38 up (one mode, 160.1-160.3 Hz 0.43-0.45 %, on 5-300 and "
+    "5-400 Hz); ours, 160.45 Hz 0.444 %, is matched to 160.75 Hz and outside its 0.27-0.37 %; 143.7 Hz "
+    "(2.8 %) and 215.1 Hz (gone on 5-300 Hz) have no peak in m2; 233.66 Hz 0.133 +- 0.003 % against "
+    "the peer's 0.141-0.244 %",
     ("spurious", "lvm-2ch-m1"): "8.05 Hz (poor coherence at low frequency, band-edge caution) and "
     "40.03 Hz (on a notch of the force spectrum; a peak m2 confirms, the peer a mode on m2 only)",
 }
