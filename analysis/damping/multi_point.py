@@ -33,8 +33,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analysis.damping import bandlimited as _bandlimited
 from analysis.damping import ga as _ga
 from analysis.damping import local as _local
+from analysis.damping.bandlimited import BandLimitedData
 from analysis.damping.identifiability import identifiability, parameter_names, parameter_scale
 from analysis.damping.objective import (
     FrequencyData,
@@ -47,7 +49,7 @@ from analysis.damping.objective import (
 from analysis.damping.result import FitResult
 from analysis.structure import StructuralModel
 
-Record = TimeData | FrequencyData
+Record = TimeData | BandLimitedData | FrequencyData
 
 #: A term (or a combination) whose relative standard deviation exceeds this is not determined.
 DETERMINED_THRESHOLD = 0.3
@@ -57,8 +59,10 @@ DETERMINED_THRESHOLD = 0.3
 class MultiPointData:
     """The records of one test, each with its own force and sensor shapes.
 
-    records : sequence of ``TimeData`` (hits at one force/sensor pair) or
-        ``FrequencyData`` (one FRF), in any mix; all models share M (N, N, kg) and
+    records : sequence of ``TimeData`` or ``BandLimitedData`` (hits at one force/sensor
+        pair; the band-limited form for records taken through an analyzer's filters,
+        analysis.damping.bandlimited) or ``FrequencyData`` (one FRF), in any mix; all
+        models share M (N, N, kg) and
         K (N, N, N/m), checked to 1e-9 relative.
     weights : (n_records,) >= 0 multipliers of each record's residuals, or None (all 1).
     labels : (n_records,) names (e.g. the point), or None ("0", "1", ...).
@@ -74,8 +78,10 @@ class MultiPointData:
         if not recs:
             raise ValueError("a multi-point fit needs at least one record")
         for r in recs:
-            if not isinstance(r, (TimeData, FrequencyData)):
-                raise TypeError(f"records must be TimeData or FrequencyData, got {type(r).__name__}")
+            if not isinstance(r, (TimeData, BandLimitedData, FrequencyData)):
+                raise TypeError(
+                    f"records must be TimeData, BandLimitedData or FrequencyData, got {type(r).__name__}"
+                )
         m0, k0 = recs[0].model.mass, recs[0].model.stiffness
         for i, r in enumerate(recs[1:], start=1):
             m, k = r.model.mass, r.model.stiffness
@@ -109,6 +115,8 @@ class MultiPointData:
 def _n_residuals(record: Record) -> int:
     if isinstance(record, TimeData):
         return record.n_hits * record.n_samples
+    if isinstance(record, BandLimitedData):
+        return record.n_compared
     return 2 * record.frequency_hz.size
 
 
@@ -116,6 +124,8 @@ def record_residuals(record: Record, damping: np.ndarray) -> np.ndarray:
     """One record's residuals for each damping matrix (B, N, N): (B, n_res)."""
     if isinstance(record, TimeData):
         return batched_residuals(record, damping)
+    if isinstance(record, BandLimitedData):
+        return _bandlimited.batched_residuals(record, damping)
     return batched_residuals_frf(record, damping)
 
 
@@ -159,8 +169,8 @@ def multi_batched_residuals(data: MultiPointData, damping: np.ndarray) -> np.nda
     parts: list[np.ndarray | None] = [None] * len(data.records)
     groups: list[list[int]] = []
     for i, rec in enumerate(data.records):
-        if isinstance(rec, TimeData):
-            parts[i] = batched_residuals(rec, safe)
+        if isinstance(rec, (TimeData, BandLimitedData)):
+            parts[i] = record_residuals(rec, safe)
             continue
         for group in groups:
             if np.array_equal(data.records[group[0]].frequency_hz, rec.frequency_hz):
@@ -184,9 +194,17 @@ def multi_residuals(data: MultiPointData, damping: np.ndarray) -> np.ndarray:
     return multi_batched_residuals(data, r[None])[0]
 
 
+def _record_psi(record: Record, damping: np.ndarray) -> np.ndarray:
+    if isinstance(record, TimeData):
+        return psi(record, damping)
+    if isinstance(record, BandLimitedData):
+        return _bandlimited.psi(record, damping)
+    return psi_frf(record, damping)
+
+
 def psi_per_record(data: MultiPointData, damping: np.ndarray) -> np.ndarray:
     """Each record's own eq (17) (unweighted) for damping (..., N, N): (..., n_records)."""
-    vals = [psi(rec, damping) if isinstance(rec, TimeData) else psi_frf(rec, damping) for rec in data.records]
+    vals = [_record_psi(rec, damping) for rec in data.records]
     return np.stack([np.asarray(v, dtype=float) for v in vals], axis=-1)
 
 
@@ -449,8 +467,8 @@ def _units(data: MultiPointData) -> list[tuple[int, int | None]]:
     """Jackknife units: (record, hit) for time records with >= 2 hits, (record, None) otherwise."""
     units: list[tuple[int, int | None]] = []
     for i, rec in enumerate(data.records):
-        if isinstance(rec, TimeData) and rec.n_hits >= 2:
-            units += [(i, h) for h in range(rec.n_hits)]
+        if isinstance(rec, (TimeData, BandLimitedData)) and rec.force_n.shape[0] >= 2:
+            units += [(i, h) for h in range(rec.force_n.shape[0])]
         else:
             units.append((i, None))
     return units
@@ -463,8 +481,9 @@ def _drop(data: MultiPointData, unit: tuple[int, int | None]) -> MultiPointData:
         del recs[i], weights[i], labels[i]
     else:
         rec = recs[i]
-        keep = np.arange(rec.n_hits) != hit
-        recs[i] = TimeData(rec.model, rec.force_n[keep], rec.response_m_s2[keep], rec.sample_rate_hz)
+        keep = np.arange(rec.force_n.shape[0]) != hit
+        # The left-out hit's samples go with it (a compared-sample mask is dropped).
+        recs[i] = type(rec)(rec.model, rec.force_n[keep], rec.response_m_s2[keep], rec.sample_rate_hz)
     return MultiPointData(tuple(recs), np.array(weights), tuple(labels))
 
 

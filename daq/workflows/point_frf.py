@@ -21,7 +21,8 @@ from daq.workflows.analysis import window_specs
 
 @dataclass
 class PointFrf:
-    """frequency_hz (n_lines,) Hz; frf (n_lines,) complex accelerance, (m/s^2)/N;
+    """frequency_hz (n_lines,) Hz; frf (n_lines,) complex accelerance, (m/s^2)/N, with the
+    exponential window's gain at the pulse undone (its added decay is still in the poles);
     coherence (n_lines,) or None; per_hit (n_hits, n_lines) complex or None (FRF-only
     runs); added_decay_1_s: the exponential window's decay in the poles, 1/s;
     source: "hits", "measured_frf" or "analyzer"."""
@@ -50,9 +51,14 @@ def point_frf(run: Run) -> PointFrf:
         )  # fmt: skip
         estimate = frf_estimate(spectra)
         decay = added_decay_rate(response_window) - added_decay_rate(force_window)
+        # The response's exponential window, counted from the record's start, scales the
+        # FRF by its value at the pulse (analysis/damping/windowed_frf.py): undone here so
+        # that residues, and shapes scaled to unit modal mass, keep their size.
+        gain = float(np.exp(decay * max(0.0, -float(run.hits.start_s))))
         return PointFrf(
-            estimate.frequency_hz, estimate.h1, estimate.coherence, per_hit_frf(spectra), float(decay), "hits"
-        )
+            estimate.frequency_hz, gain * estimate.h1, estimate.coherence, gain * per_hit_frf(spectra),
+            float(decay), "hits",
+        )  # fmt: skip
     frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
     if frfs is None:
         raise ValueError(f"run {run.run_id} has no accepted hit and no FRF")

@@ -191,3 +191,233 @@ def _point_text(point: dict[str, Any]) -> str:
         f"{point['position_m']:g} m" if point.get("position_m") is not None else f"node {point.get('node')}"
     )
     return f"{point['name']} ({where}, {point.get('direction', '+z')})"
+
+
+BandOption = Annotated[
+    str | None,
+    typer.Option(
+        metavar="<low:high>",
+        show_default=False,
+        help="Identify modes in this band only, Hz [default: chosen from the data, as daq analyze].",
+    ),
+]
+FrequenciesOption = Annotated[
+    str | None,
+    typer.Option(metavar="<f1,f2,...>", show_default=False, help="Frequencies of interest, Hz."),
+]
+MaxOrderOption = Annotated[
+    int | None,
+    typer.Option(metavar="<2-200>", show_default=False, help="LSCF order of every frequency zone."),
+]
+
+
+def _analysis(store_dir: Path, name: str, band: str | None, frequencies: str | None, max_order: int | None):
+    from analysis.run_analysis import AnalysisOptions
+    from daq.cli.commands.analyze import parse_band, parse_frequencies
+    from daq.workflows.test_analysis import analyze_test
+
+    try:
+        options = AnalysisOptions(
+            band_hz=parse_band(band), max_order=max_order, frequencies_hz=parse_frequencies(frequencies)
+        )
+    except ValueError as exc:
+        raise UserError(str(exc).replace("max_order", "--max-order").replace("band ", "--band "), 2) from None
+    sys.stderr.write(f"analysing test {name}...\n")
+    return analyze_test(store_dir, name, options)
+
+
+@test_app.command("analyze")
+def analyze(
+    name: NameArgument,
+    band: BandOption = None,
+    frequencies: FrequenciesOption = None,
+    max_order: MaxOrderOption = None,
+    json_output: JsonOption = False,
+    store: StoreOption = None,
+) -> None:
+    """One set of poles from every point's FRF, the mode shapes at the points (unit modal
+    mass through the driving point), their complexity, and MAC against the beam."""
+    from daq.workflows.test_analysis import test_analysis_json
+
+    analysis = _analysis(_store_dir(store), name, band, frequencies, max_order)
+    info = test_analysis_json(analysis)
+    if json_output:
+        typer.echo(_dumps(info))
+        return
+    print_test_analysis(info)
+
+
+def print_test_analysis(info: dict[str, Any]) -> None:
+    typer.echo(
+        f"Test {info['test']}: {len(info['modes'])} modes from {len(info['points'])} points in "
+        f"{info['band_hz'][0]:.6g}-{info['band_hz'][1]:.6g} Hz ({info['band_reason']}), synthesis error "
+        f"{100 * (info['synthesis_error'] or 0):.3g} %"
+    )
+    for caution in info["cautions"]:
+        typer.echo(f"caution: {caution}")
+    typer.echo(f"  shapes: {info['shape_scaling']}; ± standard uncertainty, {info['shape_uncertainty_from']}")
+    typer.echo(
+        "  mode  frequency Hz (± u)      damping % (± u)       MPC    exact beam (MAC)        Ritz N=3 (MAC)"
+    )
+    for k, mode in enumerate(info["modes"], start=1):
+        f_u = mode["frequency_u_hz"]
+        z_u = mode["damping_u"]
+        typer.echo(
+            f"  {k:>4}  {mode['frequency_hz']:>10.4f} ± {_u(f_u, 1, '.2g'):<8}  "
+            f"{100 * mode['damping_ratio']:>7.3f} ± {_u(z_u, 100, '.2g'):<8}  {mode['mpc']:>5.3f}  "
+            f"{_pair_text(mode.get('exact')):<22}  {_pair_text(mode.get('ritz'))}"
+        )
+    names = [p["name"] for p in info["points"]]
+    typer.echo("  shapes (real part ± u) at " + ", ".join(names) + ":")
+    for k, mode in enumerate(info["modes"], start=1):
+        values = ", ".join(
+            f"{re:.3g}±{u:.2g}" for re, u in zip(mode["shape"]["real"], mode["shape"]["real_u"], strict=True)
+        )
+        typer.echo(f"    mode {k}: {values}")
+
+
+def _u(value: float | None, scale: float, fmt: str) -> str:
+    return "–" if value is None else format(scale * value, fmt)
+
+
+def _pair_text(pair: dict[str, Any] | None) -> str:
+    if pair is None:
+        return "none (MAC < 0.5)"
+    return f"mode {pair['mode']} {pair['frequency_hz']:.4g} Hz ({pair['mac']:.3f})"
+
+
+@test_app.command("fit")
+def fit(
+    name: NameArgument,
+    method: Annotated[
+        str,
+        typer.Option(
+            metavar="<ls|ga|complex-modes>",
+            help="ls: least squares on every point's hits (eq 17 summed over the points); ga: the seed's "
+            "GA, then least squares; complex-modes: Adhikari-Woodhouse from the measured complex shapes.",
+        ),
+    ] = "ls",
+    unconstrained: Annotated[
+        bool, typer.Option("--unconstrained", help="Fit R's terms freely (R may come out not dissipative).")
+    ] = False,
+    seed: Annotated[int, typer.Option(metavar="<int>", help="Random seed of ga.")] = 0,
+    band: BandOption = None,
+    frequencies: FrequenciesOption = None,
+    max_order: MaxOrderOption = None,
+    json_output: JsonOption = False,
+    store: StoreOption = None,
+) -> None:
+    """The beam's 3 x 3 damping matrix R fitted to every point of the test at once, with
+    its standard uncertainty and the combinations the points do not determine."""
+    from daq.workflows.test_fit import fit_test, test_fit_json
+
+    store_dir = _store_dir(store)
+    analysis = _analysis(store_dir, name, band, frequencies, max_order)
+    sys.stderr.write(f"fitting R to {len(analysis.data.points)} points ({method})...\n")
+    result = fit_test(analysis, store_dir, method.lower(), psd=not unconstrained, seed=seed)
+    info = test_fit_json(result)
+    if json_output:
+        typer.echo(_dumps(info))
+        return
+    floor = info["psi_noise_floor"]
+    floor_text = f" (noise floor {floor:.3g}, {info['psi'] / floor:.3g}x)" if floor else ""
+    typer.echo(
+        f"Test {name}: {info['method']} over {info['n_points']} points, {info['band_hz'][0]:.4g}-"
+        f"{info['band_hz'][1]:.4g} Hz, Psi = {info['psi']:.4g}{floor_text}"
+    )
+    for caution in info["cautions"]:
+        typer.echo(f"caution: {caution}")
+    std = info["damping_matrix_u"]
+    typer.echo(f"  R (N s/m), ± {info['uncertainty_from']}; ? = not determined by these points:")
+    names = [f"R{i + 1}{j + 1}" for i in range(3) for j in range(3)]
+    for i, row in enumerate(info["damping_matrix"]):
+        cells = []
+        for j, value in enumerate(row):
+            u = "–" if std is None else f"{std[i][j]:.2g}"
+            term = names[3 * min(i, j) + max(i, j)]
+            mark = " ?" if std is not None and term not in info["determined_terms"] else "  "
+            cells.append(f"{value:>10.4g} ± {u:<7}{mark}")
+        typer.echo("    " + "".join(cells))
+
+
+@test_app.command("export")
+def export(
+    name: NameArgument,
+    output: Annotated[Path, typer.Option("--output", "-o", metavar="<file.uff>", help="The file to write.")],
+    format: Annotated[str, typer.Option("--format", metavar="<uff>", help="The file format.")] = "uff",
+    force: Annotated[bool, typer.Option("--force", help="Write over an existing file.")] = False,
+    store: StoreOption = None,
+) -> None:
+    """A whole test as UFF: 15 (nodes), 82 (trace lines), 58 (every FRF with its node and
+    direction, the driving point one node) and 55 (the mode shapes of daq test analyze)."""
+    from daq.workflows.test_export import export_test
+
+    if format.lower() != "uff":
+        raise UserError(f"--format {format!r}: only uff is offered for a test", exit_code=2)
+    if output.exists() and not force:
+        raise UserError(f"{output} exists; give --force to write over it", exit_code=2)
+    store_dir = _store_dir(store)
+    analysis = _analysis(store_dir, name, None, None, None)
+    n_frf, n_modes = export_test(analysis, output)
+    typer.echo(f"Test {name} written as UFF: {output} ({n_frf} FRFs, {n_modes} mode shapes)")
+
+
+@test_app.command("report")
+def report(
+    name: NameArgument,
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "--output", "-o", metavar="<dir>", help="Folder to write [default: ./report-test-NAME]."
+        ),
+    ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Write over an earlier report in that folder.")
+    ] = False,
+    fit_method: Annotated[
+        str | None,
+        typer.Option(
+            "--fit",
+            metavar="<ls|ga|complex-modes>",
+            show_default=False,
+            help="Also fit R with this method and show it [default: no fit].",
+        ),
+    ] = None,
+    band: BandOption = None,
+    frequencies: FrequenciesOption = None,
+    max_order: MaxOrderOption = None,
+    store: StoreOption = None,
+) -> None:
+    """The test's report: stability diagram over all FRFs, mode shapes along the beam beside
+    the exact and Ritz shapes, MAC, R with its uncertainty, measured against fitted FRFs.
+    The analysis is made here with the options given (the defaults of daq test analyze)."""
+    from daq.cli.commands.report import _write
+    from daq.report.modal_test_report import render_modal_test_report
+    from daq.workflows.test_export import report_inputs
+    from daq.workflows.test_fit import fit_test
+
+    folder = output if output is not None else Path(f"report-test-{name}")
+    if folder.exists() and not folder.is_dir():
+        raise UserError(f"{folder} exists and is not a folder")
+    if (folder / "index.html").exists() and not force:
+        raise UserError(
+            f"{folder} already holds a report; give --force to write over it or -o another folder"
+        )
+    store_dir = _store_dir(store)
+    analysis = _analysis(store_dir, name, band, frequencies, max_order)
+    fitted = None
+    if fit_method is not None:
+        sys.stderr.write(f"fitting R ({fit_method})...\n")
+        fitted = fit_test(analysis, store_dir, fit_method.lower())
+    try:
+        html, pngs = render_modal_test_report(report_inputs(analysis, fitted))
+    except ValueError as exc:
+        raise UserError(" ".join(str(exc).split())) from None
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"cannot create {folder}: {exc.strerror or exc}") from None
+    for png_name, png in pngs.items():
+        _write(folder / f"{png_name}.png", png)
+    _write(folder / "index.html", html.encode("utf-8"))
+    typer.echo(f"Report of test {name}: {folder / 'index.html'} ({len(pngs)} figures)")

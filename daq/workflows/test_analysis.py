@@ -1,0 +1,286 @@
+"""The analysis of a whole multi-point test: one set of poles from every point's FRF,
+the mode shapes at the points, MAC against the beam, and the damping matrix fitted to
+every point at once (docs/modal-tests.md).
+
+Each point's counted run (the newest accepted) gives its H1 FRF (daq/workflows/point_frf.py);
+the FRFs are analysed together (analysis.run_analysis.analyze_frfs: the band and the
+orders chosen as for one run); the residues of every point give the complex shapes
+(analysis.modal_id.shapes), scaled to unit modal mass through the driving point when the
+test has one; analysis.beam_shapes gives the exact and Ritz shapes at the same points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from analysis.beam_shapes import exact_shapes, ritz_shapes
+from analysis.mac import align, auto_mac, mac
+from analysis.modal_id.shapes import ModeShapes, mode_shapes
+from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs
+from daq.store import ModalTest, Point, Store, StoreError
+from daq.workflows.article import article_beam
+from daq.workflows.errors import WorkflowError
+from daq.workflows.point_frf import PointFrf, point_frf, stack_points
+from daq.workflows.test import open_test
+
+#: Exact-beam modes the measured ones are compared with (more than a band usually holds).
+EXACT_MODES = 8
+#: Below this MAC a measured mode does not look like any beam mode at these points.
+POOR_MAC = 0.8
+#: Below this MPC a shape is markedly complex (non-proportional damping, or noise).
+COMPLEX_MPC = 0.8
+#: Two windows' added decay rates differing by more than this (1/s) are not one setup.
+DECAY_TOLERANCE_1_S = 1e-6
+
+
+@dataclass
+class TestData:
+    """The measured points of a test, on one frequency axis.
+
+    points: the points measured (the roving ones with a counted run), in the test's order.
+    run_ids: their counted runs. positions_m (n_points,) where the roving end sat, m
+    (NaN on a free structure). frequency_hz (n_lines,); frf (n_points, n_lines) complex
+    accelerance (m/s^2)/N; coherence (n_points, n_lines) or None; per_hit: per point
+    (n_hits, n_lines) or None. driving_index: the point whose force and response share
+    a place, or None. added_decay_1_s: the response window's decay in the poles, 1/s.
+    """
+
+    test: ModalTest
+    points: list[Point]
+    run_ids: list[str]
+    point_frfs: list[PointFrf]
+    positions_m: np.ndarray
+    frequency_hz: np.ndarray
+    frf: np.ndarray
+    coherence: np.ndarray | None
+    driving_index: int | None
+    added_decay_1_s: float
+    cautions: list[str] = field(default_factory=list)
+
+
+def gather(store_dir: Path, name: str) -> TestData:
+    """Every measured point of test ``name``: its counted run's FRF. WorkflowError when
+    no point is measured or the points do not share one frequency axis."""
+    test = open_test(store_dir, name)
+    store = Store(store_dir)
+    counted = test.counted_runs()
+    points, run_ids, frfs = [], [], []
+    missing = [p for p, run_id in counted.items() if run_id is None]
+    for point in test.points:
+        run_id = counted[point.name]
+        if run_id is None:
+            continue
+        try:
+            frfs.append(point_frf(store.open(run_id)))
+        except (StoreError, ValueError, OSError) as exc:
+            raise WorkflowError(f"test {name}, point {point.name}: run {run_id}: {exc}") from None
+        points.append(point)
+        run_ids.append(run_id)
+    if not points:
+        raise WorkflowError(
+            f"test {name} has no measured point yet: daq capture --test {name} --next (or daq import "
+            f"FILE --test {name} --point P)"
+        )
+    try:
+        f, frf, coherence = stack_points([p.name for p in points], frfs)
+    except ValueError as exc:
+        raise WorkflowError(f"test {name}: {exc}") from None
+    cautions = []
+    if missing:
+        cautions.append(
+            f"{len(missing)} of {len(test.points)} points not measured ({', '.join(missing)}): the shapes "
+            "hold only the measured ones"
+        )
+    decays = np.array([p.added_decay_1_s for p in frfs])
+    if np.ptp(decays) > DECAY_TOLERANCE_1_S:
+        cautions.append(
+            "the points' runs used different exponential windows: one set of poles from them mixes "
+            "dampings; the median window's decay is taken out"
+        )
+    roving_end = [test.run_points(p.name).force_point if test.roving == "hammer" else p for p in points]
+    positions = np.array([np.nan if p.position_m is None else p.position_m for p in roving_end])
+    driving = [i for i, p in enumerate(points) if p.same_place(test.fixed_point)]
+    return TestData(
+        test, points, run_ids, frfs, positions, f, frf, coherence,
+        driving[0] if driving else None, float(np.median(decays)), cautions,
+    )  # fmt: skip
+
+
+@dataclass
+class TestAnalysis:
+    """What `daq test analyze` reports: the run-style analysis of all FRFs together,
+    the shapes at the points and their comparison with the beam (arrays, units in
+    analysis.modal_id.shapes and analysis.beam_shapes)."""
+
+    data: TestData
+    result: RunAnalysis
+    shapes: ModeShapes
+    exact_hz: np.ndarray | None
+    exact_at_points: np.ndarray | None
+    ritz_hz: np.ndarray | None
+    ritz_at_points: np.ndarray | None
+    mac_exact: np.ndarray | None
+    mac_ritz: np.ndarray | None
+    auto_mac: np.ndarray
+    cautions: list[str]
+
+
+def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = None) -> TestAnalysis:
+    """Analyse every measured point of test ``name`` together. WorkflowError (one line)."""
+    options = options or AnalysisOptions()
+    data = gather(store_dir, name)
+    try:
+        result = analyze_frfs(
+            data.frequency_hz, data.frf, data.coherence, "hits", options, data.added_decay_1_s
+        )
+    except ValueError as exc:
+        raise WorkflowError(f"test {name}: {exc}") from None
+    cautions = list(data.cautions) + list(result.cautions)
+    if not result.modes:
+        raise WorkflowError(
+            f"test {name}: no mode found in {result.band.low_hz:g}-{result.band.high_hz:g} Hz over "
+            f"{len(data.points)} points; give --band or --frequencies"
+        )
+    poles = _poles_seen(result)
+    band = (result.band.low_hz, result.band.high_hz)
+    per_hit = [p.per_hit for p in data.point_frfs]
+    try:
+        shapes = mode_shapes(
+            data.frequency_hz, data.frf, poles, "accelerance", data.driving_index,
+            per_hit if all(h is not None for h in per_hit) else None, rng=0, band=band,
+        )  # fmt: skip
+    except ValueError as exc:
+        raise WorkflowError(f"test {name}: mode shapes: {exc}") from None
+    cautions += shapes.cautions
+    beam = article_beam(data.test.article)
+    exact_hz = exact_at = ritz_hz = ritz_at = mac_exact = mac_ritz = None
+    if beam is not None and np.all(np.isfinite(data.positions_m)):
+        exact = exact_shapes(data.positions_m, EXACT_MODES, beam)
+        ritz = ritz_shapes(data.positions_m, 3, beam)
+        exact_hz, exact_at = exact.frequencies_hz, exact.shapes
+        ritz_hz, ritz_at = ritz.frequencies_hz, ritz.shapes
+        if len(data.points) >= 2:
+            mac_exact, mac_ritz = mac(shapes.shapes, exact_at), mac(shapes.shapes, ritz_at)
+    if len(data.points) < 2:
+        cautions.append("one point: a mode shape needs two points or more; MAC not computed")
+    auto = auto_mac(shapes.shapes)
+    for k, mode in enumerate(result.modes):
+        if mac_exact is not None and np.nanmax(mac_exact[k]) < POOR_MAC:
+            cautions.append(
+                f"mode at {mode.frequency_hz:.4g} Hz: MAC {np.nanmax(mac_exact[k]):.2f} against every "
+                "beam mode at these points: a local mode, noise, or too few points"
+            )
+        if shapes.mpc[k] < COMPLEX_MPC:
+            cautions.append(
+                f"mode at {mode.frequency_hz:.4g} Hz: its shape is complex (MPC {shapes.mpc[k]:.2f}): "
+                "non-proportional damping, or noise"
+            )
+    return TestAnalysis(
+        data, result, shapes, exact_hz, exact_at, ritz_hz, ritz_at, mac_exact, mac_ritz, auto, cautions
+    )
+
+
+def _poles_seen(result: RunAnalysis) -> np.ndarray:
+    """The poles of the reported modes as the FRFs show them (window decay included),
+    rad/s: the identification's pole nearest each reported mode."""
+    modal = result.modal.modes
+    freqs = np.array([m.frequency_hz for m in modal])
+    return np.array([modal[int(np.argmin(np.abs(freqs - m.frequency_hz)))].pole for m in result.modes])
+
+
+#: A measured mode pairs with the beam mode of largest MAC only above this.
+PAIR_MAC = 0.5
+
+
+def _pairs(mac_matrix: np.ndarray | None) -> list[int | None]:
+    """Per measured mode, the beam mode of largest MAC (None when none reaches PAIR_MAC)."""
+    if mac_matrix is None:
+        return []
+    pairs: list[int | None] = []
+    for row in mac_matrix:
+        best = int(np.nanargmax(row)) if np.any(np.isfinite(row)) else None
+        pairs.append(best if best is not None and row[best] >= PAIR_MAC else None)
+    return pairs
+
+
+def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
+    """The JSON of `daq test analyze --json`: band, modes (frequency, damping, their
+    standard uncertainties, MPC, MPD, the shape at every point with its standard
+    uncertainty, the paired exact and Ritz modes and MAC), the MAC matrices, cautions."""
+    data, result, shapes = analysis.data, analysis.result, analysis.shapes
+    exact_pairs, ritz_pairs = _pairs(analysis.mac_exact), _pairs(analysis.mac_ritz)
+    modes = []
+    for k, mode in enumerate(result.modes):
+        row: dict[str, Any] = {
+            "frequency_hz": mode.frequency_hz,
+            "frequency_u_hz": _finite(mode.frequency_u_hz),
+            "damping_ratio": mode.damping_ratio,
+            "damping_u": _finite(mode.damping_u),
+            "uncertainty_from": mode.uncertainty_from,
+            "mpc": float(shapes.mpc[k]),
+            "mpd_deg": float(shapes.mpd_deg[k]),
+            "shape": {
+                "real": shapes.shapes[k].real.tolist(),
+                "imag": shapes.shapes[k].imag.tolist(),
+                "real_u": shapes.shape_std[k].tolist(),
+                "imag_u": shapes.shape_std_imag[k].tolist(),
+            },
+        }
+        if exact_pairs:
+            row["exact"] = _pair(exact_pairs[k], analysis.exact_hz, analysis.mac_exact[k])
+        if ritz_pairs:
+            row["ritz"] = _pair(ritz_pairs[k], analysis.ritz_hz, analysis.mac_ritz[k])
+        modes.append(row)
+    return {
+        "test": data.test.name,
+        "points": [p.to_dict() | {"run_id": r} for p, r in zip(data.points, data.run_ids, strict=True)],
+        "positions_m": [_finite(x) for x in data.positions_m],
+        "driving_point": None if data.driving_index is None else data.points[data.driving_index].name,
+        "band_hz": [result.band.low_hz, result.band.high_hz],
+        "band_reason": result.band.reason,
+        "n_lines": int(data.frequency_hz.size),
+        "synthesis_error": _finite(result.modal.synthesis_error),
+        "shape_scaling": shapes.scaling,
+        "shape_uncertainty_from": shapes.uncertainty_from,
+        "modes": modes,
+        "mac_exact": _matrix(analysis.mac_exact),
+        "mac_ritz": _matrix(analysis.mac_ritz),
+        "auto_mac": _matrix(analysis.auto_mac),
+        "cautions": analysis.cautions,
+    }
+
+
+def _pair(j: int | None, frequencies_hz: np.ndarray, mac_row: np.ndarray) -> dict[str, Any] | None:
+    if j is None:
+        return None
+    return {"mode": j + 1, "frequency_hz": float(frequencies_hz[j]), "mac": float(mac_row[j])}
+
+
+def _finite(value: float) -> float | None:
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
+def _matrix(values: np.ndarray | None) -> list[list[float | None]] | None:
+    if values is None:
+        return None
+    return [[_finite(v) for v in row] for row in np.asarray(values)]
+
+
+def aligned_shapes(analysis: TestAnalysis) -> np.ndarray:
+    """The measured shapes turned (phase or sign) towards their paired exact shape, for
+    drawing and for comparing value by value; (n_modes, n_points) complex."""
+    pairs = _pairs(analysis.mac_exact)
+    if not pairs or analysis.exact_at_points is None:
+        return analysis.shapes.shapes
+    reference = np.array(
+        [
+            analysis.exact_at_points[j] if j is not None else s
+            for j, s in zip(pairs, analysis.shapes.shapes, strict=True)
+        ]
+    )
+    return align(analysis.shapes.shapes, reference)
