@@ -75,9 +75,10 @@ def gather(store_dir: Path, name: str) -> TestData:
         if run_id is None:
             continue
         try:
-            frfs.append(point_frf(store.open(run_id)))
+            measured = point_frf(store.open(run_id))
         except (StoreError, ValueError, OSError) as exc:
             raise WorkflowError(f"test {name}, point {point.name}: run {run_id}: {exc}") from None
+        frfs.append(_along_axes(measured, test.run_points(point.name)))
         points.append(point)
         run_ids.append(run_id)
     if not points:
@@ -108,6 +109,27 @@ def gather(store_dir: Path, name: str) -> TestData:
         test, points, run_ids, frfs, positions, f, frf, coherence,
         driving[0] if driving else None, float(np.median(decays)), cautions,
     )  # fmt: skip
+
+
+def _along_axes(measured: PointFrf, points: Any) -> PointFrf:
+    """The FRF with force and response along their axes' positive sense: a force along
+    -x and a response along +x (a driving point measured with the accelerometer facing
+    the hammer) turn the FRF's sign, which the shapes would otherwise carry."""
+    sign = 1.0
+    for point in (points.force_point, *points.response_points[:1]):
+        if point.direction.startswith("-"):
+            sign = -sign
+    if sign > 0:
+        return measured
+    per_hit = None if measured.per_hit is None else -measured.per_hit
+    return PointFrf(
+        measured.frequency_hz,
+        -measured.frf,
+        measured.coherence,
+        per_hit,
+        measured.added_decay_1_s,
+        measured.source,
+    )
 
 
 @dataclass

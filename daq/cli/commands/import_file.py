@@ -99,6 +99,24 @@ def import_file(
     next_point: Annotated[
         bool, typer.Option("--next", help="With --test: the first point without an accepted run.")
     ] = False,
+    as_test: Annotated[
+        str | None,
+        typer.Option(
+            "--as-test",
+            metavar="<name>",
+            help="UFF holding the FRFs of several points (58 with node numbers, 15 geometry): import it as "
+            "a whole new test of this name, one run per FRF.",
+        ),
+    ] = None,
+    article: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<seed-beam|file.toml>",
+            show_default=False,
+            help="With --as-test: the test article; on a beam the nodes' X coordinates are the positions "
+            "[default: the file's nodes as a free structure].",
+        ),
+    ] = None,
     force_at: Annotated[
         float | None,
         typer.Option(
@@ -138,6 +156,11 @@ def import_file(
     from daq.workflows.capture import utc_now
 
     check_operator_and_note(operator, note)  # before the file is even read
+    if as_test is not None or article is not None:
+        import_as_test(file, as_test, article, format, operator, note, store,
+                       test is not None or point is not None or next_point or force_at is not None
+                       or sensor_at is not None)  # fmt: skip
+        return
     where, points = import_points(store, test, point, next_point, force_at, sensor_at)
     if format is ImportFormat.auto:
         chosen, why = detect_format(file)
@@ -222,6 +245,31 @@ def import_file(
         from daq.cli.commands.capture import join_test
 
         join_test(store_dir, where, run.run_id)
+
+
+def import_as_test(file: Path, name, article, format, operator, note, store, point_options: bool) -> None:
+    """`daq import FILE --as-test NAME`: a multi-point UFF file as a new test, one run per FRF."""
+    from daq.store import resolve_store_dir
+    from daq.workflows.test_import import import_uff_test
+
+    if name is None:
+        raise UserError("--article goes with --as-test NAME", exit_code=2)
+    if point_options:
+        raise UserError(
+            "--as-test makes a new test of the whole file: no --test, --point, --next, --force-at", 2
+        )
+    if format is not ImportFormat.auto and format.value != "uff":
+        raise UserError("--as-test reads UFF files only", exit_code=2)
+    if not file.is_file():
+        raise UserError(f"{file}: no such file")
+    store_dir, _ = resolve_store_dir(store)
+    test, runs, notes = import_uff_test(store_dir, file, name, article, operator, note)
+    typer.echo(
+        f"Imported {file.name} as test {test.name}: {len(runs)} FRFs at {len(test.points)} points, roving "
+        f"{test.roving}, fixed at {test.fixed_point.name}; daq test analyze {test.name}"
+    )
+    for line in notes:
+        typer.echo(f"note: {line}")
 
 
 def import_points(store, test, point, next_point, force_at, sensor_at):
