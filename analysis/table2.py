@@ -8,7 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from analysis.beam import TABLE_1, BeamProperties, SectionSource
+from analysis.beam_shapes import exact_shapes, ritz_shapes
 from analysis.exact_beam import cantilever_frequencies_hz
+from analysis.mac import auto_mac, mac
 from analysis.modal import DampedModes, damped_modes
 from analysis.ritz import RitzBeam
 from analysis.seed import TABLE_2_ANALYTICAL_HZ, TABLE_2_EXPERIMENTAL_HZ
@@ -160,3 +162,134 @@ def identified_table2(
             identified[row], damping[row] = freqs[best], zetas[best]
             free[best] = False
     return IdentifiedTable2(n_functions, section, ritz, exact, identified, damping)
+
+
+@dataclass(frozen=True)
+class ModalTestTable2:
+    """Table 2 of a multi-point test: per measured mode (rows, n_modes of them, by
+    frequency), the measured frequency and damping with their standard uncertainty, the
+    paired exact-beam and Ritz modes and the MAC of the measured shape against each.
+
+    frequency_hz, frequency_std_hz (Hz), damping_ratio, damping_std (fractions of
+    critical), mpc : (n_modes,) as measured; NaN where not given.
+    exact_mode, ritz_mode : (n_modes,) int, the paired model mode (0-based), -1 if none:
+        the model mode nearest in frequency within ``tolerance`` (relative to the model
+        frequency), each model mode used once, lowest measured modes first.
+    exact_hz, ritz_hz : (n_modes,) the paired model modes' frequencies, Hz (NaN: none).
+    mac_exact, mac_ritz : (n_modes,) MAC of the measured shape against the paired
+        model mode at the test's points (NaN: none).
+    mac_exact_matrix (n_modes, n_exact), mac_ritz_matrix (n_modes, N): every measured
+        shape against every model mode. auto_mac (n_modes, n_modes).
+    """
+
+    n_functions: int
+    section: SectionSource
+    positions_m: np.ndarray
+    frequency_hz: np.ndarray
+    frequency_std_hz: np.ndarray
+    damping_ratio: np.ndarray
+    damping_std: np.ndarray
+    mpc: np.ndarray
+    exact_mode: np.ndarray
+    exact_hz: np.ndarray
+    ritz_mode: np.ndarray
+    ritz_hz: np.ndarray
+    mac_exact: np.ndarray
+    mac_ritz: np.ndarray
+    mac_exact_matrix: np.ndarray
+    mac_ritz_matrix: np.ndarray
+    auto_mac: np.ndarray
+
+    def difference_pct(self, column: np.ndarray) -> np.ndarray:
+        """100 (measured - column) / column: how far the test is from a model."""
+        return 100.0 * (self.frequency_hz - column) / column
+
+
+def _pair_by_frequency(measured_hz: np.ndarray, model_hz: np.ndarray, tolerance: float) -> np.ndarray:
+    """(n_measured,) index of the model mode paired with each measured mode, -1: none."""
+    pair = np.full(measured_hz.size, -1, dtype=int)
+    free = np.ones(model_hz.size, dtype=bool)
+    for k in np.argsort(measured_hz):
+        distance = np.where(free, np.abs(model_hz - measured_hz[k]) / model_hz, np.inf)
+        best = int(np.argmin(distance)) if distance.size else 0
+        if distance.size and distance[best] <= tolerance:
+            pair[k] = best
+            free[best] = False
+    return pair
+
+
+def _optional(values: np.ndarray | None, n: int, name: str) -> np.ndarray:
+    if values is None:
+        return np.full(n, np.nan)
+    v = np.asarray(values, dtype=float).ravel()
+    if v.size != n:
+        raise ValueError(f"{name} must have one value per mode ({n}), got {v.size}")
+    return v
+
+
+def modal_test_table2(
+    frequency_hz: np.ndarray,
+    damping_ratio: np.ndarray,
+    shapes: np.ndarray,
+    positions_m: np.ndarray,
+    beam: BeamProperties = TABLE_1,
+    n_functions: int = 3,
+    section: SectionSource = "tabulated",
+    *,
+    frequency_std_hz: np.ndarray | None = None,
+    damping_std: np.ndarray | None = None,
+    mpc: np.ndarray | None = None,
+    n_exact_modes: int | None = None,
+    tolerance: float = 0.25,
+) -> ModalTestTable2:
+    """Table 2 of a multi-point test (see ModalTestTable2).
+
+    frequency_hz, damping_ratio : (n_modes,) the test's modes (Hz, fraction of
+    critical). shapes (n_modes, n_points) complex, measured at positions_m (n_points,)
+    m from the clamp (any scaling: MAC ignores it). The exact beam is taken to
+    n_exact_modes modes (default max(n_modes, N) + 2), the Ritz model has N =
+    n_functions. A mode's ± (frequency_std_hz, damping_std) and mpc are carried as given
+    (e.g. from analysis.modal_id.shapes.ModeShapes or the run's uncertainty).
+    """
+    freqs = np.asarray(frequency_hz, dtype=float).ravel()
+    zetas = np.asarray(damping_ratio, dtype=float).ravel()
+    n = freqs.size
+    s = np.asarray(shapes)
+    if s.ndim == 1 and n == 1:
+        s = s[np.newaxis, :]
+    x = np.atleast_1d(np.asarray(positions_m, dtype=float))
+    if zetas.size != n or s.ndim != 2 or s.shape != (n, x.size):
+        raise ValueError(
+            f"expected {n} damping ratios and shapes of shape ({n}, {x.size}); got {zetas.size} and {s.shape}"
+        )
+    n_exact = n_exact_modes or max(n, n_functions) + 2
+    exact = exact_shapes(x, n_exact, beam, section)
+    ritz = ritz_shapes(x, n_functions, beam, section)
+    mac_e = mac(s, exact.shapes) if n else np.empty((0, n_exact))
+    mac_r = mac(s, ritz.shapes) if n else np.empty((0, n_functions))
+    pe = _pair_by_frequency(freqs, exact.frequencies_hz, tolerance)
+    pr = _pair_by_frequency(freqs, ritz.frequencies_hz, tolerance)
+    rows = np.arange(n)
+
+    def pick(table: np.ndarray, pair: np.ndarray) -> np.ndarray:
+        return np.where(pair >= 0, table[rows, np.maximum(pair, 0)], np.nan) if n else np.empty(0)
+
+    return ModalTestTable2(
+        n_functions=n_functions,
+        section=section,
+        positions_m=x,
+        frequency_hz=freqs,
+        frequency_std_hz=_optional(frequency_std_hz, n, "frequency_std_hz"),
+        damping_ratio=zetas,
+        damping_std=_optional(damping_std, n, "damping_std"),
+        mpc=_optional(mpc, n, "mpc"),
+        exact_mode=pe,
+        exact_hz=np.where(pe >= 0, exact.frequencies_hz[np.maximum(pe, 0)], np.nan),
+        ritz_mode=pr,
+        ritz_hz=np.where(pr >= 0, ritz.frequencies_hz[np.maximum(pr, 0)], np.nan),
+        mac_exact=pick(mac_e, pe),
+        mac_ritz=pick(mac_r, pr),
+        mac_exact_matrix=mac_e,
+        mac_ritz_matrix=mac_r,
+        auto_mac=auto_mac(s) if n else np.empty((0, 0)),
+    )
