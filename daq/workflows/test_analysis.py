@@ -17,10 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from analysis.beam_shapes import exact_shapes, ritz_shapes
-from analysis.mac import align, auto_mac, mac
+from analysis.beam_shapes import exact_shapes
+from analysis.mac import align, auto_mac
 from analysis.modal_id.shapes import ModeShapes, mode_shapes
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs
+from analysis.table2 import ModalTestTable2, modal_test_table2
 from daq.store import ModalTest, Point, Store, StoreError
 from daq.workflows.article import article_beam
 from daq.workflows.errors import WorkflowError
@@ -141,14 +142,18 @@ class TestAnalysis:
     data: TestData
     result: RunAnalysis
     shapes: ModeShapes
-    exact_hz: np.ndarray | None
+    table2: ModalTestTable2 | None
     exact_at_points: np.ndarray | None
-    ritz_hz: np.ndarray | None
-    ritz_at_points: np.ndarray | None
-    mac_exact: np.ndarray | None
-    mac_ritz: np.ndarray | None
     auto_mac: np.ndarray
     cautions: list[str]
+
+    @property
+    def mac_exact(self) -> np.ndarray | None:
+        return None if self.table2 is None else self.table2.mac_exact_matrix
+
+    @property
+    def mac_ritz(self) -> np.ndarray | None:
+        return None if self.table2 is None else self.table2.mac_ritz_matrix
 
 
 def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = None) -> TestAnalysis:
@@ -179,31 +184,32 @@ def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = N
         raise WorkflowError(f"test {name}: mode shapes: {exc}") from None
     cautions += shapes.cautions
     beam = article_beam(data.test.article)
-    exact_hz = exact_at = ritz_hz = ritz_at = mac_exact = mac_ritz = None
-    if beam is not None and np.all(np.isfinite(data.positions_m)):
-        exact = exact_shapes(data.positions_m, EXACT_MODES, beam)
-        ritz = ritz_shapes(data.positions_m, 3, beam)
-        exact_hz, exact_at = exact.frequencies_hz, exact.shapes
-        ritz_hz, ritz_at = ritz.frequencies_hz, ritz.shapes
-        if len(data.points) >= 2:
-            mac_exact, mac_ritz = mac(shapes.shapes, exact_at), mac(shapes.shapes, ritz_at)
+    table = exact_at = None
+    if beam is not None and np.all(np.isfinite(data.positions_m)) and len(data.points) >= 2:
+        modes = result.modes
+        table = modal_test_table2(
+            np.array([m.frequency_hz for m in modes]), np.array([m.damping_ratio for m in modes]),
+            shapes.shapes, data.positions_m, beam, 3, n_exact_modes=EXACT_MODES,
+            frequency_std_hz=np.array([m.frequency_u_hz for m in modes]),
+            damping_std=np.array([m.damping_u for m in modes]), mpc=shapes.mpc,
+        )  # fmt: skip
+        exact_at = exact_shapes(data.positions_m, EXACT_MODES, beam).shapes
     if len(data.points) < 2:
         cautions.append("one point: a mode shape needs two points or more; MAC not computed")
     auto = auto_mac(shapes.shapes)
     for k, mode in enumerate(result.modes):
-        if mac_exact is not None and np.nanmax(mac_exact[k]) < POOR_MAC:
+        if table is not None and not table.mac_exact[k] >= POOR_MAC:
+            paired = "its exact-beam mode" if table.exact_mode[k] >= 0 else "any exact-beam mode near it"
             cautions.append(
-                f"mode at {mode.frequency_hz:.4g} Hz: MAC {np.nanmax(mac_exact[k]):.2f} against every "
-                "beam mode at these points: a local mode, noise, or too few points"
+                f"mode at {mode.frequency_hz:.4g} Hz: MAC {table.mac_exact[k]:.2f} against {paired} at these "
+                "points: a local mode, noise, or too few points"
             )
         if shapes.mpc[k] < COMPLEX_MPC:
             cautions.append(
                 f"mode at {mode.frequency_hz:.4g} Hz: its shape is complex (MPC {shapes.mpc[k]:.2f}): "
                 "non-proportional damping, or noise"
             )
-    return TestAnalysis(
-        data, result, shapes, exact_hz, exact_at, ritz_hz, ritz_at, mac_exact, mac_ritz, auto, cautions
-    )
+    return TestAnalysis(data, result, shapes, table, exact_at, auto, cautions)
 
 
 def _poles_seen(result: RunAnalysis) -> np.ndarray:
@@ -214,19 +220,13 @@ def _poles_seen(result: RunAnalysis) -> np.ndarray:
     return np.array([modal[int(np.argmin(np.abs(freqs - m.frequency_hz)))].pole for m in result.modes])
 
 
-#: A measured mode pairs with the beam mode of largest MAC only above this.
-PAIR_MAC = 0.5
-
-
-def _pairs(mac_matrix: np.ndarray | None) -> list[int | None]:
-    """Per measured mode, the beam mode of largest MAC (None when none reaches PAIR_MAC)."""
-    if mac_matrix is None:
+def pairs(analysis: TestAnalysis, model: str = "exact") -> list[int | None]:
+    """Per measured mode, the paired beam mode (0-based; nearest in frequency, Table 2 of
+    a test) of the exact beam or the Ritz model, None when none; [] without a Table 2."""
+    if analysis.table2 is None:
         return []
-    pairs: list[int | None] = []
-    for row in mac_matrix:
-        best = int(np.nanargmax(row)) if np.any(np.isfinite(row)) else None
-        pairs.append(best if best is not None and row[best] >= PAIR_MAC else None)
-    return pairs
+    index = analysis.table2.exact_mode if model == "exact" else analysis.table2.ritz_mode
+    return [int(j) if j >= 0 else None for j in index]
 
 
 def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
@@ -234,7 +234,7 @@ def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
     standard uncertainties, MPC, MPD, the shape at every point with its standard
     uncertainty, the paired exact and Ritz modes and MAC), the MAC matrices, cautions."""
     data, result, shapes = analysis.data, analysis.result, analysis.shapes
-    exact_pairs, ritz_pairs = _pairs(analysis.mac_exact), _pairs(analysis.mac_ritz)
+    table = analysis.table2
     modes = []
     for k, mode in enumerate(result.modes):
         row: dict[str, Any] = {
@@ -252,10 +252,9 @@ def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
                 "imag_u": shapes.shape_std_imag[k].tolist(),
             },
         }
-        if exact_pairs:
-            row["exact"] = _pair(exact_pairs[k], analysis.exact_hz, analysis.mac_exact[k])
-        if ritz_pairs:
-            row["ritz"] = _pair(ritz_pairs[k], analysis.ritz_hz, analysis.mac_ritz[k])
+        if table is not None:
+            row["exact"] = _pair(int(table.exact_mode[k]), table.exact_hz[k], table.mac_exact[k])
+            row["ritz"] = _pair(int(table.ritz_mode[k]), table.ritz_hz[k], table.mac_ritz[k])
         modes.append(row)
     return {
         "test": data.test.name,
@@ -276,10 +275,11 @@ def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
     }
 
 
-def _pair(j: int | None, frequencies_hz: np.ndarray, mac_row: np.ndarray) -> dict[str, Any] | None:
-    if j is None:
+def _pair(j: int, frequency_hz: float, mac_value: float) -> dict[str, Any] | None:
+    """The paired model mode (1-based) with its frequency and MAC; None when unpaired."""
+    if j < 0:
         return None
-    return {"mode": j + 1, "frequency_hz": float(frequencies_hz[j]), "mac": float(mac_row[j])}
+    return {"mode": j + 1, "frequency_hz": float(frequency_hz), "mac": _finite(mac_value)}
 
 
 def _finite(value: float) -> float | None:
@@ -296,13 +296,13 @@ def _matrix(values: np.ndarray | None) -> list[list[float | None]] | None:
 def aligned_shapes(analysis: TestAnalysis) -> np.ndarray:
     """The measured shapes turned (phase or sign) towards their paired exact shape, for
     drawing and for comparing value by value; (n_modes, n_points) complex."""
-    pairs = _pairs(analysis.mac_exact)
-    if not pairs or analysis.exact_at_points is None:
+    paired = pairs(analysis)
+    if not paired or analysis.exact_at_points is None:
         return analysis.shapes.shapes
     reference = np.array(
         [
             analysis.exact_at_points[j] if j is not None else s
-            for j, s in zip(pairs, analysis.shapes.shapes, strict=True)
+            for j, s in zip(paired, analysis.shapes.shapes, strict=True)
         ]
     )
     return align(analysis.shapes.shapes, reference)

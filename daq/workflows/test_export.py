@@ -19,7 +19,7 @@ from daq.formats.uff_multipoint import Dof, ModeShapes, MultiPointExchange, Node
 from daq.report.modal_test_report import ModalTestReport
 from daq.workflows.article import article_beam
 from daq.workflows.errors import WorkflowError
-from daq.workflows.test_analysis import EXACT_MODES, TestAnalysis, _pairs, aligned_shapes
+from daq.workflows.test_analysis import EXACT_MODES, TestAnalysis, aligned_shapes, pairs
 from daq.workflows.test_fit import TestFit
 
 #: Positions the beam's shapes are drawn at, along the beam.
@@ -105,7 +105,7 @@ def report_inputs(analysis: TestAnalysis, fit: TestFit | None = None) -> ModalTe
     grid = np.linspace(0.0, beam.length_m, GRID_POINTS)
     exact = exact_shapes(grid, EXACT_MODES, beam).shapes
     ritz = ritz_shapes(grid, 3, beam).shapes
-    exact_pairs, ritz_pairs = _pairs(analysis.mac_exact), _pairs(analysis.mac_ritz)
+    exact_pairs, ritz_pairs = pairs(analysis, "exact"), pairs(analysis, "ritz")
     nan_row = np.full(grid.size, np.nan)
     modes = result.modes
     role = "sensor" if data.test.roving == "hammer" else "hammer"

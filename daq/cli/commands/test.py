@@ -282,7 +282,7 @@ def _u(value: float | None, scale: float, fmt: str) -> str:
 
 def _pair_text(pair: dict[str, Any] | None) -> str:
     if pair is None:
-        return "none (MAC < 0.5)"
+        return "none near it"
     return f"mode {pair['mode']} {pair['frequency_hz']:.4g} Hz ({pair['mac']:.3f})"
 
 
