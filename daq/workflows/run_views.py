@@ -69,6 +69,7 @@ def run_dict(run, path: Path) -> dict[str, Any]:
         "provenance": run.provenance,
         "instrument": None if run.instrument is None else dict(vars(run.instrument)),
         "sample": None if run.sample is None else dict(vars(run.sample)),
+        "points": {**run.resolved_points().to_dicts(), "recorded": run.points is not None},
         "n_hits": n_hits,
         "n_accepted": n_accepted,
         "hits": hits_data,

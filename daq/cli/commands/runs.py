@@ -213,6 +213,17 @@ def _print_run(d: dict[str, Any], store: str) -> None:
         field("sample", "-")
     else:
         field("sample", ", ".join(f"{k} {v:g}" for k, v in sample.items() if v is not None))
+    points = d.get("points")
+    if points:
+
+        def where(p: dict) -> str:
+            place = f"{p['position_m']:g} m" if p.get("position_m") is not None else f"node {p.get('node')}"
+            return f"{p['name']} ({place}, {p['direction']})"
+
+        test = f"test {points['test']}, " if points.get("test") else ""
+        said = "" if points.get("recorded") else " (not recorded: the seed's beam at the tip assumed)"
+        responses = ", ".join(where(p) for p in points["response_points"])
+        field("points", f"{test}force at {where(points['force_point'])}, response at {responses}{said}")
     hits = d["hits"]
     if hits is None:
         field("hits", "none")
