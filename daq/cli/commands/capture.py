@@ -271,6 +271,11 @@ def run_capture(
                     f"{source.specimen.sensor_at_m:g} m"
                 )
             console.print(f"Simulated {model} ({scenario} beam{moved}) at {resource}: --sim")
+            if points is not None and points.article.get("kind") != "seed-beam":
+                console.print(
+                    f"note: the simulator plays the seed's beam, not test {where.test}'s article "
+                    f"({points.article.get('kind')}); the run records the article"
+                )
             if points is None and (force_at_m is not None or sensor_at_m is not None):
                 points = moved_points(source.specimen.force_at_m, source.specimen.sensor_at_m)
         try:
