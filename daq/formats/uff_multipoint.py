@@ -176,6 +176,7 @@ class MultiPointExchange:
     coherence: np.ndarray | None = None
     modes: ModeShapes | None = None
     notes: tuple[str, ...] = field(default=())
+    window_decay_1_s: float = 0.0
 
     def __post_init__(self) -> None:
         self.nodes = tuple(self.nodes)
@@ -376,7 +377,7 @@ def _frf_sets(ex: MultiPointExchange) -> list[dict]:
             f"multi-point test {ex.form}",
             "NONE",
             f"ref_name={names[ref.node]} rsp_name={names[rsp.node]}",
-            "NONE",
+            f"{WINDOW_TAG}{ex.window_decay_1_s!r} 1/s from record start" if ex.window_decay_1_s else "NONE",
         )
         kinds = ((FRF_TYPE_OF_FORM[ex.form], unit), (13, "N"))
         frf_sets.append(_dset(FUNC_FRF, i, ids, ref, rsp, even, *kinds, ex.frf[i], ex.frequency_hz))
@@ -623,7 +624,11 @@ def read_multipoint_uff(path: Path | str, max_bytes: int = MAX_IMPORT_BYTES) -> 
     for number in sorted(n for n in unplaced - set(nodes) if n is not None):
         nodes[number] = (math.nan, math.nan, math.nan)
     modes = _modes(name, shape_sets, nodes, _dof_axes(refs, rsps), notes)
+    decay = _window_decay(frf_recs)
+    if decay:
+        notes.append(f"the FRFs went through an exponential window adding {decay:g} 1/s of decay (ID line 5)")
     exchange = MultiPointExchange(
+        window_decay_1_s=decay,
         nodes=tuple(Node(n, names.get(n, str(n)), *xyz) for n, xyz in nodes.items()),
         lines=tuple(lines),
         frequency_hz=freq,
@@ -693,6 +698,26 @@ def _whole(value: Any) -> int | None:
     except (TypeError, ValueError, OverflowError):
         return None
     return int(number) if math.isfinite(number) and number == int(number) else None
+
+
+#: How an exported FRF's ID line 5 states the response's exponential window (its decay rate).
+WINDOW_TAG = "exp_window_decay_1_s="
+
+
+def _window_decay(frf_recs) -> float:
+    """The exponential window's decay (1/s) every FRF record states in ID line 5 as
+    written by write_multipoint_uff; 0 when they do not all state the same one."""
+    values = set()
+    for rec in frf_recs:
+        text = rec.ids[4] if len(rec.ids) > 4 else ""
+        if not text.startswith(WINDOW_TAG):
+            return 0.0
+        try:
+            values.add(float(text[len(WINDOW_TAG) :].split()[0]))
+        except (ValueError, IndexError):
+            return 0.0
+    value = values.pop() if len(values) == 1 else 0.0
+    return value if math.isfinite(value) and value > 0 else 0.0
 
 
 def _coherence(frf_recs, coh_recs, dofs, name: str, notes: list[str]) -> np.ndarray | None:

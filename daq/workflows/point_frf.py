@@ -68,10 +68,9 @@ def point_frf(run: Run) -> PointFrf:
     if form != "accelerance":
         frf = convert_form(frf, frfs.frequency_hz, "accelerance", form)
     coherence = None if frfs.coherence is None else frfs.coherence[0]
-    decay = 0.0
-    if source == "analyzer":
-        _, response_window, _ = window_specs(run)
-        decay = added_decay_rate(response_window)
+    # The analyzer's windows, or those the importer read from the file (stated, not undone).
+    _, response_window, _ = window_specs(run)
+    decay = added_decay_rate(response_window)
     return PointFrf(frfs.frequency_hz, frf, coherence, None, float(decay), source)
 
 

@@ -72,7 +72,7 @@ def export_test(analysis: TestAnalysis, path: Path) -> tuple[int, int]:
         coherence = coherence[:, keep]
     exchange = MultiPointExchange(
         tuple(nodes), lines, data.frequency_hz[keep], frf[:, keep], references, responses,
-        "accelerance", coherence, modes,
+        "accelerance", coherence, modes, window_decay_1_s=data.added_decay_1_s,
     )  # fmt: skip
     try:
         write_multipoint_uff(path, exchange)

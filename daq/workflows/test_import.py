@@ -114,7 +114,11 @@ def import_uff_test(
         for k, point in enumerate(points):
             coherence = None if ex.coherence is None else ex.coherence[k : k + 1]
             frfs = MeasuredFrf(ex.frequency_hz, ex.frf[k : k + 1], coherence, [point.name], ex.form)
-            imported = {"file": path.name, "sha256": digest, "format": "uff", "frf_index": k}
+            imported: dict[str, Any] = {"file": path.name, "sha256": digest, "format": "uff", "frf_index": k}
+            if ex.window_decay_1_s > 0:
+                # As a run's analysis reads windows an importer found (daq/workflows/analysis.py).
+                window = {"window": "EXPO", "exp_decay_s": 1.0 / ex.window_decay_1_s}
+                imported["windows"] = {"accelerometer": window, "hammer": {"window": "UNIF"}}
             provenance: dict[str, Any] = {
                 "imported_from": {**imported, "format_from": "daq import --as-test"}
             }
