@@ -25,7 +25,8 @@ class PointFrf:
     exponential window's gain at the pulse undone (its added decay is still in the poles);
     coherence (n_lines,) or None; per_hit (n_hits, n_lines) complex or None (FRF-only
     runs); added_decay_1_s: the exponential window's decay in the poles, 1/s;
-    source: "hits", "measured_frf" or "analyzer"."""
+    source: "hits", "measured_frf" or "analyzer"; force_autospectrum (n_lines,) the
+    averaged force autospectrum, N^2 s^2 (hits only: the band choice reads it)."""
 
     frequency_hz: np.ndarray
     frf: np.ndarray
@@ -33,6 +34,7 @@ class PointFrf:
     per_hit: np.ndarray | None
     added_decay_1_s: float
     source: str
+    force_autospectrum: np.ndarray | None = None
 
     @property
     def n_hits(self) -> int:
@@ -57,7 +59,7 @@ def point_frf(run: Run) -> PointFrf:
         gain = float(np.exp(decay * max(0.0, -float(run.hits.start_s))))
         return PointFrf(
             estimate.frequency_hz, gain * estimate.h1, estimate.coherence, gain * per_hit_frf(spectra),
-            float(decay), "hits",
+            float(decay), "hits", estimate.g_ff,
         )  # fmt: skip
     frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
     if frfs is None:

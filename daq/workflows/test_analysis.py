@@ -11,12 +11,13 @@ test has one; analysis.beam_shapes gives the exact and Ritz shapes at the same p
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from analysis.band_choice import choose_band
 from analysis.beam_shapes import exact_shapes
 from analysis.mac import align, auto_mac
 from analysis.modal_id.shapes import ModeShapes, mode_shapes
@@ -160,12 +161,21 @@ def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = N
     """Analyse every measured point of test ``name`` together. WorkflowError (one line)."""
     options = options or AnalysisOptions()
     data = gather(store_dir, name)
+    band = None
+    forces = [p.force_autospectrum for p in data.point_frfs]
     try:
+        if options.band_hz is None and all(g is not None for g in forces):
+            # Where every hit put energy and the coherence is usable, as for one run: the
+            # points' force spectra (their median) instead of the FRFs alone.
+            band = choose_band(data.frequency_hz, np.median(np.stack(forces), axis=0), data.coherence)
+            options = replace(options, band_hz=(band.low_hz, band.high_hz))
         result = analyze_frfs(
             data.frequency_hz, data.frf, data.coherence, "hits", options, data.added_decay_1_s
         )
     except ValueError as exc:
         raise WorkflowError(f"test {name}: {exc}") from None
+    if band is not None:
+        result.band = band
     cautions = list(data.cautions) + list(result.cautions)
     if not result.modes:
         raise WorkflowError(

@@ -18,10 +18,11 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import (
+    DEFAULT_SCENARIO,
+    DEFAULT_TIME_SCALE,
     DialectOption,
     ForceAtOption,
     OldSimModelOption,
-    Scenario,
     SensorAtOption,
     SimModel,
     SimModelOption,
@@ -157,8 +158,8 @@ def capture(
         force_at, sensor_at = where.force_at_m, where.sensor_at_m
     run_capture(
         real, settings, hits_wanted, yes, operator, note, store,
-        scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
-        time_scale=0.05 if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
+        scenario=(scenario or DEFAULT_SCENARIO).value, seed=seed,
+        time_scale=DEFAULT_TIME_SCALE if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
         dialect=check_dialect(dialect), model=(simulated or SimModel.hp35660a).value,
         force_at_m=force_at if real is None else None, sensor_at_m=sensor_at if real is None else None,
         where=where,
@@ -179,15 +180,20 @@ def test_point(store: str | None, test: str, point: str | None, next_point: bool
         raise UserError(str(exc), exit_code=exc.exit_code) from None
 
 
-def join_test(store_dir: Path, where, run_id: str) -> None:
+def join_test(store_dir: Path, where, run_id: str, accepted: bool = True) -> None:
     """Join the sealed run to its test and say so; UserError when it could not be joined."""
     from daq.workflows.errors import WorkflowError
     from daq.workflows.test import join
 
     try:
-        test = join(store_dir, where, run_id)
+        test = join(store_dir, where, run_id, accepted)
     except WorkflowError as exc:
         raise UserError(str(exc)) from None
+    if not accepted:
+        typer.echo(
+            f"Run {run_id} listed in test {where.test} at point {where.point}, not counted (incomplete)"
+        )
+        return
     left = [p.name for p in test.points if test.counted_run(p.name) is None]
     rest = f"; next: {left[0]} ({len(left)} left)" if left else "; every point is measured"
     typer.echo(f"Run {run_id} joined test {where.test} at point {where.point}{rest}")
@@ -222,7 +228,7 @@ def run_capture(
     note: str,
     store: str | None,
     scenario: str,
-    seed: int,
+    seed: int | None,
     time_scale: float,
     hammer: str | None,
     sim_asked: bool = False,
@@ -232,14 +238,15 @@ def run_capture(
     sensor_at_m: float | None = None,
     where=None,
 ) -> None:
-    """Open the analyzer (or start the simulator when ``resource`` is None), run the
+    """Open the analyzer (or start the simulator when ``resource`` is None, playing
+    ``seed``, or a fresh random seed when None: printed and recorded in the run), run the
     capture with a display, and seal the run; an interrupted capture is sealed incomplete."""
     from rich.console import Console
 
     from daq.cli.capture_session import drive
     from daq.store import Store, StoreError, resolve_store_dir
     from daq.workflows.capture import Capture
-    from daq.workflows.connect import open_analyzer, serve_simulator, simulator_source
+    from daq.workflows.connect import fresh_seed, open_analyzer, serve_simulator, simulator_source
 
     console = Console(highlight=False, soft_wrap=True)
     store_dir, _ = resolve_store_dir(store)
@@ -251,6 +258,8 @@ def run_capture(
     with contextlib.ExitStack() as stack:
         simulator = None
         if resource is None:
+            if seed is None:
+                seed = fresh_seed()
             try:
                 source = simulator_source(scenario, seed, hammer or "")
             except ValueError as exc:
@@ -270,7 +279,10 @@ def run_capture(
                     f", hammer at {source.specimen.force_at_m:g} m, accelerometer at "
                     f"{source.specimen.sensor_at_m:g} m"
                 )
-            console.print(f"Simulated {model} ({scenario} beam{moved}) at {resource}: --sim")
+            console.print(
+                f"Simulated {model} ({scenario} beam{moved}, seed {seed}, time scale {time_scale:g}) "
+                f"at {resource}: --sim"
+            )
             if points is not None and points.article.get("kind") != "seed-beam":
                 console.print(
                     f"note: the simulator plays the seed's beam, not test {where.test}'s article "
@@ -287,6 +299,12 @@ def run_capture(
             simulator=simulator, operator=operator, note=note, store_dir=store_dir,
             points=points,
         )  # fmt: skip
-        run = drive(console, job, store_dir, ask=not yes)
+        try:
+            run = drive(console, job, store_dir, ask=not yes)
+        except UserError:
+            if where is not None and (store_dir / f"{job.run_id}.h5").exists():
+                # An interrupted capture is sealed incomplete: listed at its point, not counted.
+                join_test(store_dir, where, job.run_id, accepted=False)
+            raise
     if where is not None:
         join_test(store_dir, where, run.run_id)

@@ -222,8 +222,14 @@ def _analysis(store_dir: Path, name: str, band: str | None, frequencies: str | N
         )
     except ValueError as exc:
         raise UserError(str(exc).replace("max_order", "--max-order").replace("band ", "--band "), 2) from None
-    sys.stderr.write(f"analysing test {name}...\n")
+    _progress(f"analysing test {name}...")
     return analyze_test(store_dir, name, options)
+
+
+def _progress(text: str) -> None:
+    """A line on stderr for a person watching (a terminal); scripts get errors alone."""
+    if sys.stderr.isatty():
+        sys.stderr.write(text + "\n")
 
 
 @test_app.command("analyze")
@@ -313,7 +319,7 @@ def fit(
 
     store_dir = _store_dir(store)
     analysis = _analysis(store_dir, name, band, frequencies, max_order)
-    sys.stderr.write(f"fitting R to {len(analysis.data.points)} points ({method})...\n")
+    _progress(f"fitting R to {len(analysis.data.points)} points ({method})...")
     result = fit_test(analysis, store_dir, method.lower(), psd=not unconstrained, seed=seed)
     info = test_fit_json(result)
     if json_output:
@@ -407,7 +413,7 @@ def report(
     analysis = _analysis(store_dir, name, band, frequencies, max_order)
     fitted = None
     if fit_method is not None:
-        sys.stderr.write(f"fitting R ({fit_method})...\n")
+        _progress(f"fitting R ({fit_method})...")
         fitted = fit_test(analysis, store_dir, fit_method.lower())
     try:
         html, pngs = render_modal_test_report(report_inputs(analysis, fitted))
