@@ -25,14 +25,15 @@ DEMO_STORE ?= $(VENV)/demo-runs
 demo: $(VENV)/.installed-run
 	$(BIN)/daq model
 	$(BIN)/daq demo
-	$(BIN)/daq capture --sim --hits 5 --yes --operator demo --note "make demo" --store $(DEMO_STORE)
+	# --seed 1: the run docs/damping.md measured (a capture without --seed plays a fresh one).
+	$(BIN)/daq capture --sim --seed 1 --hits 5 --yes --operator demo --note "make demo" --store $(DEMO_STORE)
 	$(BIN)/daq runs list --store $(DEMO_STORE)
 	$(BIN)/daq runs verify --store $(DEMO_STORE)
 	$(BIN)/daq analyze latest --store $(DEMO_STORE)
 	$(BIN)/daq fit latest --store $(DEMO_STORE)
 	$(BIN)/daq report latest --store $(DEMO_STORE) -o $(VENV)/demo-report --force
 	# The same beam on a simulated SCPI 35670A, its run through an SDF file and back.
-	$(BIN)/daq capture --sim --analyzer 35670A --hits 3 --yes --note "make demo, 35670A" --store $(DEMO_STORE)
+	$(BIN)/daq capture --sim --seed 1 --analyzer 35670A --hits 3 --yes --note "make demo, 35670A" --store $(DEMO_STORE)
 	$(BIN)/daq analyze latest --store $(DEMO_STORE)
 	$(BIN)/daq export latest --format sdf --force -o $(VENV)/demo-35670A.sdf --store $(DEMO_STORE)
 	$(BIN)/daq import $(VENV)/demo-35670A.sdf --store $(DEMO_STORE)

@@ -78,6 +78,13 @@ class Scenario(StrEnum):
     realistic = "realistic"
 
 
+#: The specimen and the speed every command's simulator plays unless told otherwise
+#: (daq sim serve, capture --sim, demo, serve --sim): the beam a lab measures, at a pace
+#: a person at the keyboard does not wait on (docs/simulator.md, "Defaults").
+DEFAULT_SCENARIO = Scenario.realistic
+DEFAULT_TIME_SCALE = 0.05
+
+
 class SimModel(StrEnum):
     """The models the simulator plays (sims/), by the name the CLI takes."""
 
@@ -98,16 +105,32 @@ SCENARIO_HELP = (
     "or realistic (the exact beam, 6 lightly damped modes)."
 )
 SEED_HELP = "Random seed of the simulated hammer and noise: the same seed gives the same data."
+#: A seed not given is a fresh random one, always printed (and recorded in a run), so
+#: that two captures never repeat each other's hits unless asked to.
+FRESH_SEED_HELP = "[default: a fresh random one{}]"
 TIME_SCALE_HELP = (
     "Speed of simulated time: 1 = real time (a hit every 0.5-2 s), 0.1 = ten times faster, 0 = instant."
 )
 
 #: The simulator options of a command that drives a real analyzer or, with --sim, the simulator.
-SimScenarioOption = Annotated[Scenario | None, typer.Option(help="Simulator only. " + SCENARIO_HELP)]
-SimSeedOption = Annotated[int | None, typer.Option(metavar="<int>", help="Simulator only. " + SEED_HELP)]
+SimScenarioOption = Annotated[
+    Scenario | None,
+    typer.Option(
+        show_default=False, help=f"Simulator only. {SCENARIO_HELP} [default: {DEFAULT_SCENARIO.value}]"
+    ),
+]
+SimSeedOption = Annotated[
+    int | None,
+    typer.Option(
+        metavar="<int>",
+        help=f"Simulator only. {SEED_HELP} " + FRESH_SEED_HELP.format(" per capture, recorded in its run"),
+    ),
+]
 SimTimeScaleOption = Annotated[
     float | None,
-    typer.Option(metavar="<factor>", help="Simulator only. " + TIME_SCALE_HELP + " [default: 0.05]"),
+    typer.Option(
+        metavar="<factor>", help=f"Simulator only. {TIME_SCALE_HELP} [default: {DEFAULT_TIME_SCALE:g}]"
+    ),
 ]
 SimModelOption = Annotated[
     SimModel | None,

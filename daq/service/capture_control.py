@@ -106,7 +106,7 @@ class CaptureController:
             with self._cond:
                 self.state = "idle"
             raise
-        simulator = self.link.sim.provenance() if self.link.sim is not None else None
+        simulator = self.link.simulator_for_capture()
         job = Capture(
             dsa, self.settings, hits_wanted, resource=self.link.resource, transport=self.link.transport_name,
             simulator=simulator, operator=operator, note=note, store_dir=self.store_dir,

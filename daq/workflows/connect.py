@@ -78,6 +78,15 @@ def open_analyzer(
     return open_resource(resource, timeout_s=timeout_s, dialect=dialect, retries=retries, lock_file=lock_file)
 
 
+def fresh_seed() -> int:
+    """A new random seed for the simulator, for a capture (or a simulator's start) given
+    none: 0 <= seed < 2**32, from the operating system's entropy, so that two captures
+    never play the same hits by accident. Printed and recorded, it replays them."""
+    import secrets
+
+    return secrets.randbits(32)
+
+
 def simulator_source(
     scenario: str = "seed",
     seed: int = 0,

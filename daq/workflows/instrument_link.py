@@ -14,7 +14,7 @@ import threading
 from dataclasses import dataclass
 from typing import Any
 
-from daq.workflows.connect import open_analyzer, serve_simulator
+from daq.workflows.connect import fresh_seed, open_analyzer, serve_simulator
 from drivers.base import SignalAnalyzer
 from drivers.errors import DriverError
 from drivers.locking import ResourceLock
@@ -28,18 +28,22 @@ IO_TIMEOUT_S = 5.0
 
 @dataclass(frozen=True)
 class SimSpec:
-    """The built-in simulator's beam scenario, seed, time scale and hammer overrides."""
+    """The built-in simulator's beam scenario, seed, time scale and hammer overrides.
+    The command line chooses the defaults (daq/cli/options.py). ``seed`` None: each
+    capture plays a fresh random seed; a seed given: each capture plays that seed, so
+    that every capture is the one ``daq capture --sim --seed N`` takes."""
 
-    scenario: str = "realistic"
-    seed: int = 1
-    time_scale: float = 0.05
+    scenario: str
+    seed: int | None
+    time_scale: float
     hammer: str = ""
     model: str = "35660A"
 
-    def provenance(self) -> dict[str, Any]:
+    def provenance(self, seed: int) -> dict[str, Any]:
+        """What a capture records of the simulator, ``seed`` the one it played."""
         return {
             "scenario": self.scenario,
-            "seed": self.seed,
+            "seed": seed,
             "time_scale": self.time_scale,
             "hammer": self.hammer,
             "model": self.model,
@@ -67,6 +71,8 @@ class InstrumentLink:
         #: The dialect given (--dialect) or found at the first connection.
         self.dialect = dialect
         self.detection = f"the {dialect} dialect was forced (--dialect or $DAQ_DIALECT)" if dialect else ""
+        #: The simulator's physics (with --sim), reseeded at each capture.
+        self._source: Any = None
 
     def start(self) -> None:
         """Start the simulator if any, take the instrument's lock (ResourceBusy if
@@ -77,7 +83,9 @@ class InstrumentLink:
             from sims.sources import PhysicsSource
 
             hammer = adjusted(HammerModel(), self.sim.hammer) if self.sim.hammer else HammerModel()
-            source = PhysicsSource(self.sim.scenario, hammer=hammer, seed=self.sim.seed)
+            seed = fresh_seed() if self.sim.seed is None else self.sim.seed
+            source = PhysicsSource(self.sim.scenario, hammer=hammer, seed=seed)
+            self._source = source
             self.resource = serve_simulator(self._stack, source, self.sim.time_scale, self.sim.model)
         lock = ResourceLock(lock_key_of(self.resource), self.resource, holder=self.holder)
         lock.acquire()
@@ -88,6 +96,17 @@ class InstrumentLink:
                 self.note_ok(dsa.identify())
         except DriverError as exc:
             self.note_error(str(exc))
+
+    def simulator_for_capture(self) -> dict[str, Any] | None:
+        """Before a capture: restart the simulator's random stream on the capture's seed
+        (--seed, else a fresh one) and return the simulator's provenance for the run,
+        whose seed replays the capture's hits (``daq capture --sim --seed N``); None for
+        a real analyzer."""
+        if self.sim is None:
+            return None
+        seed = fresh_seed() if self.sim.seed is None else self.sim.seed
+        self._source.reseed(seed)
+        return self.sim.provenance(seed)
 
     def open_driver(self) -> SignalAnalyzer:
         """A new connection (the lock is ours already: the driver does not take it). The

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import tomllib
 
 import numpy as np
@@ -32,13 +33,17 @@ def test_simulated_capture_seals_a_complete_run(tmp_path, env):
         "capture", "--sim", "--yes", "--hits", "3", "--time-scale", "0", "--store", str(store), env=env
     )
     assert result.returncode == 0, result.stderr
-    assert result.stdout.splitlines()[0].startswith("Simulated 35660A (realistic beam) at TCPIP::127.0.0.1::")
+    banner = result.stdout.splitlines()[0]
+    assert re.match(
+        r"Simulated 35660A \(realistic beam, seed \d+, time scale 0\) at TCPIP::127\.0\.0\.1::", banner
+    )
     (summary,) = Store(store).list()
     run = Store(store).open(summary.run_id)
     assert summary.run_id in result.stdout
     assert run.kind == "simulated"
     assert run.complete
     assert run.provenance["simulator"]["scenario"] == "realistic"
+    assert f"seed {run.provenance['simulator']['seed']}," in banner  # the fresh seed, printed and recorded
     assert run.hits.n_hits == 3
     assert run.hits.accepted.all()
     assert run.hits.force_n.shape == (3, 1024)

@@ -26,7 +26,8 @@ REALISTIC_MODES_HZ = (5.569, 34.899, 97.717)
 
 
 def test_a_capture_decided_through_the_api_lands_with_the_right_flags_and_gets_its_results(tmp_path):
-    with serving(tmp_path, "--sim", "--time-scale", "0.02") as served:
+    # --seed 1: the hits whose modes and damping the checks below were measured on.
+    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0.02") as served:
         health = served.get("/api/health").json()
         assert health["instrument"]["connected"] is True
         assert health["instrument"]["simulated"] is True

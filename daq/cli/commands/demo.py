@@ -13,14 +13,27 @@ from typing import Annotated
 import typer
 
 from daq.cli.errors import UserError
-from daq.cli.options import SCENARIO_HELP, SEED_HELP, TIME_SCALE_HELP, Scenario
+from daq.cli.options import (
+    DEFAULT_SCENARIO,
+    DEFAULT_TIME_SCALE,
+    FRESH_SEED_HELP,
+    SCENARIO_HELP,
+    SEED_HELP,
+    TIME_SCALE_HELP,
+    Scenario,
+)
 
 
 def demo(
     hits: Annotated[int, typer.Option(metavar="<1-100>", help="Hits to average.")] = 5,
-    scenario: Annotated[Scenario, typer.Option(help=SCENARIO_HELP)] = Scenario.realistic,
-    seed: Annotated[int, typer.Option(help=SEED_HELP)] = 1,
-    time_scale: Annotated[float, typer.Option(metavar="<factor>", help=TIME_SCALE_HELP)] = 0.05,
+    scenario: Annotated[Scenario, typer.Option(help=SCENARIO_HELP)] = DEFAULT_SCENARIO,
+    seed: Annotated[
+        int | None,
+        typer.Option(
+            metavar="<int>", show_default=False, help=f"{SEED_HELP} {FRESH_SEED_HELP.format(', printed')}"
+        ),
+    ] = None,
+    time_scale: Annotated[float, typer.Option(metavar="<factor>", help=TIME_SCALE_HELP)] = DEFAULT_TIME_SCALE,
 ) -> None:
     """Run a simulated impact test; compare it with the beam model.
 
@@ -36,7 +49,7 @@ def demo(
 
     from analysis.exact_beam import cantilever_frequencies_hz
     from analysis.ritz import ritz_frequencies_hz
-    from daq.workflows.connect import open_analyzer
+    from daq.workflows.connect import fresh_seed, open_analyzer
     from drivers.settings import ImpactSettings
     from sims.instrument import Analyzer
     from sims.scenarios import SCENARIOS
@@ -50,10 +63,12 @@ def demo(
     if not time_scale >= 0:
         raise UserError("--time-scale must be >= 0", exit_code=2)
     console = Console()
+    seed = fresh_seed() if seed is None else seed
     analyzer = Analyzer(PhysicsSource(scenario.value, seed=seed), time_scale=time_scale)
     with TcpServer(analyzer) as server, open_analyzer(server.resource, timeout_s=5.0) as dsa:
         console.print(
-            f"Simulated analyzer ({scenario.value} beam) at [bold]{server.resource}[/]: {dsa.identify()}"
+            f"Simulated analyzer ({scenario.value} beam, seed {seed}, time scale {time_scale:g}) "
+            f"at [bold]{server.resource}[/]: {dsa.identify()}"
         )
         settings = dsa.configure(ImpactSettings(span_hz=200.0, averages=hits, preview=True))
         console.print(

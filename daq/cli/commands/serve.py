@@ -15,9 +15,10 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import (
+    DEFAULT_SCENARIO,
+    DEFAULT_TIME_SCALE,
     DialectOption,
     OldSimModelOption,
-    Scenario,
     SimModel,
     SimModelOption,
     SimScenarioOption,
@@ -118,8 +119,8 @@ def serve(
     store_dir, _ = resolve_store_dir(store)
     run_service(
         store_dir, real, sim, host, port, token, created, path, n_jobs, address,
-        scenario=(scenario or Scenario.realistic).value, seed=1 if seed is None else seed,
-        time_scale=0.05 if time_scale is None else time_scale,
+        scenario=(scenario or DEFAULT_SCENARIO).value, seed=seed,
+        time_scale=DEFAULT_TIME_SCALE if time_scale is None else time_scale,
         model=(simulated or SimModel.hp35660a).value, dialect=forced,
     )  # fmt: skip
 
@@ -134,7 +135,7 @@ def _scheduler(option: str | None) -> str | None:
 
 def run_service(
     store_dir, resource, sim, host, port, token, created, token_file, workers, scheduler,
-    scenario: str, seed: int, time_scale: float, model: str = "35660A", dialect: str | None = None,
+    scenario: str, seed: int | None, time_scale: float, model: str = "35660A", dialect: str | None = None,
 ) -> None:  # fmt: skip
     import socket
 
@@ -282,6 +283,13 @@ def _banner(service, config, store_dir, scheduler, created, token_file, loopback
     state = status["identification"] or f"not answering: {status['last_error']}"
     say = sys.stderr.write
     say(f"daq serve: {what} at {status['resource']} ({state})\n")
+    if config.sim is not None:
+        sim = config.sim
+        seed = "a fresh seed per capture" if sim.seed is None else f"seed {sim.seed} for every capture"
+        say(
+            f"daq serve: simulating the {sim.scenario} beam, time scale {sim.time_scale:g}, {seed} "
+            "(recorded in its run)\n"
+        )
     plural = "" if config.workers == 1 else "s"
     workers = f"{config.workers} analysis worker{plural}" + (f" on {scheduler}" if scheduler else "")
     say(f"daq serve: store {store_dir}; {workers}\n")

@@ -10,6 +10,9 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import (
+    DEFAULT_SCENARIO,
+    DEFAULT_TIME_SCALE,
+    FRESH_SEED_HELP,
     MODEL_HELP,
     MODEL_METAVAR,
     SCENARIO_HELP,
@@ -90,9 +93,22 @@ def serve(
         int,
         typer.Option(metavar="<0-30>", help="With --pty: the analyzer's GPIB address behind the Prologix."),
     ] = 11,
-    scenario: Annotated[Scenario, typer.Option(help=SCENARIO_HELP)] = Scenario.seed,
-    seed: Annotated[int, typer.Option(help=SEED_HELP)] = 0,
-    time_scale: Annotated[float, typer.Option(metavar="<factor>", help=TIME_SCALE_HELP)] = 1.0,
+    scenario: Annotated[
+        Scenario | None,
+        typer.Option(
+            show_default=False,
+            help=f"{SCENARIO_HELP} [default: {DEFAULT_SCENARIO.value}; seed with --damping-matrix]",
+        ),
+    ] = None,
+    seed: Annotated[
+        int | None,
+        typer.Option(
+            metavar="<int>",
+            show_default=False,
+            help=f"{SEED_HELP} {FRESH_SEED_HELP.format(' at each start, printed')}",
+        ),
+    ] = None,
+    time_scale: Annotated[float, typer.Option(metavar="<factor>", help=TIME_SCALE_HELP)] = DEFAULT_TIME_SCALE,
     noise: Annotated[
         bool, typer.Option("--noise/--no-noise", help="Add sensor noise to the signals.")
     ] = True,
@@ -172,6 +188,9 @@ def serve(
             verb = "applies" if len(given) == 1 else "apply"
             raise UserError(f"{', '.join(given)} only {verb} to the physics, not to --replay", exit_code=2)
     damping = None
+    if scenario is None:
+        # A damping matrix is the seed's beam's: it alone chooses that beam.
+        scenario = Scenario.seed if damping_matrix is not None else DEFAULT_SCENARIO
     if damping_matrix is not None:
         if scenario is not Scenario.seed:
             raise UserError(
@@ -196,6 +215,10 @@ def serve(
             raise UserError(f"--replay {replay}: {exc}", exit_code=2) from None
         what = f"replay of {replay} ({len(hits)} hits)"
     else:
+        if seed is None:
+            from daq.workflows.connect import fresh_seed
+
+            seed = fresh_seed()
         try:
             source = PhysicsSource(
                 scenario.value, seed=seed, force_at_m=force_at, sensor_at_m=sensor_at, damping=damping
