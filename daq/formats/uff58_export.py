@@ -1,6 +1,20 @@
 """UFF dataset 58 export through pyuff (the reader is daq/formats/uff58.py, whose
 docstring gives the records written and why binary 58 is used).
 
+Records are written FRFs first (function type 4), then their coherence (6), then the
+hits' time records (1): readers that take the FRF's form from the file's first
+dataset 58 (sdypy-EMA does) find an FRF there.
+
+Nodes follow the run's points (Run.resolved_points): the force point is node 1 and
+every response point at the same place (same name, position or article node) is node 1
+too, so a driving point is ONE node for reference and response; a response point
+elsewhere is node 2, 3, ... Directions are the points' (``+z`` -> +Z, code 3). An
+imported run that records no points keeps reference node 1, response node 2 (where it
+was measured is not known). The FRF records' ID line 5 names the two points
+(``ref_name=... rsp_name=...``), ID line 4 states the windows the FRF went through
+(``response_window=exponential exp_decay_s=... pulse_s=...`` or
+``response_window=uniform``): UFF 58 has no field for a window.
+
 The file is written to a temporary in the target's folder, read back with pyuff and
 compared record by record before it replaces the target: a file pyuff cannot read
 back unchanged is never left at ``path``.
@@ -10,6 +24,7 @@ from __future__ import annotations
 
 import gc
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -19,18 +34,43 @@ import pyuff
 from daq.formats.errors import FormatError
 from daq.formats.imported import atomic_temp, commit_temp, discard_temp, one_line, show_path
 from daq.formats.uff58 import FUNC_COHERENCE, FUNC_FRF, FUNC_TIME, read_uff_sets
-from daq.store.model import Run
+from daq.store.model import POSITION_TOLERANCE_M, MeasuredFrf, Point, Run
+
+#: UFF direction codes of the points' directions.
+DIRECTION_CODES = {"+x": 1, "-x": -1, "+y": 2, "-y": -2, "+z": 3, "-z": -3}
 
 
-def write_uff(run: Run, path: Path) -> None:
-    """Write ``run``'s hits, analyzer FRF and measured FRFs as binary UFF 58, atomically.
+@dataclass(frozen=True)
+class ExportFrfs:
+    """FRFs to write in place of the run's stored ones (daq/workflows/export.py makes
+    them: the H1 of the accepted hits without the response window). ``windows``: the
+    text of the records' ID line 4, the windows the FRFs went through as ``key=value``
+    words (at most 80 characters); ``tag``: what ID line 2 calls them after the run id."""
 
+    frfs: MeasuredFrf
+    windows: str
+    tag: str = "h1"
+
+
+@dataclass(frozen=True)
+class _Dof:
+    node: int
+    direction: int
+    name: str
+
+
+def write_uff(run: Run, path: Path, frfs: ExportFrfs | None = None) -> None:
+    """Write ``run``'s FRFs and hits as binary UFF 58, atomically.
+
+    The FRFs are ``frfs`` when given, else the run's analyzer FRF and measured FRFs as
+    stored (with the windows they went through stated in ID line 4).
     The written file is read back with pyuff before it replaces ``path``: every value
     must come back bit for bit, else FormatError and ``path`` is left untouched.
     """
     path = Path(path)
     name = show_path(path)
-    sets = _time_sets(run) + _frf_sets(run)
+    force, responses = _dofs(run)
+    sets = _frf_sets(run, force, responses, frfs) + _time_sets(run, force, responses)
     for dset in sets:
         if dset["data"].size < 2:
             raise FormatError(f"cannot write {name}: UFF 58 records need at least 2 points")
@@ -77,7 +117,29 @@ def _equal(a: Any, b: np.ndarray) -> bool:
     return a.shape == b.shape and a.dtype == b.dtype and bool(np.array_equal(a, b))
 
 
-def _time_sets(run: Run) -> list[dict]:
+def _dofs(run: Run) -> tuple[_Dof, list[_Dof]]:
+    """The force point's DOF (node 1) and the response points' (module docstring)."""
+    if run.points is None and run.kind == "imported":
+        return _Dof(1, 3, ""), [_Dof(2, 3, "")]
+    points = run.resolved_points()
+    force = points.force_point
+    numbers: dict[str, int] = {}
+    responses = []
+    for point in points.response_points:
+        node = 1 if _same_place(point, force) else numbers.setdefault(point.name, 2 + len(numbers))
+        responses.append(_Dof(node, DIRECTION_CODES[point.direction], point.name))
+    return _Dof(1, DIRECTION_CODES[force.direction], force.name), responses
+
+
+def _same_place(a: Point, b: Point) -> bool:
+    if a.name == b.name:
+        return True
+    if a.position_m is not None and b.position_m is not None:
+        return abs(a.position_m - b.position_m) <= POSITION_TOLERANCE_M
+    return a.node is not None and a.node == b.node
+
+
+def _time_sets(run: Run, force: _Dof, responses: list[_Dof]) -> list[dict]:
     hits = run.hits
     if hits is None:
         return []
@@ -85,9 +147,9 @@ def _time_sets(run: Run) -> list[dict]:
     ids += (f"sample_rate_hz={float(hits.sample_rate_hz)!r} start_s={float(hits.start_s)!r}",)
     sets = []
     for k in range(hits.n_hits):
-        for what, data, node, kind, unit in (
-            ("force", hits.force_n[k], 1, 13, "N"),
-            ("response", hits.response_m_s2[k], 2, 12, "m/s^2"),
+        for what, data, dof, kind, unit in (
+            ("force", hits.force_n[k], force, 13, "N"),
+            ("response", hits.response_m_s2[k], responses[0], 12, "m/s^2"),
         ):
             title = f"{run.run_id} hit {k} {what}"
             if not hits.accepted[k]:
@@ -95,32 +157,47 @@ def _time_sets(run: Run) -> list[dict]:
                 title = f"{title} rejected: {one_line(str(hits.reject_reason[k]))}"[:80]
             head = (title, run.run_id, *ids)
             kinds = ((kind, unit), (0, "NONE"))
-            sets.append(_dset(FUNC_TIME, k, head, node, True, (17, "s"), *kinds, data, hits.time_s()))
+            sets.append(_dset(FUNC_TIME, k, head, force, dof, True, (17, "s"), *kinds, data, hits.time_s()))
     return sets
 
 
-def _frf_sets(run: Run) -> list[dict]:
+def _frf_sets(run: Run, force: _Dof, responses: list[_Dof], given: ExportFrfs | None) -> list[dict]:
+    if given is not None:
+        groups = [(given.tag, given.frfs, given.windows)]
+    else:
+        groups = [
+            (tag, frfs, _frf_windows(run, tag))
+            for tag, frfs in (("analyzer", run.analyzer), ("measured", run.measured_frfs))
+            if frfs is not None
+        ]
     frf_sets, coh_sets = [], []
-    for tag, frfs in (("analyzer", run.analyzer), ("measured", run.measured_frfs)):
-        if frfs is None:
-            continue
+    for tag, frfs, windows in groups:
         even = _even_axis(frfs.frequency_hz)
         numerator = {"receptance": (8, "m"), "mobility": (11, "m/s"), "accelerance": (12, "m/s^2")}[frfs.form]
         axis, frf_kinds, coh_kinds = frfs.frequency_hz, (numerator, (13, "N")), ((0, "NONE"), (0, "NONE"))
-        windows = _frf_windows(run, tag)
         for i in range(frfs.n_frf):
-            head = (_id_text(frfs.labels[i]), f"{run.run_id} {tag}", run.start_time, windows, "NONE")
-            frf_sets.append(_dset(FUNC_FRF, i, head, 2, even, (18, "Hz"), *frf_kinds, frfs.frf[i], axis))
+            # The i-th FRF is the i-th response point's when the run has one per FRF.
+            rsp = responses[i] if len(responses) == frfs.n_frf else responses[0]
+            names = f"ref_name={force.name} rsp_name={rsp.name}" if force.name and rsp.name else ""
+            head = (
+                _id_text(frfs.labels[i]), f"{run.run_id} {tag}", run.start_time, windows,
+                names if len(names) <= 80 else "NONE",
+            )  # fmt: skip
+            frf_sets.append(
+                _dset(FUNC_FRF, i, head, force, rsp, even, (18, "Hz"), *frf_kinds, frfs.frf[i], axis)
+            )
             if frfs.coherence is not None:
                 coh = frfs.coherence[i]
-                coh_sets.append(_dset(FUNC_COHERENCE, i, head, 2, even, (18, "Hz"), *coh_kinds, coh, axis))
+                coh_sets.append(
+                    _dset(FUNC_COHERENCE, i, head, force, rsp, even, (18, "Hz"), *coh_kinds, coh, axis)
+                )
     return frf_sets + coh_sets
 
 
 def _frf_windows(run: Run, tag: str) -> str:
-    """ID line 4 of an FRF record: the exponential window the FRF went through
-    (``exp_decay_s=... pulse_s=...``), read back by read_uff so that the analysis can
-    take the window's damping out; "NONE" when it is not known."""
+    """ID line 4 of a stored FRF's records: the exponential window the FRF went through
+    (``response_window=exponential exp_decay_s=... pulse_s=...``), read back by read_uff
+    so that the analysis can take the window's damping out; "NONE" when it is not known."""
     decay = pulse = None
     if tag == "analyzer" and run.instrument is not None:
         setup = run.instrument.settings.get("accelerometer", {})
@@ -131,21 +208,24 @@ def _frf_windows(run: Run, tag: str) -> str:
         source = run.provenance.get("imported_from", {})
         if isinstance(source, dict) and source.get("exp_decay_s"):
             decay, pulse = float(source["exp_decay_s"]), float(source.get("pulse_s") or 0.0)
-    return "NONE" if decay is None else f"exp_decay_s={decay!r} pulse_s={pulse!r}"
+    if decay is None:
+        return "NONE"
+    return f"response_window=exponential exp_decay_s={decay!r} pulse_s={pulse!r}"
 
 
-def _dset(func, number, ids, rsp_node, even, abscissa, ordinate, denominator, data, x) -> dict:
-    """One binary dataset 58 dict; abscissa, ordinate, denominator: (specific data type, units label)."""
+def _dset(func, number, ids, ref, rsp, even, abscissa, ordinate, denominator, data, x) -> dict:
+    """One binary dataset 58 dict; ref, rsp: the reference and response _Dof; abscissa,
+    ordinate, denominator: (specific data type, units label)."""
     dset = pyuff.prepare_58(
         binary=1,
         **{f"id{i + 1}": text for i, text in enumerate(ids)},
         func_type=func,
         ver_num=number,
         load_case_id=0,
-        rsp_node=rsp_node,
-        rsp_dir=3,
-        ref_node=1,  # the hammer: node 1, +Z
-        ref_dir=3,
+        rsp_node=rsp.node,
+        rsp_dir=rsp.direction,
+        ref_node=ref.node,
+        ref_dir=ref.direction,
         abscissa_spacing=1 if even else 0,
         abscissa_spec_data_type=abscissa[0],
         ordinate_spec_data_type=ordinate[0],

@@ -121,19 +121,22 @@ def test_plain_pyuff_reads_our_file_unchanged(tmp_path):
     write_uff(run, path)
     sets = pyuff.UFF(str(path)).read_sets()
     assert [s["type"] for s in sets] == [58] * 6
-    assert [s["func_type"] for s in sets] == [1, 1, 1, 1, 4, 6]
-    assert [s["ordinate_spec_data_type"] for s in sets[:4]] == [13, 12, 13, 12]
+    # FRFs first: sdypy-EMA takes the FRF's form from the file's first dataset 58
+    assert [s["func_type"] for s in sets] == [4, 6, 1, 1, 1, 1]
+    assert [s["ordinate_spec_data_type"] for s in sets[2:]] == [13, 12, 13, 12]
     for k in range(2):
-        assert same_bits(sets[2 * k]["data"], run.hits.force_n[k])
-        assert same_bits(sets[2 * k + 1]["data"], run.hits.response_m_s2[k])
+        assert same_bits(sets[2 + 2 * k]["data"], run.hits.force_n[k])
+        assert same_bits(sets[3 + 2 * k]["data"], run.hits.response_m_s2[k])
         # the time axis from the %13.5e header: -0.125 and 1/256 happen to be exact
-        assert np.allclose(sets[2 * k]["x"], run.hits.time_s(), rtol=0, atol=1e-12)
-    assert same_bits(sets[4]["data"], run.analyzer.frf[0])
-    assert same_bits(sets[4]["x"], freq)
-    assert same_bits(sets[5]["data"], run.analyzer.coherence[0])
-    assert sets[0]["ordinate_axis_units_lab"] == "N"
-    assert sets[1]["ordinate_axis_units_lab"] == "m/s^2"
-    assert run.run_id in sets[0]["id2"]
+        assert np.allclose(sets[2 + 2 * k]["x"], run.hits.time_s(), rtol=0, atol=1e-12)
+    assert same_bits(sets[0]["data"], run.analyzer.frf[0])
+    assert same_bits(sets[0]["x"], freq)
+    assert same_bits(sets[1]["data"], run.analyzer.coherence[0])
+    assert sets[2]["ordinate_axis_units_lab"] == "N"
+    assert sets[3]["ordinate_axis_units_lab"] == "m/s^2"
+    assert run.run_id in sets[2]["id2"]
+    # a run that records no points was measured at the tip, hammer and sensor: one node
+    assert {(s["ref_node"], s["ref_dir"], s["rsp_node"], s["rsp_dir"]) for s in sets} == {(1, 3, 1, 3)}
 
 
 def test_export_refuses_non_finite(tmp_path):
