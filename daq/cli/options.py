@@ -211,3 +211,37 @@ def given_once(new: str, new_value: object, old: str, old_value: object) -> obje
         raise UserError(f"{old} is the old name of {new}: give {new} only", exit_code=2)
     renamed(old, new)
     return old_value
+
+
+#: A multi-point test and its point (daq capture and daq import, docs/modal-tests.md).
+TestOption = Annotated[
+    str | None,
+    typer.Option(metavar="<name>", help="Measure one point of this multi-point test (daq test new)."),
+]
+PointOption = Annotated[str | None, typer.Option(metavar="<name>", help="With --test: the point measured.")]
+NextPointOption = Annotated[
+    bool, typer.Option("--next", help="With --test: the first point without an accepted run.")
+]
+
+#: The identification's choices (daq analyze, daq test analyze/fit/report).
+BandOption = Annotated[
+    str | None,
+    typer.Option(
+        metavar="<low:high>",
+        show_default=False,
+        help="Identify modes in this band only, Hz [default: where the hammer put energy and the "
+        "coherence is usable].",
+    ),
+]
+FrequenciesOption = Annotated[
+    str | None,
+    typer.Option(metavar="<f1,f2,...>", help="Frequencies of interest, Hz (else found automatically)."),
+]
+MaxOrderOption = Annotated[
+    int | None,
+    typer.Option(
+        metavar="<2-200>",
+        show_default=False,
+        help="LSCF model order of every frequency zone [default: each zone's, from its peaks].",
+    ),
+]

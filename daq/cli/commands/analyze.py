@@ -18,7 +18,15 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from daq.cli.errors import UserError
-from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
+from daq.cli.options import (
+    BandOption,
+    FrequenciesOption,
+    JobsOption,
+    JsonOption,
+    MaxOrderOption,
+    SchedulerOption,
+    StoreOption,
+)
 
 if TYPE_CHECKING:
     from daq.batch.executor import Backend, BatchReport
@@ -72,27 +80,9 @@ def analyze(
         typer.Argument(metavar="[RUN]...", show_default=False, help="Run ids, unique prefixes, or latest."),
     ] = None,
     all_runs: Annotated[bool, typer.Option("--all", help="Analyse every run of the store.")] = False,
-    band: Annotated[
-        str | None,
-        typer.Option(
-            metavar="<low:high>",
-            show_default=False,
-            help="Identify modes in this band only, Hz [default: where the hammer put energy and the "
-            "coherence is usable].",
-        ),
-    ] = None,
-    frequencies: Annotated[
-        str | None,
-        typer.Option(metavar="<f1,f2,...>", help="Frequencies of interest, Hz (else found automatically)."),
-    ] = None,
-    max_order: Annotated[
-        int | None,
-        typer.Option(
-            metavar="<2-200>",
-            show_default=False,
-            help="LSCF model order of every frequency zone [default: each zone's, from its peaks].",
-        ),
-    ] = None,
+    band: BandOption = None,
+    frequencies: FrequenciesOption = None,
+    max_order: MaxOrderOption = None,
     estimator: Annotated[
         str, typer.Option(metavar="<h1|h2|hv>", help="FRF estimator for time records.")
     ] = "h1",

@@ -22,7 +22,9 @@ from daq.cli.options import (
     DEFAULT_TIME_SCALE,
     DialectOption,
     ForceAtOption,
+    NextPointOption,
     OldSimModelOption,
+    PointOption,
     SensorAtOption,
     SimModel,
     SimModelOption,
@@ -30,6 +32,7 @@ from daq.cli.options import (
     SimSeedOption,
     SimTimeScaleOption,
     StoreOption,
+    TestOption,
     check_dialect,
     given_once,
 )
@@ -96,16 +99,9 @@ def capture(
     model: OldSimModelOption = None,
     force_at: ForceAtOption = None,
     sensor_at: SensorAtOption = None,
-    test: Annotated[
-        str | None,
-        typer.Option(metavar="<name>", help="Capture one point of this multi-point test (daq test new)."),
-    ] = None,
-    point: Annotated[
-        str | None, typer.Option(metavar="<name>", help="With --test: the point to measure.")
-    ] = None,
-    next_point: Annotated[
-        bool, typer.Option("--next", help="With --test: the first point without an accepted run.")
-    ] = False,
+    test: TestOption = None,
+    point: PointOption = None,
+    next_point: NextPointOption = False,
     print_setup: Annotated[
         bool, typer.Option("--print-setup", help="Print the default setup file and exit.")
     ] = False,

@@ -17,7 +17,7 @@ from typing import Annotated, Any
 import typer
 
 from daq.cli.errors import UserError
-from daq.cli.options import StoreOption
+from daq.cli.options import NextPointOption, PointOption, StoreOption, TestOption
 
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 SDF_SUFFIXES = (".sdf",)
@@ -89,16 +89,9 @@ def import_file(
     ] = None,
     operator: Annotated[str, typer.Option(metavar="<name>", help="Stored with the run.")] = "",
     note: Annotated[str, typer.Option(metavar="<text>", help="Stored with the run.")] = "",
-    test: Annotated[
-        str | None,
-        typer.Option(metavar="<name>", help="Import one point of this multi-point test (daq test new)."),
-    ] = None,
-    point: Annotated[
-        str | None, typer.Option(metavar="<name>", help="With --test: the point measured.")
-    ] = None,
-    next_point: Annotated[
-        bool, typer.Option("--next", help="With --test: the first point without an accepted run.")
-    ] = False,
+    test: TestOption = None,
+    point: PointOption = None,
+    next_point: NextPointOption = False,
     as_test: Annotated[
         str | None,
         typer.Option(

@@ -16,7 +16,7 @@ from typing import Annotated, Any
 import typer
 
 from daq.cli.errors import UserError
-from daq.cli.options import JsonOption, StoreOption
+from daq.cli.options import BandOption, FrequenciesOption, JsonOption, MaxOrderOption, StoreOption
 
 test_app = typer.Typer(
     help="Multi-point modal tests: points on a test article, one run per point, analysed together.\n\n"
@@ -191,24 +191,6 @@ def _point_text(point: dict[str, Any]) -> str:
         f"{point['position_m']:g} m" if point.get("position_m") is not None else f"node {point.get('node')}"
     )
     return f"{point['name']} ({where}, {point.get('direction', '+z')})"
-
-
-BandOption = Annotated[
-    str | None,
-    typer.Option(
-        metavar="<low:high>",
-        show_default=False,
-        help="Identify modes in this band only, Hz [default: chosen from the data, as daq analyze].",
-    ),
-]
-FrequenciesOption = Annotated[
-    str | None,
-    typer.Option(metavar="<f1,f2,...>", show_default=False, help="Frequencies of interest, Hz."),
-]
-MaxOrderOption = Annotated[
-    int | None,
-    typer.Option(metavar="<2-200>", show_default=False, help="LSCF order of every frequency zone."),
-]
 
 
 def _analysis(store_dir: Path, name: str, band: str | None, frequencies: str | None, max_order: int | None):
