@@ -62,6 +62,7 @@ bench: $(VENV)/.installed-dev
 	$(BIN)/python bench/bench_analysis.py
 	$(BIN)/python bench/bench_damping.py
 	$(BIN)/python bench/bench_ga_seeds.py
+	$(BIN)/python bench/bench_modal_test.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis
