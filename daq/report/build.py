@@ -1,14 +1,31 @@
-"""A run's report as one self-contained HTML page: used by ``daq report`` and by the
-service's ``/api/runs/<id>/report``."""
+"""A run's report as one self-contained HTML page (and a PDF of the same sections):
+used by ``daq report`` and, the page alone, by the service's ``/api/runs/<id>/report``."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 
+@dataclass
+class ReportFiles:
+    """A run's report: ``html`` (index.html), ``pngs`` (figure name -> PNG bytes) and
+    ``pdf`` (report.pdf bytes, the same sections; None when not asked for)."""
+
+    html: str
+    pngs: dict[str, bytes]
+    pdf: bytes | None = None
+
+
 def build_report(store_dir: Path, run_id: str, options: Any = None) -> tuple[str, dict[str, bytes]]:
-    """(index.html text, {figure name: PNG bytes}) of run ``run_id``.
+    """(index.html text, {figure name: PNG bytes}) of run ``run_id`` (see build_report_files)."""
+    files = build_report_files(store_dir, run_id, options, pdf=False)
+    return files.html, files.pngs
+
+
+def build_report_files(store_dir: Path, run_id: str, options: Any = None, pdf: bool = True) -> ReportFiles:
+    """The report of run ``run_id``: its HTML page, PNG figures and (``pdf``) its PDF.
 
     The analysis drawn is the stored one, with the options it was made with (brought up
     to date with those same options if the software changed); ``options``
@@ -31,22 +48,36 @@ def build_report(store_dir: Path, run_id: str, options: Any = None) -> tuple[str
         raise ValueError(f"run {run_id}: {exc}") from None
     the_run = the_store.open(run_id)
     result = the_store.read_result(run_id, RESULT_NAME)
-    pngs = {
-        "frf": figures.frf_figure(result),
-        "stability": figures.stability_figure(result),
-        "synthesis": figures.synthesis_figure(result),
-    }
-    if the_run.hits is not None:
-        pngs["hits"] = figures.hits_figure(the_run)
     fits = stored_fits(the_store, run_id)
     # The default least-squares fit when there is one, whatever else was tried.
     order = sorted(fits, key=lambda name: name != FitOptions().result_name)
     with_response = [fits[name] for name in order if "model_response" in fits[name]]
+    drawers: dict[str, Any] = {
+        "frf": lambda: figures.draw_frf(result),
+        "stability": lambda: figures.draw_stability(result),
+        "synthesis": lambda: figures.draw_synthesis(result),
+    }
+    if the_run.hits is not None:
+        drawers["hits"] = lambda: figures.draw_hits(the_run)
     if with_response and the_run.hits is not None:
-        pngs["response_fit"] = figures.response_fit_figure(the_run, with_response[0])
+        drawers["response_fit"] = lambda: figures.draw_response_fit(the_run, with_response[0])
     if any("history" in f for f in fits.values()):
-        pngs["convergence"] = figures.convergence_figure(fits)
-    return page.render(the_run, result, pngs, fits, fit_hint=not fits), pngs
+        drawers["convergence"] = lambda: figures.draw_convergence(fits)
+    drawn: dict[str, Any] = {}
+    try:
+        pngs = {}
+        for name, draw in drawers.items():
+            drawn[name] = draw()
+            pngs[name] = figures._png(drawn[name], close=not pdf)
+        report = page.sections(the_run, result, pngs, fits, fit_hint=not fits)
+        html = page.render_sections(the_run, report, pngs)
+        pdf_bytes = page.render_pdf(the_run, report, drawn) if pdf else None
+    finally:
+        if pdf:
+            plt = figures._pyplot()
+            for fig in drawn.values():
+                plt.close(fig)
+    return ReportFiles(html, pngs, pdf_bytes)
 
 
 def stored_fits(the_store: Any, run_id: str) -> dict[str, dict]:

@@ -1,12 +1,24 @@
 """The report page: one HTML file with its style inline and every figure embedded as a
 base64 PNG, so that it opens from disk, is mailed as one attachment, and needs no
-network. Every text from a run (operator, note, reasons) is HTML-escaped."""
+network. Every text from a run (operator, note, reasons) is HTML-escaped.
+
+The report is first a list of sections (:func:`sections`: headings, paragraphs,
+cautions, tables and figure names, all plain text); :func:`render` writes them as the
+HTML page and :func:`render_pdf` as a PDF of the same sections (matplotlib's PDF
+backend: text pages for the tables, the figures as vector pages), so the two hold the
+same report."""
 
 from __future__ import annotations
 
 import base64
 import html
+import io
+import json
+import textwrap
+from dataclasses import dataclass, field
 from typing import Any
+
+from daq.report.figures import failed_checks, psi_unit
 
 STYLE = """
 body { font: 14px/1.45 system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
@@ -16,6 +28,7 @@ th { background: #f4f4f4; text-align: left; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.rejected td { color: #c0392b; } img { max-width: 100%; border: 1px solid #eee; }
 .note { color: #666; font-size: 0.9em; }
+tr.caution td { color: #8a4b00; }
 .caution { color: #8a4b00; background: #fff4e0; border-left: 4px solid #e69500; padding: 4px 8px; }
 """
 
@@ -48,6 +61,471 @@ def _img(png: bytes, alt: str) -> str:
     return f'<img alt="{_e(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">'
 
 
+def _cautions(cautions: list[str]) -> list[str]:
+    """Each caution as a paragraph the eye cannot miss (escaped: texts may come from runs)."""
+    return [f"<p class='caution'>caution: {_e(text)}</p>" for text in cautions]
+
+
+# ------------------------------------------------------------------ the report's sections
+
+
+@dataclass
+class Para:
+    """A paragraph: ``kind`` "p" (text), "note" (grey) or "caution" (shown with "caution: ")."""
+
+    text: str
+    kind: str = "p"
+
+
+@dataclass
+class Table:
+    """Plain-text cells; ``numeric``: columns aligned right; ``row_header``: each row's
+    first cell heads it; ``classes``: a CSS class per row ("rejected", "caution" or "")."""
+
+    header: list[str] | None
+    rows: list[list[str]]
+    numeric: frozenset[int] = frozenset()
+    row_header: bool = False
+    classes: list[str] | None = None
+
+
+@dataclass
+class Fig:
+    """A figure of the report, by its name in the figures dict."""
+
+    name: str
+    title: str
+
+
+@dataclass
+class Section:
+    """A heading ("" for none) and its blocks (Para, Table, Fig) in order."""
+
+    title: str
+    blocks: list[Any] = field(default_factory=list)
+
+
+#: Window mnemonics as the analyzer stores them -> what a reader calls them.
+WINDOW_NAMES = {"UNIF": "uniform", "HANN": "Hann", "FLAT": "flat top", "FORC": "force", "EXPO": "exponential"}
+#: The analyzer's channels as the run's settings name them: (input, role, engineering unit).
+CHANNELS = {
+    "hammer": ("CH1", "hammer (force)", "N"),
+    "accelerometer": ("CH2", "accelerometer (response)", "m/s²"),
+}
+TRIGGER_UNITS = {"CH1": "N", "CH2": "m/s²"}
+STANDARD_GRAVITY = 9.80665
+#: Settings the acquisition tables show; any other stored key is listed as stored.
+SHOWN_SETTINGS = frozenset({
+    "span_hz", "lines", "center_hz", "averages", "trigger_source", "trigger_level_eu", "trigger_slope",
+    "pre_trigger_s", "preview", "hammer", "accelerometer",
+})  # fmt: skip
+NOT_RECORDED = "not recorded"
+
+
+def _g(value: float, unit: str, fmt: str = ".4g") -> str:
+    return f"{format(value, fmt)} {unit}"
+
+
+def _time(seconds: float) -> str:
+    """A duration in the unit a reader takes in: ms below one second, else s."""
+    return _g(1e3 * seconds, "ms") if abs(seconds) < 1 else _g(seconds, "s")
+
+
+def _compact(value: Any, limit: int = 240) -> str:
+    text = value if isinstance(value, str) else json.dumps(value, ensure_ascii=False, sort_keys=True)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def accepted_against_checks(run: Any) -> list[str]:
+    """One line per hit accepted although a check failed (hits counted from 1)."""
+    hits = run.hits
+    if hits is None:
+        return []
+    lines = []
+    for i in range(hits.n_hits):
+        failed = failed_checks(hits.checks[i])
+        if bool(hits.accepted[i]) and failed:
+            details = "; ".join(f"{name}: {hits.checks[i][name].get('detail', 'failed')}" for name in failed)
+            lines.append(f"hit {i + 1} was accepted although its check failed ({details})")
+    return lines
+
+
+def _channel_rows(settings: dict[str, Any]) -> tuple[list[list[str]], list[list[str]]]:
+    """(channel rows, transducer rows) of the stored settings."""
+    channels, transducers = [], []
+    for key, (inp, role, eu) in CHANNELS.items():
+        setup = settings.get(key)
+        if not isinstance(setup, dict):
+            continue
+        sens = setup.get("sensitivity_v_per_eu")
+        if isinstance(sens, (int, float)) and sens > 0:
+            sens_text = f"{1e3 * sens:.4g} mV/{'N' if eu == 'N' else '(m/s²)'}"
+            if eu != "N":
+                sens_text += f" (= {1e3 * sens * STANDARD_GRAVITY:.4g} mV/g)"
+        else:
+            sens, sens_text = None, NOT_RECORDED
+        range_v = setup.get("range_v")
+        if range_v is None:
+            range_text = "auto" if "range_v" in setup else NOT_RECORDED
+        else:
+            range_text = _g(range_v, "V") + (f" (= {range_v / sens:.4g} {eu} full scale)" if sens else "")
+        coupling = {True: "AC", False: "DC"}.get(setup.get("ac_coupled"), NOT_RECORDED)
+        mnemonic = setup.get("window")
+        window = f"{WINDOW_NAMES.get(mnemonic, mnemonic)} ({mnemonic})" if mnemonic else NOT_RECORDED
+        if mnemonic == "FORC" and setup.get("force_width_s") is not None:
+            window += f", width {_time(setup['force_width_s'])} from the record's start"
+        if mnemonic == "EXPO" and setup.get("exp_decay_s"):
+            tau = float(setup["exp_decay_s"])
+            window += f", time constant {_time(tau)} (decay {1 / tau:.4g} 1/s)"
+        channels.append([f"{inp} {role}", sens_text, range_text, coupling, window])
+        transducer = setup.get("transducer") if isinstance(setup.get("transducer"), dict) else {}
+        transducers.append([
+            f"{inp} {role}", str(transducer.get("model") or NOT_RECORDED),
+            str(transducer.get("serial") or NOT_RECORDED), sens_text,
+            str(transducer.get("calibration_date") or NOT_RECORDED),
+            str(transducer.get("due_date") or NOT_RECORDED),
+        ])  # fmt: skip
+    return channels, transducers
+
+
+def _point_text(point: Any) -> str:
+    where = (
+        f"{point.position_m:.4g} m from the clamp" if point.position_m is not None else f"node {point.node}"
+    )
+    return f"{point.name}: {where}, {point.direction}"
+
+
+def acquisition_section(run: Any) -> Section:
+    """The analyzer, its settings as the run stored them, the transducers as far as the
+    run records them, the record, the points, and what the simulator or importer says."""
+    section = Section("Acquisition")
+    blocks = section.blocks
+    inst = run.instrument
+    settings = inst.settings if inst is not None else {}
+    if inst is not None:
+        blocks.append(
+            Table(
+                None,
+                [
+                    ["analyzer", inst.model],
+                    ["identification", inst.identification or NOT_RECORDED],
+                    ["resource", inst.resource or NOT_RECORDED],
+                    ["transport, dialect", f"{inst.transport}, {inst.dialect}"],
+                ],
+                row_header=True,
+            )
+        )
+    else:
+        blocks.append(Para("No analyzer: the run holds no analyzer settings (see its origin below).", "note"))
+    rows = []
+    span, lines = settings.get("span_hz"), settings.get("lines")
+    if span is not None:
+        rows.append(["span", _g(span, "Hz")])
+    if lines is not None:
+        rows.append(["lines", str(lines)])
+        if span:
+            rows.append(["resolution (span / lines)", _g(span / lines, "Hz")])
+            rows.append(["record length (lines / span)", _time(lines / span)])
+    if "center_hz" in settings:
+        centre = settings["center_hz"]
+        rows.append(["centre", "baseband (0 to span)" if not centre else _g(centre, "Hz") + " (zoom)"])
+    if "averages" in settings:
+        rows.append(["averages", f"{settings['averages']} hits (stable averaging)"])
+    source = settings.get("trigger_source")
+    if source is not None:
+        role = {"CH1": " (hammer)", "CH2": " (accelerometer)"}.get(source, "")
+        rows.append(["trigger source", f"{source}{role}"])
+    if settings.get("trigger_level_eu") is not None:
+        rows.append(["trigger level", _g(settings["trigger_level_eu"], TRIGGER_UNITS.get(source, "EU"))])
+    if settings.get("trigger_slope") is not None:
+        slope = settings["trigger_slope"]
+        rows.append(["trigger slope", {"POS": "rising (POS)", "NEG": "falling (NEG)"}.get(slope, slope)])
+    if settings.get("pre_trigger_s") is not None:
+        rows.append(["pre-trigger", _time(settings["pre_trigger_s"])])
+    if "preview" in settings:
+        rows.append(["preview", "each hit accepted or rejected before it is averaged" if settings["preview"]
+                     else "off: every triggered hit averaged"])  # fmt: skip
+    if rows:
+        blocks += [
+            Para("Analyzer settings, as the run stored them:", "note"),
+            Table(["setting", "value"], rows),
+        ]
+    channels, transducers = _channel_rows(settings)
+    if channels:
+        blocks.append(Table(["channel", "sensitivity", "range", "coupling", "window"], channels))
+        blocks += [
+            Para("Transducers, as far as the run records them:", "note"),
+            Table(
+                ["channel", "model", "serial", "sensitivity", "calibrated", "calibration due"], transducers
+            ),
+        ]
+    other = {k: v for k, v in settings.items() if k not in SHOWN_SETTINGS}
+    if other:
+        blocks += [
+            Para("Other settings, as stored:", "note"),
+            Table(["setting", "value"], [[k, _compact(v)] for k, v in sorted(other.items())]),
+        ]
+    if run.hits is not None:
+        h = run.hits
+        record = [
+            ["hits", f"{h.n_hits} ({int(h.accepted.sum())} accepted), counted from 1"],
+            ["samples per record", str(h.n_samples)],
+            ["sample rate", _g(h.sample_rate_hz, "Hz")],
+            ["record length", _time(h.n_samples / h.sample_rate_hz)],
+            [
+                "first sample",
+                _time(h.start_s) + " after the trigger" + (" (pre-trigger)" if h.start_s < 0 else ""),
+            ],
+            [
+                "centre",
+                "baseband" if h.center_hz == 0 else _g(h.center_hz, "Hz") + " (zoom, complex records)",
+            ],
+        ]
+        blocks += [Para("Time records:", "note"), Table(None, record, row_header=True)]
+    points = run.resolved_points()
+    article = points.article
+    article_text = str(article.get("kind", "")) + (f" ({article['name']})" if article.get("name") else "")
+    point_rows = [
+        ["modal test", points.test or "none"],
+        [
+            "article",
+            article_text + ("" if run.points is not None else ", assumed: the run records no points"),
+        ],
+        ["force point", _point_text(points.force_point)],
+    ] + [[f"response point {i}", _point_text(p)] for i, p in enumerate(points.response_points, 1)]
+    blocks += [Para("Points:", "note"), Table(None, point_rows, row_header=True)]
+    blocks += _origin(run)
+    return section
+
+
+def _origin(run: Any) -> list[Any]:
+    """What the simulator, a replay or an importer recorded about where the data came from."""
+    prov = run.provenance or {}
+    rows = []
+    if "hits_wanted" in prov:
+        rows.append(["hits wanted", str(prov["hits_wanted"])])
+    sim = prov.get("simulator")
+    if isinstance(sim, dict):
+        for key, value in sorted(sim.items()):
+            unit = " m" if key.endswith("_m") else ""
+            rows.append(
+                [f"simulator {key.replace('_', ' ')}", f"{_compact(value)}{unit}" if value != "" else "–"]
+            )
+    if prov.get("replayed_from"):
+        rows.append(["replayed from", _compact(prov["replayed_from"])])
+    imported = prov.get("imported_from")
+    if isinstance(imported, dict):
+        for key, value in imported.items():
+            rows.append([f"imported {key.replace('_', ' ')}", _compact(value)])
+    for key, value in sorted(prov.items()):
+        if key not in {"hits_wanted", "simulator", "replayed_from", "imported_from"}:
+            rows.append([key.replace("_", " "), _compact(value)])
+    if not rows:
+        return []
+    return [Para("Origin, as the run records it:", "note"), Table(["", ""], rows, row_header=True)]
+
+
+def _window_cautions(summary: dict[str, Any]) -> list[str]:
+    windows_from = summary.get("windows", {}).get("from", "")
+    return [f"windows {windows_from}"] if str(windows_from).startswith("unknown") else []
+
+
+def cautions_section(run: Any, result: dict[str, Any], fits: dict[str, dict] | None) -> Section:
+    """Every caution of the report in one place: the analysis's, each fit's, and the hits
+    accepted although a check failed."""
+    section = Section("Cautions")
+    groups = [
+        ("the analysis", [*_window_cautions(result["summary"]), *result["summary"].get("cautions", [])])
+    ]
+    groups += [
+        (name, [*_window_cautions(fit["summary"]), *fit["summary"].get("cautions", [])])
+        for name, fit in (fits or {}).items()
+    ]
+    groups.append(("the hits", accepted_against_checks(run)))
+    for where, cautions in groups:
+        if cautions:
+            section.blocks.append(Para(f"From {where}:", "note"))
+            section.blocks += [Para(text, "caution") for text in cautions]
+    if not section.blocks:
+        section.blocks.append(Para("None: the analysis, the fits and the hits raised no caution.", "note"))
+    return section
+
+
+def sections(
+    run: Any,
+    result: dict[str, Any],
+    figures: Any,
+    fits: dict[str, dict] | None = None,
+    fit_hint: bool = False,
+) -> list[Section]:
+    """The report's sections, in order; ``figures``: the names of the figures drawn."""
+    s = result["summary"]
+    info = [
+        ["run", run.run_id], ["kind", run.kind + ("" if run.complete else ", INCOMPLETE")],
+        ["started", run.start_time], ["operator", run.operator or "–"], ["note", run.note or "–"],
+        ["software", run.software],
+    ]  # fmt: skip
+    if run.instrument is not None:
+        info.append(["instrument", f"{run.instrument.model} ({run.instrument.identification})"])
+    out = [
+        Section("", [Table(["", ""], info, row_header=True)]),
+        cautions_section(run, result, fits),
+        acquisition_section(run),
+    ]
+    if run.hits is not None:
+        rows, classes = [], []
+        for i in range(run.hits.n_hits):
+            ok = bool(run.hits.accepted[i])
+            failed = failed_checks(run.hits.checks[i])
+            if ok and failed:
+                verdict, cls = f"accepted against failed check: {', '.join(failed)}", "caution"
+            else:
+                verdict, cls = (
+                    ("accepted", "") if ok else (f"rejected: {run.hits.reject_reason[i]}", "rejected")
+                )
+            rows.append(
+                [str(i + 1), str(run.hits.timestamp_utc[i]), f"{run.hits.peak_force_n[i]:.3g}", verdict]
+            )
+            classes.append(cls)
+        hits = Section(
+            "Hits",
+            [
+                Table(
+                    ["hit", "time (UTC)", "peak force (N)", "verdict"],
+                    rows,
+                    frozenset({0, 2}),
+                    classes=classes,
+                )
+            ],
+        )
+        if "hits" in figures:
+            hits.blocks.append(Fig("hits", "force and response of each hit"))
+        out.append(hits)
+    source = {"hits": f"{s['n_averages']} accepted hits, {s.get('estimator')}"}.get(s["source"], s["source"])
+    windows = s.get("windows", {}).get("from", "")
+    band = s.get("band")
+    band_text = f" Band {band['low_hz']:.6g}-{band['high_hz']:.6g} Hz: {band['reason']}." if band else ""
+    u_from = sorted({m.get("uncertainty_from") for m in s["modes"]} - {None})
+    note = (
+        f"From {source}.{band_text} Windows: {windows}; the exponential window's decay "
+        f"({s['added_decay_1_s']:.4g} 1/s) is removed from every damping ratio. "
+        + (f"± is the standard uncertainty of the value, from {', '.join(u_from)}. " if u_from else "")
+        + (
+            f"Synthesis error {100 * s['synthesis_error']:.3g} %."
+            if s.get("synthesis_error") is not None
+            else ""
+        )
+    )
+    mode_rows = []
+    for k, m in enumerate(s["modes"], 1):
+        q = m["quality"]
+        zeta = m["damping_ratio"]
+        mode_rows.append([
+            str(k), f"{m['frequency_hz']:.4f} ± {_num(m.get('frequency_u_hz'), '.2g')}",
+            f"{_num(None if zeta is None else 100 * zeta, '.3g')} ± "
+            f"{_num(None if m.get('damping_u') is None else 100 * m['damping_u'], '.2g')}",
+            str(q["n_stable_orders"]), f"{100 * q['synthesis_share']:.2g} %",
+        ])  # fmt: skip
+    modes = Section("Modes", [Para(note, "note")])
+    modes.blocks += [Para(c, "caution") for c in [*_window_cautions(s), *s.get("cautions", [])]]
+    modes.blocks.append(
+        Table(
+            ["mode", "frequency (Hz)", "damping (%)", "stable orders", "share of synthesis"],
+            mode_rows,
+            frozenset(range(5)),
+        )
+    )
+    out.append(modes)
+    t = s["table2"]
+    if t.get("n_functions") is None:
+        out.append(Section("Table 2", [Para(f"{t['beam']}.", "note")]))
+    else:
+        rows = [
+            [
+                str(r["mode"]),
+                _num(r["ritz_hz"], ".3f"),
+                _num(r["exact_hz"], ".3f"),
+                _num(r["identified_hz"], ".3f"),
+                _num(r["difference_exact_pct"], "+.2f"),
+                _num(_pct(r["damping_ratio"]), ".3g"),
+            ]
+            for r in t["rows"]
+        ]
+        out.append(Section("Table 2", [
+            Para(f"Beam: {t['beam']}; Ritz with N = {t['n_functions']}.", "note"),
+            Table(TABLE2_HEADER, rows, frozenset(range(6))),
+        ]))  # fmt: skip
+    for name, title in (("frf", "FRF and coherence"), ("stability", "Stability diagram"),
+                        ("synthesis", "Synthesis")):  # fmt: skip
+        if name in figures:
+            out.append(Section(title, [Fig(name, title)]))
+    if fits:
+        out += _fit_sections(fits, figures)
+    elif fit_hint:
+        out.append(
+            Section(
+                "Damping matrix",
+                [
+                    Para(
+                        f"No damping fit is stored for this run: `daq fit {run.run_id}` makes one, "
+                        "then this report shows it.",
+                        "note",
+                    )
+                ],
+            )
+        )
+    return out
+
+
+def _fit_sections(fits: dict[str, dict], figures: Any) -> list[Section]:
+    """The damping matrix of each fit with its uncertainty, the modes it implies, its
+    cautions, and the figures of the fit."""
+    section = Section("Damping matrix")
+    for name, fit in fits.items():
+        s = fit["summary"]
+        unit = psi_unit(s)
+        floor = s.get("psi_noise_floor")
+        floor_text = f"; noise floor {floor:.3g} {unit}" if floor is not None else ""
+        scale = s["stiffness"].get("scale")
+        stiffness = s["stiffness"].get("update", "") + ("" if scale is None else f" x {scale:.5f}")
+        section.blocks.append(Para(
+            f"Fit {name}: Psi (eq 17) = {s['psi']:.4g} {unit}{floor_text}, {s['n_evaluations']} model "
+            f"evaluations, stiffness: {stiffness}."
+        ))  # fmt: skip
+        unc = s["uncertainty"]
+        by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
+        r = s["damping_matrix"]
+        rows = []
+        for i in range(len(r)):
+            cells = [str(i + 1)]
+            for j in range(len(r)):
+                std, determined = by_name.get(f"R{min(i, j) + 1}{max(i, j) + 1}", (None, True))
+                spread = f" ± {std:.2g}" if std is not None else ""
+                cells.append(f"{r[i][j]:.4f}{spread}{'' if determined else ' ?'}")
+            rows.append(cells)
+        section.blocks.append(Table(["R (N s/m)", *[str(j + 1) for j in range(len(r))]], rows,
+                                    frozenset(range(1, len(r) + 1)), row_header=True))  # fmt: skip
+        for direction in unc["null_directions"]:
+            combo = " ".join(f"{w:+.2f} {k}" for k, w in direction["combination"].items() if abs(w) >= 0.05)
+            section.blocks.append(Para(f"Not determined by the data (? above): {combo}.", "note"))
+        mode_rows = [
+            [str(k), _num(m["frequency_hz"], ".4f"), _num(_pct(m["damping_ratio"]), ".3g")]
+            for k, m in enumerate(s["modes"], 1)
+        ]
+        section.blocks.append(
+            Table(["mode", "frequency (Hz)", "damping (%)"], mode_rows, frozenset({0, 1, 2}))
+        )
+        section.blocks += [Para(c, "caution") for c in [*_window_cautions(s), *s.get("cautions", [])]]
+    out = [section]
+    for key, title in (("response_fit", "Measured and model response"), ("convergence", "Convergence")):
+        if key in figures:
+            out.append(Section(title, [Fig(key, title)]))
+    return out
+
+
+# ---------------------------------------------------------------------------- HTML
+
+
 def render(
     run: Any,
     result: dict[str, Any],
@@ -58,149 +536,172 @@ def render(
     """The page for ``run`` with its analysis ``result``, its damping fits (result name
     -> stored fit) and ``figures`` (name -> PNG); ``fit_hint``: say that no fit is stored
     and how to make one."""
-    s = result["summary"]
-    info = [
-        ("run", run.run_id), ("kind", run.kind + ("" if run.complete else ", INCOMPLETE")),
-        ("started", run.start_time), ("operator", run.operator or "–"), ("note", run.note or "–"),
-        ("software", run.software),
-    ]  # fmt: skip
-    if run.instrument is not None:
-        info.append(("instrument", f"{run.instrument.model} ({run.instrument.identification})"))
+    return render_sections(run, sections(run, result, figures, fits, fit_hint), figures)
+
+
+def title(run: Any) -> str:
+    return f"Impact test {run.run_id}"
+
+
+def render_sections(run: Any, report: list[Section], figures: dict[str, bytes]) -> str:
+    """The HTML page of ``report``'s sections (every text escaped, figures embedded)."""
     parts = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>Run {_e(run.run_id)}</title><style>{STYLE}</style></head><body>",
-        f"<h1>Impact test {_e(run.run_id)}</h1>",
-        _table(["", ""], [[f"<th>{_e(k)}</th>", f"<td>{_e(v)}</td>"] for k, v in info]),
+        f"<h1>{_e(title(run))}</h1>",
     ]
-    if run.hits is not None:
-        rows, classes = [], []
-        for i in range(run.hits.n_hits):
-            ok = bool(run.hits.accepted[i])
-            rows.append([
-                f"<td class='num'>{i + 1}</td>", f"<td>{_e(run.hits.timestamp_utc[i])}</td>",
-                f"<td class='num'>{run.hits.peak_force_n[i]:.3g}</td>",
-                f"<td>{'accepted' if ok else 'rejected: ' + _e(run.hits.reject_reason[i])}</td>",
-            ])  # fmt: skip
-            classes.append("" if ok else "rejected")
-        parts += ["<h2>Hits</h2>", _table(["hit", "time (UTC)", "peak force (N)", "verdict"], rows, classes)]
-        if "hits" in figures:
-            parts.append(_img(figures["hits"], "force and response of each hit"))
-    parts.append("<h2>Modes</h2>")
-    source = {"hits": f"{s['n_averages']} accepted hits, {s.get('estimator')}"}.get(s["source"], s["source"])
-    windows = s.get("windows", {}).get("from", "")
-    band = s.get("band")
-    band_text = f" Band {band['low_hz']:.6g}-{band['high_hz']:.6g} Hz: {band['reason']}." if band else ""
-    u_from = sorted({m.get("uncertainty_from") for m in s["modes"]} - {None})
-    parts.append(
-        f"<p class='note'>From {_e(source)}.{_e(band_text)} Windows: {_e(windows)}; the exponential "
-        f"window's decay ({s['added_decay_1_s']:.4g} 1/s) is removed from every damping ratio. "
-        + (f"± is the standard uncertainty of the value, from {_e(', '.join(u_from))}. " if u_from else "")
-        + (
-            f"Synthesis error {100 * s['synthesis_error']:.3g} %."
-            if s.get("synthesis_error") is not None
-            else ""
-        )
-        + "</p>"
-    )
-    windows_from = s.get("windows", {}).get("from", "")
-    unknown_windows = [f"windows {windows_from}"] if str(windows_from).startswith("unknown") else []
-    parts += _cautions([*unknown_windows, *s.get("cautions", [])])
-    mode_rows = []
-    for k, m in enumerate(s["modes"], 1):
-        q = m["quality"]
-        zeta = m["damping_ratio"]
-        mode_rows.append([
-            f"<td class='num'>{k}</td>",
-            f"<td class='num'>{m['frequency_hz']:.4f} ± {_num(m.get('frequency_u_hz'), '.2g')}</td>",
-            f"<td class='num'>{_num(None if zeta is None else 100 * zeta, '.3g')} ± "
-            f"{_num(None if m.get('damping_u') is None else 100 * m['damping_u'], '.2g')}</td>",
-            f"<td class='num'>{q['n_stable_orders']}</td>",
-            f"<td class='num'>{100 * q['synthesis_share']:.2g} %</td>",
-        ])  # fmt: skip
-    parts.append(
-        _table(["mode", "frequency (Hz)", "damping (%)", "stable orders", "share of synthesis"], mode_rows)
-    )
-    t = s["table2"]
-    rows = [
-        [
-            f"<td class='num'>{r['mode']}</td>", f"<td class='num'>{_num(r['ritz_hz'], '.3f')}</td>",
-            f"<td class='num'>{_num(r['exact_hz'], '.3f')}</td>",
-            f"<td class='num'>{_num(r['identified_hz'], '.3f')}</td>",
-            f"<td class='num'>{_num(r['difference_exact_pct'], '+.2f')}</td>",
-            f"<td class='num'>{_num(_pct(r['damping_ratio']), '.3g')}</td>",
-        ]
-        for r in t["rows"]
-    ]  # fmt: skip
-    if t.get("n_functions") is None:
-        parts.append(f"<h2>Table 2</h2><p class='note'>{_e(t['beam'])}.</p>")
-    else:
-        parts += [
-            f"<h2>Table 2</h2><p class='note'>Beam: {_e(t['beam'])}; Ritz with N = {t['n_functions']}.</p>",
-            _table(
-                ["mode", "Ritz (Hz)", "exact beam (Hz)", "this run (Hz)", "run vs exact (%)", "damping (%)"],
-                rows,
-            ),
-        ]
-    for name, title in (("frf", "FRF and coherence"), ("stability", "Stability diagram"),
-                        ("synthesis", "Synthesis")):  # fmt: skip
-        if name in figures:
-            parts += [f"<h2>{_e(title)}</h2>", _img(figures[name], title)]
-    if fits:
-        parts += _fit_section(fits, figures)
-    elif fit_hint:
-        parts.append(
-            "<h2>Damping matrix</h2><p class='note'>No damping fit is stored for this run: "
-            f"<code>daq fit {_e(run.run_id)}</code> makes one, then this report shows it.</p>"
-        )
+    for section in report:
+        if section.title:
+            parts.append(f"<h2>{_e(section.title)}</h2>")
+        for block in section.blocks:
+            if isinstance(block, Para):
+                if block.kind == "caution":
+                    parts += _cautions([block.text])
+                else:
+                    cls = " class='note'" if block.kind == "note" else ""
+                    parts.append(f"<p{cls}>{_e(block.text)}</p>")
+            elif isinstance(block, Table):
+                parts.append(_html_table(block))
+            elif isinstance(block, Fig) and block.name in figures:
+                parts.append(_img(figures[block.name], block.title))
     parts.append("</body></html>")
     return "\n".join(parts)
 
 
-def _cautions(cautions: list[str]) -> list[str]:
-    """Each caution as a paragraph the eye cannot miss (escaped: texts may come from runs)."""
-    return [f"<p class='caution'>caution: {_e(text)}</p>" for text in cautions]
+def _html_table(table: Table) -> str:
+    rows = []
+    for row in table.rows:
+        cells = []
+        for j, cell in enumerate(row):
+            if j == 0 and table.row_header:
+                cells.append(f"<th>{_e(cell)}</th>")
+            else:
+                cells.append(
+                    f"<td class='num'>{_e(cell)}</td>" if j in table.numeric else f"<td>{_e(cell)}</td>"
+                )
+        rows.append(cells)
+    if table.header is None:
+        body = "".join(f"<tr{_cls(table.classes, i)}>" + "".join(row) + "</tr>" for i, row in enumerate(rows))
+        return f"<table>{body}</table>"
+    return _table(table.header, rows, table.classes)
 
 
-def _fit_section(fits: dict[str, dict], figures: dict[str, bytes]) -> list[str]:
-    """The damping matrix of each fit with its uncertainty, the modes it implies, and
-    the figures of the fit."""
-    parts = ["<h2>Damping matrix</h2>"]
-    for name, fit in fits.items():
-        s = fit["summary"]
-        floor = s.get("psi_noise_floor")
-        floor_text = f"; noise floor {floor:.3g}" if floor is not None else ""
-        scale = s["stiffness"].get("scale")
-        stiffness = s["stiffness"].get("update", "") + ("" if scale is None else f" x {scale:.5f}")
-        parts.append(
-            f"<p><b>{_e(name)}</b>: Psi = {s['psi']:.4g}{_e(floor_text)}, {s['n_evaluations']} model "
-            f"evaluations, stiffness: {_e(stiffness)}.</p>"
-        )
-        unc = s["uncertainty"]
-        by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
-        r = s["damping_matrix"]
-        rows = []
-        for i in range(len(r)):
-            cells = [f"<th>{i + 1}</th>"]
-            for j in range(len(r)):
-                std, determined = by_name.get(f"R{min(i, j) + 1}{max(i, j) + 1}", (None, True))
-                spread = f" ± {std:.2g}" if std is not None else ""
-                mark = "" if determined else " <b>?</b>"
-                cells.append(f"<td class='num'>{r[i][j]:.4f}{spread}{mark}</td>")
-            rows.append(cells)
-        parts.append(_table(["R (N s/m)", *[str(j + 1) for j in range(len(r))]], rows))
-        for direction in unc["null_directions"]:
-            combo = " ".join(f"{w:+.2f} {k}" for k, w in direction["combination"].items() if abs(w) >= 0.05)
-            parts.append(f"<p class='note'>Not determined by the data (? above): {_e(combo)}.</p>")
-        mode_rows = [
-            [f"<td class='num'>{k}</td>", f"<td class='num'>{_num(m['frequency_hz'], '.4f')}</td>",
-             f"<td class='num'>{_num(_pct(m['damping_ratio']), '.3g')}</td>"]
-            for k, m in enumerate(s["modes"], 1)
-        ]  # fmt: skip
-        parts.append(_table(["mode", "frequency (Hz)", "damping (%)"], mode_rows))
-        windows_from = s.get("windows", {}).get("from", "")
-    unknown_windows = [f"windows {windows_from}"] if str(windows_from).startswith("unknown") else []
-    parts += _cautions([*unknown_windows, *s.get("cautions", [])])
-    for key, title in (("response_fit", "Measured and model response"), ("convergence", "Convergence")):
-        if key in figures:
-            parts += [f"<h2>{_e(title)}</h2>", _img(figures[key], title)]
-    return parts
+def _cls(classes: list[str] | None, i: int) -> str:
+    return f' class="{classes[i]}"' if classes and classes[i] else ""
+
+
+# ----------------------------------------------------------------------------- PDF
+
+#: A4 portrait, inches; text lines per page and characters per line of the text pages.
+PAGE_IN = (8.27, 11.69)
+LINES_PER_PAGE = 64
+CHARS_PER_LINE = 96
+
+
+def render_pdf(run: Any, report: list[Section], figures: dict[str, Any]) -> bytes:
+    """The PDF of ``report``'s sections: text pages (headings, paragraphs, cautions, the
+    tables in monospace columns) and each figure (``figures``: name -> matplotlib
+    Figure) as a vector page of its own, right after the text page that names it.
+    Drawn with matplotlib's PDF backend: no system library needed."""
+    from matplotlib.backends.backend_pdf import PdfPages
+    from matplotlib.figure import Figure
+
+    buffer = io.BytesIO()
+    lines: list[tuple[str, str]] = [(title(run), "h1"), ("", "p")]
+    pending: list[tuple[int, Any]] = []  # (line it follows, figure)
+
+    with PdfPages(buffer, metadata={"Title": title(run), "Creator": run.software}) as pdf:
+
+        def page(text: list[tuple[str, str]]) -> None:
+            fig = Figure(figsize=PAGE_IN)
+            for k, (line, style) in enumerate(text):
+                fig.text(
+                    0.06,
+                    1 - (0.05 + k * 0.9 / LINES_PER_PAGE),
+                    _pdf_text(line),
+                    va="top",
+                    **_PDF_STYLES[style],
+                )
+            pdf.savefig(fig)
+
+        def emit(last: bool = False) -> None:
+            """Each full text page (every page when ``last``), then the figures it names."""
+            while len(lines) >= LINES_PER_PAGE or (last and (lines or pending)):
+                shown = min(len(lines), LINES_PER_PAGE)
+                if shown:
+                    page(lines[:shown])
+                for at, fig in pending:
+                    if at <= shown:
+                        pdf.savefig(fig)
+                pending[:] = [(at - shown, fig) for at, fig in pending if at > shown]
+                del lines[:shown]
+
+        def keep_together(n: int) -> None:
+            room = LINES_PER_PAGE - len(lines)
+            if n > room and n <= LINES_PER_PAGE:
+                lines.extend([("", "p")] * room)
+                emit()
+
+        for section in report:
+            if section.title:
+                keep_together(6)  # no heading alone at a page's foot
+                lines.extend([("", "p"), (section.title, "h2")])
+            for block in section.blocks:
+                if isinstance(block, Fig):
+                    if block.name in figures:
+                        pending.append((len(lines), figures[block.name]))
+                    continue
+                if isinstance(block, Para):
+                    prefix = "caution: " if block.kind == "caution" else ""
+                    text = [
+                        (w, block.kind) for w in textwrap.wrap(prefix + block.text, CHARS_PER_LINE) or [""]
+                    ]
+                else:
+                    text = [(row, "mono") for row in _text_table(block)] + [("", "p")]
+                keep_together(len(text))
+                lines.extend(text)
+                emit()
+        emit(last=True)
+    return buffer.getvalue()
+
+
+_PDF_STYLES = {
+    "h1": {"fontsize": 15, "fontweight": "bold"},
+    "h2": {"fontsize": 11.5, "fontweight": "bold"},
+    "p": {"fontsize": 8.5},
+    "note": {"fontsize": 8.5, "color": "#555555"},
+    "caution": {"fontsize": 8.5, "color": "#8a4b00", "fontweight": "bold"},
+    "mono": {"fontsize": 7.2, "family": "monospace"},
+}
+
+
+def _pdf_text(text: str) -> str:
+    """Text as matplotlib draws it literally ($ would start mathtext)."""
+    return text.replace("$", r"\$")
+
+
+def _text_table(table: Table, width: int = 112) -> list[str]:
+    """The table as monospace lines: columns padded, long cells wrapped within their column
+    (the widest column narrowed first, down to the next widest, until the row fits)."""
+    has_header = table.header is not None and any(table.header)
+    rows = ([table.header] if has_header else []) + table.rows
+    n = max(len(r) for r in rows) if rows else 0
+    widths = [max(len(r[j]) if j < len(r) else 0 for r in rows) for j in range(n)]
+    budget = width - 3 * (n - 1)
+    while sum(widths) > budget and max(widths) > 12:
+        widest = widths.index(max(widths))
+        others = sorted(widths, reverse=True)
+        target = max(12, others[1] if len(others) > 1 else 12, widths[widest] - (sum(widths) - budget))
+        widths[widest] = target if target < widths[widest] else widths[widest] - 1
+    out = []
+    for i, row in enumerate(rows):
+        cells = [(textwrap.wrap(row[j], widths[j]) or [""]) if j < len(row) else [""] for j in range(n)]
+        for k in range(max(len(c) for c in cells)):
+            parts = []
+            for j, c in enumerate(cells):
+                text = c[k] if k < len(c) else ""
+                parts.append(text.rjust(widths[j]) if j in table.numeric else text.ljust(widths[j]))
+            out.append("   ".join(parts).rstrip())
+        if i == 0 and has_header:
+            out.append("-" * min(width, sum(widths) + 3 * (n - 1)))
+    return out

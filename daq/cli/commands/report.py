@@ -1,5 +1,6 @@
-"""`daq report RUN [-o DIR]`: PNG figures and one self-contained HTML page of a run
-and its analysis (analysed first if its stored analysis is missing or stale)."""
+"""`daq report RUN [-o DIR]`: PNG figures, one self-contained HTML page and a PDF of the
+same report of a run and its analysis (analysed first if its stored analysis is missing
+or stale)."""
 
 from __future__ import annotations
 
@@ -50,13 +51,14 @@ def report(
     ] = None,
     store: StoreOption = None,
 ) -> None:
-    """Write a run's report: hits, FRF and coherence, stability diagram, synthesis, Table 2.
+    """Write a run's report: acquisition, cautions, hits, FRF, stability, synthesis, Table 2, fits.
 
-    PNG files and index.html (everything embedded: it opens from disk, no network).
+    PNG files, index.html (everything embedded: it opens from disk, no network) and
+    report.pdf (the same sections, to print or file).
     The analysis shown is the stored one, made by `daq analyze` with the options it was
     given; analysis options here analyse again with them first (stored as by daq analyze).
     """
-    from daq.report.build import build_report
+    from daq.report.build import build_report_files
     from daq.store import Store, StoreError, resolve_store_dir
 
     store_dir, _ = resolve_store_dir(store)
@@ -73,17 +75,20 @@ def report(
         )
     options = _options(band, frequencies, max_order, estimator)
     try:
-        html, pngs = build_report(store_dir, run_id, options)
+        files = build_report_files(store_dir, run_id, options)
     except (StoreError, ValueError) as exc:
         raise UserError(" ".join(str(exc).split())) from None
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise UserError(f"cannot create {folder}: {exc.strerror or exc}") from None
-    for name, png in pngs.items():
+    for name, png in files.pngs.items():
         _write(folder / f"{name}.png", png)
-    _write(folder / "index.html", html.encode("utf-8"))
-    typer.echo(f"Report of run {run_id}: {folder / 'index.html'} ({len(pngs)} figures)")
+    assert files.pdf is not None
+    _write(folder / "report.pdf", files.pdf)
+    _write(folder / "index.html", files.html.encode("utf-8"))
+    figures = f"{len(files.pngs)} figures"
+    typer.echo(f"Report of run {run_id}: {folder / 'index.html'} and {folder / 'report.pdf'} ({figures})")
 
 
 def _options(band: str | None, frequencies: str | None, max_order: int | None, estimator: str | None):
