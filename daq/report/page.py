@@ -322,7 +322,7 @@ def _origin(run: Any) -> list[Any]:
             rows.append([key.replace("_", " "), _compact(value)])
     if not rows:
         return []
-    return [Para("Origin, as the run records it:", "note"), Table(["", ""], rows, row_header=True)]
+    return [Para("Origin, as the run records it:", "note"), Table(None, rows, row_header=True)]
 
 
 def _window_cautions(summary: dict[str, Any]) -> list[str]:
