@@ -29,7 +29,7 @@ from daq.workflows.outcome import RunOutcome, failure_reason
 
 METHODS = ("modal", "ls", "ga", "de", "pilkey-inman")
 STIFFNESS = ("modes", "scale", "none")
-FIT_VERSION = 3
+FIT_VERSION = 4
 #: The most Ritz functions the default picks (the largest R a fit supports).
 MAX_FUNCTIONS = 10
 
@@ -205,9 +205,15 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     arrays = {"damping_matrix": r, "history": np.asarray(result.history, dtype=float)}
     if domain == "time":
         first = int(np.flatnonzero(run.hits.accepted)[0])
-        from analysis.response import time_response
+        from analysis.damping.bandlimited import BandLimitedData, model_response
 
-        arrays["model_response"] = time_response(model, r, run.hits.force_n[first], run.hits.sample_rate_hz)
+        # The response the fit compared with (band-limited force), not a zero-order hold:
+        # the report's residual is then the fit's own.
+        hit = slice(first, first + 1)
+        one = BandLimitedData(
+            model, run.hits.force_n[hit], run.hits.response_m_s2[hit], run.hits.sample_rate_hz
+        )
+        arrays["model_response"] = model_response(one, r[None])[0, 0]
         arrays["hit_index"] = np.array([first])
     if not arrays["history"].size:
         arrays.pop("history")
