@@ -114,6 +114,9 @@ class ModalTestReport:
     damping_matrix_std: np.ndarray | None = None
     fit_notes: list[str] = field(default_factory=list)
     cautions: list[str] = field(default_factory=list)
+    #: (n_modes,) the exact beam mode (0-based, -1: none) each measured mode is paired
+    #: with (Table 2 of a test: nearest in frequency); None: the mode of the same number.
+    paired_exact_mode: np.ndarray | None = None
 
 
 def render_modal_test_report(report: ModalTestReport) -> tuple[str, dict[str, bytes]]:
@@ -397,7 +400,11 @@ def render_page(r: ModalTestReport, figures: dict[str, bytes]) -> str:
     n_exact = np.shape(r.mac_exact)[1]
     mode_rows = []
     for k in range(len(r.mode_frequency_hz)):
-        mac = float(r.mac_exact[k][k]) if k < n_exact else None
+        if r.paired_exact_mode is not None:
+            j = int(r.paired_exact_mode[k])
+            mac = float(r.mac_exact[k][j]) if 0 <= j < n_exact else None
+        else:
+            mac = float(r.mac_exact[k][k]) if k < n_exact else None
         mode_rows.append([
             _td(str(k + 1)),
             _td(f"{r.mode_frequency_hz[k]:.4f} ± {r.mode_frequency_std_hz[k]:.2g}"),
@@ -406,7 +413,8 @@ def render_page(r: ModalTestReport, figures: dict[str, bytes]) -> str:
         ])  # fmt: skip
     header = [
         "mode", "frequency (Hz) ± std. uncertainty", "damping (%) ± std. uncertainty", "MPC",
-        "MAC vs exact beam mode of the same number",
+        "MAC vs its exact beam mode" if r.paired_exact_mode is not None
+        else "MAC vs exact beam mode of the same number",
     ]  # fmt: skip
     parts.append(_table(header, mode_rows))
 

@@ -566,9 +566,10 @@ def check_point_on_article(point: Point, article: dict[str, Any], what: str = "p
     if length is not None:
         if point.position_m is None:
             raise ValueError(f"{what} {point.name} names node {point.node!r}, but the article is a beam")
-        if point.position_m > length + POSITION_TOLERANCE_M:
+        if point.position_m > length + POSITION_TOLERANCE_M or point.position_m <= POSITION_TOLERANCE_M:
+            # At the clamp nothing moves: no hammer or sensor can measure there.
             raise ValueError(
-                f"{what} {point.name} at {point.position_m} m lies outside the beam (0..{length} m)"
+                f"{what} {point.name} at {point.position_m} m lies outside the beam (0 < x <= {length} m)"
             )
     else:
         if point.node is None:

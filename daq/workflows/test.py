@@ -170,3 +170,22 @@ def test_view(store_dir: Path, name: str) -> dict[str, Any]:
         "measured": sum(p["measured"] for p in points),
         "next_point": next_point(test),
     }
+
+
+def set_run_accepted(store_dir: Path, name: str, run: str, accepted: bool) -> tuple[ModalTest, str, str]:
+    """Accept or reject a run already joined to test ``name`` (by id or a unique prefix);
+    (the test after, the run's point, the run id). WorkflowError (one line)."""
+    test = open_test(store_dir, name)
+    matches = sorted({r.run_id for r in test.runs if r.run_id.startswith(run)})
+    if len(matches) != 1:
+        what = "no run" if not matches else f"{len(matches)} runs"
+        raise WorkflowError(
+            f"test {name} has {what} starting with {run!r} (daq test show {name})", exit_code=2
+        )
+    run_id = matches[0]
+    point = next(r.point for r in test.runs if r.run_id == run_id)
+    try:
+        test = join_run(store_dir, name, point, run_id, accepted)
+    except (StoreError, ValueError) as exc:
+        raise WorkflowError(str(exc)) from None
+    return test, point, run_id

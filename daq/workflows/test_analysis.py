@@ -33,6 +33,8 @@ from daq.workflows.test import open_test
 EXACT_MODES = 8
 #: Below this MAC a measured mode does not look like any beam mode at these points.
 POOR_MAC = 0.8
+#: Above this auto-MAC two measured modes cannot be told apart at the test's points.
+AUTO_MAC_ALIKE = 0.5
 #: Below this MPC a shape is markedly complex (non-proportional damping, or noise).
 COMPLEX_MPC = 0.8
 #: Two windows' added decay rates differing by more than this (1/s) are not one setup.
@@ -207,12 +209,30 @@ def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = N
     if len(data.points) < 2:
         cautions.append("one point: a mode shape needs two points or more; MAC not computed")
     auto = auto_mac(shapes.shapes)
+    if data.driving_index is None:
+        cautions.append(
+            "no driving point (no point at the fixed point's place): the shapes are scaled to a unit largest "
+            "component, not to unit modal mass; measure a point where the "
+            + ("accelerometer" if data.test.roving == "hammer" else "hammer")
+            + " is"
+        )
+    close = np.argwhere(np.triu(auto, 1) > AUTO_MAC_ALIKE)
+    for i, j in close:
+        cautions.append(
+            f"modes at {result.modes[i].frequency_hz:.4g} and {result.modes[j].frequency_hz:.4g} Hz look "
+            f"alike at these {len(data.points)} points (auto-MAC {auto[i, j]:.2f}): too few points, or "
+            "badly placed"
+        )
     for k, mode in enumerate(result.modes):
-        if table is not None and not table.mac_exact[k] >= POOR_MAC:
-            paired = "its exact-beam mode" if table.exact_mode[k] >= 0 else "any exact-beam mode near it"
+        if table is not None and table.exact_mode[k] < 0:
             cautions.append(
-                f"mode at {mode.frequency_hz:.4g} Hz: MAC {table.mac_exact[k]:.2f} against {paired} at these "
-                "points: a local mode, noise, or too few points"
+                f"mode at {mode.frequency_hz:.4g} Hz: no exact-beam mode within 25 % of it: not a mode of "
+                "this beam (a local mode, the fixture, noise), or the article is wrong"
+            )
+        elif table is not None and not table.mac_exact[k] >= POOR_MAC:
+            cautions.append(
+                f"mode at {mode.frequency_hz:.4g} Hz: MAC {table.mac_exact[k]:.2f} against its exact-beam "
+                "mode at these points: a local mode, noise, or too few points"
             )
         if shapes.mpc[k] < COMPLEX_MPC:
             cautions.append(
@@ -275,7 +295,7 @@ def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
         "band_reason": result.band.reason,
         "n_lines": int(data.frequency_hz.size),
         "synthesis_error": _finite(result.modal.synthesis_error),
-        "shape_scaling": shapes.scaling,
+        "shape_scaling": _scaling_text(shapes.scaling, data),
         "shape_uncertainty_from": shapes.uncertainty_from,
         "modes": modes,
         "mac_exact": _matrix(analysis.mac_exact),
@@ -290,6 +310,13 @@ def _pair(j: int, frequency_hz: float, mac_value: float) -> dict[str, Any] | Non
     if j < 0:
         return None
     return {"mode": j + 1, "frequency_hz": float(frequency_hz), "mac": _finite(mac_value)}
+
+
+def _scaling_text(text: str, data: TestData) -> str:
+    """The shapes' scaling as a person reads it: the driving point by its name."""
+    if data.driving_index is None:
+        return text
+    return text.replace(f"(FRF {data.driving_index})", f"(point {data.points[data.driving_index].name})")
 
 
 def _finite(value: float) -> float | None:

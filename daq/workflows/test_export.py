@@ -124,6 +124,18 @@ def report_inputs(analysis: TestAnalysis, fit: TestFit | None = None) -> ModalTe
             + f" (relative standard uncertainty {100 * combo.get('relative_std', float('nan')):.3g} %)"
             for combo in fit.undetermined
         ]
+    drawn_exact = np.array([exact[j] if j is not None else nan_row for j in exact_pairs])
+    drawn_ritz = np.array([ritz[j] if j is not None else nan_row for j in ritz_pairs])
+    if data.driving_index is None and analysis.exact_at_points is not None:
+        # Shapes scaled to a unit largest component: the beam's curves drawn at the
+        # measured scale (least squares at the points) so that they overlay.
+        measured = aligned_shapes(analysis).real
+        for k, j in enumerate(exact_pairs):
+            if j is not None:
+                at = analysis.exact_at_points[j]
+                factor = float(measured[k] @ at / (at @ at)) if at @ at > 0 else np.nan
+                drawn_exact[k] *= factor
+                drawn_ritz[k] *= factor
     return ModalTestReport(
         test_name=data.test.name,
         article=f"{data.test.article.get('kind')}, roving {data.test.roving}, {role} fixed",
@@ -146,14 +158,15 @@ def report_inputs(analysis: TestAnalysis, fit: TestFit | None = None) -> ModalTe
         shape_std=shapes.shape_std,
         shape_scaling=shapes.scaling,
         grid_m=grid,
-        exact_shapes=np.array([exact[j] if j is not None else nan_row for j in exact_pairs]),
+        exact_shapes=drawn_exact,
         mac_exact=analysis.mac_exact,
         auto_mac=analysis.auto_mac,
-        ritz_shapes=np.array([ritz[j] if j is not None else nan_row for j in ritz_pairs]),
+        ritz_shapes=drawn_ritz,
         mac_ritz=analysis.mac_ritz,
         fit_method=None if fit is None else fit.method,
         damping_matrix=None if fit is None else fit.damping_matrix,
         damping_matrix_std=None if fit is None else fit.damping_std,
         fit_notes=notes,
         cautions=list(analysis.cautions) + ([] if fit is None else list(fit.cautions)),
+        paired_exact_mode=np.array([-1 if j is None else j for j in exact_pairs]),
     )

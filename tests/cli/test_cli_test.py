@@ -329,3 +329,47 @@ def test_a_capture_killed_mid_test_keeps_its_hits_and_its_point(tmp_path):
     assert view["next_point"] == "p1"
     p1 = next(p for p in view["points"] if p["name"] == "p1")
     assert p1["runs"] == [{"run_id": run.run_id, "accepted": False, "joined": p1["runs"][0]["joined"]}]
+
+
+def test_reject_and_accept_a_run_of_the_test(seed_store):
+    """`daq test reject` stops counting a run at its point (the point is next again) and
+    `daq test accept` counts it again; an unknown run is one line, exit 2."""
+    store = str(seed_store)
+    view = json.loads(daq_ok("test", "show", "s7", "--json", "--store", store).stdout)
+    p3 = next(p for p in view["points"] if p["name"] == "p3")
+    run_id = p3["counted_run"]
+    try:
+        out = daq_ok("test", "reject", "s7", run_id[:24], "--store", store).stdout
+        assert f"Run {run_id} rejected at point p3" in out
+        after = json.loads(daq_ok("test", "show", "s7", "--json", "--store", store).stdout)
+        assert after["next_point"] == "p3"
+        assert after["measured"] == view["measured"] - 1
+    finally:
+        daq_ok("test", "accept", "s7", run_id, "--store", store)
+    again = json.loads(daq_ok("test", "show", "s7", "--json", "--store", store).stdout)
+    assert again["measured"] == view["measured"]
+    bad = subprocess.run(
+        [str(DAQ), "test", "reject", "s7", "nosuchrun", "--store", store], capture_output=True, text=True
+    )
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1
+    assert "no run starting with" in bad.stderr
+
+
+def test_two_points_without_a_driving_point_say_so(tmp_path):
+    """Two points, the accelerometer at the tip, neither at the tip: the shapes cannot be
+    scaled to unit modal mass; the caution says so in the JSON, a pair of modes whose
+    auto-MAC exceeds 0.5 is named, and nothing says a MAC of 'nan'."""
+    store = tmp_path / "runs"
+    daq_ok("test", "new", "two", "--points", "a=0.3,b=0.5", "--store", str(store))
+    for seed in (5, 6):
+        capture(store, "--test", "two", "--next", seed=seed)
+    info = json.loads(daq_ok("test", "analyze", "two", "--json", "--store", str(store)).stdout)
+    cautions = " ".join(info["cautions"])
+    assert info["driving_point"] is None
+    assert "no driving point" in cautions
+    assert "unit largest component" in info["shape_scaling"]
+    auto = np.array(info["auto_mac"])
+    alike = np.triu(auto, 1) > 0.5
+    assert cautions.count("look alike") == int(alike.sum())
+    assert "nan" not in cautions

@@ -253,7 +253,7 @@ def print_test_analysis(info: dict[str, Any]) -> None:
         typer.echo(
             f"  {k:>4}  {mode['frequency_hz']:>10.4f} ± {_u(f_u, 1, '.2g'):<8}  "
             f"{100 * mode['damping_ratio']:>7.3f} ± {_u(z_u, 100, '.2g'):<8}  {mode['mpc']:>5.3f}  "
-            f"{_pair_text(mode.get('exact')):<22}  {_pair_text(mode.get('ritz'))}"
+            f"{_pair_text(mode, 'exact'):<22}  {_pair_text(mode, 'ritz')}"
         )
     names = [p["name"] for p in info["points"]]
     typer.echo("  shapes (real part ± u) at " + ", ".join(names) + ":")
@@ -268,9 +268,12 @@ def _u(value: float | None, scale: float, fmt: str) -> str:
     return "–" if value is None else format(scale * value, fmt)
 
 
-def _pair_text(pair: dict[str, Any] | None) -> str:
+def _pair_text(mode: dict[str, Any], model: str) -> str:
+    if model not in mode:
+        return "– (no MAC: one point, or no beam)"
+    pair = mode[model]
     if pair is None:
-        return "none near it"
+        return "none within 25 %"
     return f"mode {pair['mode']} {pair['frequency_hz']:.4g} Hz ({pair['mac']:.3f})"
 
 
@@ -348,6 +351,11 @@ def export(
     analysis = _analysis(store_dir, name, None, None, None)
     n_frf, n_modes = export_test(analysis, output)
     typer.echo(f"Test {name} written as UFF: {output} ({n_frf} FRFs, {n_modes} mode shapes)")
+    if n_modes == 0 and analysis.result.modes:
+        typer.echo(
+            "note: mode shapes not written: without a driving point the fixed point has no shape value, "
+            "and dataset 55 needs one at every node"
+        )
 
 
 @test_app.command("report")
@@ -409,3 +417,35 @@ def report(
         _write(folder / f"{png_name}.png", png)
     _write(folder / "index.html", html.encode("utf-8"))
     typer.echo(f"Report of test {name}: {folder / 'index.html'} ({len(pngs)} figures)")
+
+
+@test_app.command("reject")
+def reject(
+    name: NameArgument,
+    run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="A run of the test.")],
+    store: StoreOption = None,
+) -> None:
+    """Stop counting a run at its point (the point is measured again by --next); the run
+    stays in the store and in the test's list."""
+    _decide(name, run, False, store)
+
+
+@test_app.command("accept")
+def accept(
+    name: NameArgument,
+    run: Annotated[str, typer.Argument(metavar="RUN", show_default=False, help="A run of the test.")],
+    store: StoreOption = None,
+) -> None:
+    """Count a run of the test again at its point (the newest accepted run counts)."""
+    _decide(name, run, True, store)
+
+
+def _decide(name: str, run: str, accepted: bool, store: str | None) -> None:
+    from daq.workflows.test import set_run_accepted
+
+    test, point, run_id = set_run_accepted(_store_dir(store), name, run, accepted)
+    counted = test.counted_run(point)
+    now = f"run {counted} counts there" if counted else "nothing counts there: measure it again"
+    typer.echo(
+        f"Run {run_id} {'accepted' if accepted else 'rejected'} at point {point} of test {name}; {now}"
+    )
