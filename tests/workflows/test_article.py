@@ -165,7 +165,17 @@ def test_sample_for_what_older_software_reads():
 # --- property tests of the --points parser ------------------------------------------------------
 
 NAMES = st.from_regex(r"[A-Za-z0-9][A-Za-z0-9_-]{0,20}", fullmatch=True)
-POSITIONS = st.floats(min_value=0.0, max_value=TABLE_1.length_m, allow_nan=False, allow_infinity=False)
+# On the beam: 0 < x <= L (nothing moves at the clamp, so no point may sit there).
+POSITIONS = st.floats(
+    min_value=0.0, max_value=TABLE_1.length_m, exclude_min=True, allow_nan=False, allow_infinity=False
+).filter(lambda x: x > 1e-9)
+
+
+def test_a_point_at_the_clamp_is_refused_in_one_line():
+    with pytest.raises(WorkflowError) as refused:
+        parse_points("p1=0")
+    assert "\n" not in str(refused.value)
+    assert "0 < x <= 0.7 m" in str(refused.value)
 
 
 @st.composite
