@@ -126,14 +126,7 @@ def _along_axes(measured: PointFrf, points: Any) -> PointFrf:
     if sign > 0:
         return measured
     per_hit = None if measured.per_hit is None else -measured.per_hit
-    return PointFrf(
-        measured.frequency_hz,
-        -measured.frf,
-        measured.coherence,
-        per_hit,
-        measured.added_decay_1_s,
-        measured.source,
-    )
+    return replace(measured, frf=-measured.frf, per_hit=per_hit)
 
 
 @dataclass
