@@ -362,7 +362,66 @@ def create_app(service: Service) -> FastAPI:
             headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
         )
 
+    _document_error_answers(app, service.config.reads_need_token)
     return app
+
+
+#: What each error answer of the API means; every one has the body ``{"detail": "..."}``.
+ERROR_ANSWERS = {
+    "401": "no token, or the wrong one (writes always; reads when the service is not on loopback)",
+    "404": "no such run, hit or result",
+    "409": "the capture is not in a state that allows this (one already running, no pending hit, ...)",
+    "411": "a body without a Content-Length header (chunked bodies are refused)",
+    "413": "a body larger than the service accepts",
+    "422": "a parameter or the body is not valid; detail names the field",
+    "503": "the analyzer or a run file cannot be reached now; try again (Retry-After)",
+}
+_CAPTURE_CONTROL = ("/api/capture", "/api/capture/decision", "/api/capture/stop", "/api/capture/abort")
+
+
+def _document_error_answers(app: FastAPI, reads_need_token: bool) -> None:
+    """List every error answer each /api route can give, with its body, in the OpenAPI
+    description (FastAPI lists only 422, and with its own body, not this service's)."""
+    from fastapi.openapi.utils import get_openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema:
+            return app.openapi_schema
+        schema = get_openapi(
+            title=app.title, version=app.version, description=app.description, routes=app.routes
+        )
+        schemas = schema.setdefault("components", {}).setdefault("schemas", {})
+        schemas["Error"] = {
+            "title": "Error",
+            "type": "object",
+            "properties": {"detail": {"type": "string", "title": "Detail"}},
+            "required": ["detail"],
+        }
+        body = {"application/json": {"schema": {"$ref": "#/components/schemas/Error"}}}
+        for path, operations in schema.get("paths", {}).items():
+            if not path.startswith("/api/"):
+                continue
+            for method, operation in operations.items():
+                codes = set()
+                if method != "get" or reads_need_token:
+                    codes.add("401")
+                if method in ("post", "put"):
+                    codes |= {"411", "413"}
+                if operation.get("parameters") or operation.get("requestBody"):
+                    codes.add("422")
+                if "{" in path or path == "/api/capture/frf":
+                    codes.add("404")
+                if method == "post" and path in _CAPTURE_CONTROL:
+                    codes.add("409")
+                if (method == "post" and path == "/api/capture") or path.startswith("/api/runs"):
+                    codes.add("503")
+                answers = operation.setdefault("responses", {})
+                for code in sorted(codes):
+                    answers[code] = {"description": ERROR_ANSWERS[code], "content": body}
+        app.openapi_schema = schema
+        return schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
 
 
 async def _stream(service: Service, request: Request, since: int | None):
