@@ -190,6 +190,18 @@ def create_app(service: Service) -> FastAPI:
             raise HTTPException(409, str(exc)) from None
         return {"index": body.index, "accepted": body.accept}
 
+    @app.post(
+        "/api/capture/undo",
+        dependencies=writes,
+        summary="Take back the last decision while it is held (the hit is pending again)",
+    )
+    def capture_undo() -> dict[str, Any]:
+        try:
+            undone = service.capture.undo()
+        except Conflict as exc:
+            raise HTTPException(409, str(exc)) from None
+        return undone
+
     @app.post("/api/capture/stop", dependencies=writes, status_code=202, summary="Stop; seal the hits so far")
     def capture_stop() -> dict[str, Any]:
         return _stop(service, "stop")
@@ -376,7 +388,9 @@ ERROR_ANSWERS = {
     "422": "a parameter or the body is not valid; detail names the field",
     "503": "the analyzer or a run file cannot be reached now; try again (Retry-After)",
 }
-_CAPTURE_CONTROL = ("/api/capture", "/api/capture/decision", "/api/capture/stop", "/api/capture/abort")
+_CAPTURE_CONTROL = (
+    "/api/capture", "/api/capture/decision", "/api/capture/undo", "/api/capture/stop", "/api/capture/abort",
+)  # fmt: skip
 
 
 def _document_error_answers(app: FastAPI, reads_need_token: bool) -> None:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -43,6 +44,9 @@ from drivers.settings import ImpactSettings
 log = logging.getLogger(__name__)
 
 MAX_HITS_WANTED = 999
+#: Seconds a decision made on the page is held before it goes to the analyzer, so that
+#: a wrong click can be undone (POST /api/capture/undo). The service's option.
+UNDO_WINDOW_S = 3.0
 
 
 class Conflict(Exception):
@@ -59,7 +63,11 @@ class CaptureController:
         hub: EventHub,
         on_sealed: Callable[[str], None],
         settings: ImpactSettings | None = None,
+        undo_window_s: float = UNDO_WINDOW_S,
     ) -> None:
+        if not undo_window_s >= 0:
+            raise ValueError(f"undo_window_s must be >= 0, got {undo_window_s!r}")
+        self.undo_window_s = float(undo_window_s)
         self.link = link
         self.store_dir = store_dir
         self.hub = hub
@@ -87,6 +95,9 @@ class CaptureController:
         self.start_s = 0.0
         self.center_hz = 0.0
         self._decision: tuple[bool, str] | None = None
+        # A decision held for undo: until when (time.monotonic()), and for which hit.
+        self._held_until = 0.0
+        self._held_index: int | None = None
         self._stop: str | None = None
         self._frf: dict[str, Any] | None = None
 
@@ -135,7 +146,52 @@ class CaptureController:
             if index != self.pending:
                 raise Conflict(f"hit {index} is not the one waiting (hit {self.pending} is)")
             self._decision = (bool(accept), reason)
+            held = self.undo_window_s > 0
+            if held:
+                # Held: the page may still take it back (undo); the capture thread hands
+                # it to the analyzer when the window has passed.
+                self._held_until = time.monotonic() + self.undo_window_s
+                self._held_index = index
+                self.pending = None
+                self.hits[index].update(held=True, undo_until_s=self.undo_window_s)
             self._cond.notify_all()
+            run_id = self.run_id
+        if held:
+            self.hub.publish(
+                "decision_held",
+                {"run_id": run_id, "index": index, "number": index + 1, "accepted": bool(accept),
+                 "reason": reason, "undo_until_s": self.undo_window_s},
+            )  # fmt: skip
+
+    def undo(self) -> dict[str, Any]:
+        """Take back the decision being held: the hit is pending again. Conflict when
+        there is none, or when it has gone to the analyzer already."""
+        with self._cond:
+            if self.state != "running" or not self.hits:
+                raise Conflict("no decision to undo")
+            index = self._held_index
+            if index is not None and self._decision is not None and time.monotonic() < self._held_until:
+                accepted, _ = self._decision
+                self._decision = None
+                self._held_index = None
+                self.pending = index
+                self.hits[index].update(held=False, undo_until_s=None)
+                self._cond.notify_all()
+                run_id = self.run_id
+            else:
+                decided = [h for h in self.hits if h["decided"] or h.get("held")]
+                if not decided:
+                    raise Conflict("no decision to undo")
+                last = decided[-1]
+                accepted = self._decision[0] if last.get("held") and self._decision else last["accepted"]
+                if accepted:
+                    raise Conflict(f"hit {last['index'] + 1} is already in the analyzer's average")
+                raise Conflict(f"hit {last['index'] + 1} is already rejected at the analyzer")
+        undone = "accepted" if accepted else "rejected"
+        self.hub.publish(
+            "decision_undone", {"run_id": run_id, "index": index, "number": index + 1, "undone": undone}
+        )
+        return {"index": index, "number": index + 1, "undone": undone}
 
     def stop(self, how: str = "stop") -> None:
         """End the capture: ``stop`` seals the hits so far, ``abort`` discards them."""
@@ -160,14 +216,26 @@ class CaptureController:
     # ------------------------------------------------------------ reading
     def snapshot(self) -> dict[str, Any]:
         with self._cond:
+            left = None
+            if self._held_index is not None and self._decision is not None:
+                left = max(0.0, self._held_until - time.monotonic())
+            hits = []
+            for h in self.hits:
+                hit = dict(h)
+                if hit.get("held"):
+                    hit["undo_until_s"] = left
+                hits.append(hit)
             return {
+                "hit_index_base": 0,
                 "state": self.state,
                 "run_id": self.run_id,
                 "hits_wanted": self.hits_wanted,
                 "accepted": sum(1 for h in self.hits if h["accepted"]),
                 "auto": self.auto,
                 "pending": self.pending,
-                "hits": [dict(h) for h in self.hits],
+                "undo_until_s": left,
+                "undo_window_s": self.undo_window_s,
+                "hits": hits,
                 "settings": self.actual_settings,
                 "last_run_id": self.last_run_id,
                 "last_outcome": self.last_outcome,
@@ -229,9 +297,10 @@ class CaptureController:
         with self._cond:
             undecided = [h for h in self.hits if not h["decided"]]
             for hit in undecided:
-                hit.update(decided=True, accepted=False, reason=reason)
+                hit.update(decided=True, accepted=False, reason=reason, held=False, undo_until_s=None)
             accepted_so_far = sum(1 for h in self.hits if h["accepted"])
             self.pending = None
+            self._held_index = None
             self.last_run_id = sealed.run_id if sealed is not None else self.last_run_id
             self.last_outcome = outcome
             self.last_error = message if outcome in ("failed", "incomplete") and message else None
@@ -241,8 +310,8 @@ class CaptureController:
         for hit in undecided:
             self.hub.publish(
                 "hit_decided",
-                {"run_id": job.run_id, "index": hit["index"], "accepted": False, "reason": reason,
-                 "accepted_so_far": accepted_so_far},
+                {"run_id": job.run_id, "index": hit["index"], "number": hit["index"] + 1, "accepted": False,
+                 "reason": reason, "accepted_against_checks": False, "accepted_so_far": accepted_so_far},
             )  # fmt: skip
         self.hub.publish("capture_ended", {"run_id": job.run_id, "outcome": outcome, "message": message})
         if sealed is not None:
@@ -286,8 +355,9 @@ class CaptureController:
     def _iterate(self, job: Capture) -> Run:
         for event in job:
             with self._cond:
-                if self._stop is not None:
-                    raise _Stopped
+                stopping = self._stop is not None
+            if stopping and not isinstance(event, HitDecided):
+                raise _Stopped
             if isinstance(event, Connected):
                 self.link.note_ok(event.identification)
                 self.hub.publish("instrument", self.link.status())
@@ -305,7 +375,9 @@ class CaptureController:
                 if not self.auto:
                     job.decide(*self._wait_for_decision(event.index))
             elif isinstance(event, HitDecided):
-                self._decided(job, event)
+                self._decided(job, event)  # a decision held when Stop came is kept
+                if stopping:
+                    raise _Stopped
             elif isinstance(event, Finished):
                 self._seal(event.run, job)
                 return event.run
@@ -313,7 +385,8 @@ class CaptureController:
 
     def _arrived(self, job: Capture, hit: HitArrived) -> None:
         summary = {
-            "index": hit.index, "decided": False, "accepted": None, "reason": "",
+            "index": hit.index, "number": hit.index + 1, "decided": False, "accepted": None, "reason": "",
+            "accepted_against_checks": False, "held": False, "undo_until_s": None,
             "peak_force_n": hit.peak_force_n, "overload": list(hit.overload),
             "timestamp_utc": hit.timestamp_utc, "passed": hit.passed,
             "suggested_reason": hit.suggested_reason,
@@ -333,25 +406,40 @@ class CaptureController:
         )  # fmt: skip
 
     def _wait_for_decision(self, index: int) -> tuple[bool, str]:
+        """The decision on hit ``index``, once its undo window has passed (at once on
+        Stop: a decision made is kept; Abort discards everything anyway)."""
         with self._cond:
-            while self._decision is None and self._stop is None:
-                self._cond.wait()
-            if self._stop is not None:
-                raise _Stopped
+            while True:
+                if self._stop == "abort" or (self._stop is not None and self._decision is None):
+                    raise _Stopped
+                if self._decision is not None:
+                    left = self._held_until - time.monotonic() if self._held_index == index else 0.0
+                    if left <= 0 or self._stop is not None:
+                        break
+                    self._cond.wait(left)
+                else:
+                    self._cond.wait()
             decision = self._decision
             self._decision = None
+            self._held_index = None
             self.pending = None
+            self.hits[index].update(held=False, undo_until_s=None)
             return decision
 
     def _decided(self, job: Capture, event: HitDecided) -> None:
         with self._cond:
             hit = self.hits[event.index]
-            hit.update(decided=True, accepted=event.accepted, reason=event.reason)
+            hit.update(
+                decided=True, accepted=event.accepted, reason=event.reason,
+                accepted_against_checks=bool(event.accepted and not hit["passed"]),
+            )  # fmt: skip
             accepted = [self.traces[h["index"]] for h in self.hits if h["accepted"]]
         self.hub.publish(
             "hit_decided",
-            {"run_id": job.run_id, "index": event.index, "accepted": event.accepted,
-             "reason": event.reason, "accepted_so_far": event.accepted_so_far},
+            {"run_id": job.run_id, "index": event.index, "number": event.index + 1,
+             "accepted": event.accepted, "reason": event.reason,
+             "accepted_against_checks": bool(event.accepted and not hit["passed"]),
+             "accepted_so_far": event.accepted_so_far},
         )  # fmt: skip
         if event.accepted:
             frf = live_frf(self.actual_settings or {}, accepted, self.sample_rate_hz, self.center_hz)

@@ -30,7 +30,11 @@ class ServiceConfig:
     """store_dir : the run store. resource / sim : the analyzer (one of them).
     host, port : where HTTP is served. token : the access token.
     workers : analysis worker processes. scheduler : a Dask scheduler instead.
-    dialect : the analyzer's dialect, forced (None: found out at the first connection)."""
+    dialect : the analyzer's dialect, forced (None: found out at the first connection).
+    undo_window_s : seconds a decision is held before it goes to the analyzer, so that
+        the page can undo it (default 3 s, else ``$DAQ_UNDO_WINDOW_S``; 0: none).
+    setup : the named setup (or a setup file) captures use when a request names none;
+        None: the built-in "default"."""
 
     store_dir: Path
     resource: str | None
@@ -42,11 +46,25 @@ class ServiceConfig:
     workers: int = field(default_factory=lambda: max(1, (os.cpu_count() or 2) - 1))
     scheduler: str | None = None
     dialect: str | None = None
+    undo_window_s: float = field(default_factory=lambda: _undo_window_from_env())
+    setup: str | None = None
 
     @property
     def url(self) -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
         return f"http://{host}:{self.port}"
+
+
+def _undo_window_from_env() -> float:
+    """``$DAQ_UNDO_WINDOW_S`` when set to a number >= 0, else the default (3 s)."""
+    from daq.service.capture_control import UNDO_WINDOW_S
+
+    text = os.environ.get("DAQ_UNDO_WINDOW_S", "").strip()
+    try:
+        value = float(text) if text else UNDO_WINDOW_S
+    except ValueError:
+        return UNDO_WINDOW_S
+    return value if 0 <= value <= 600 else UNDO_WINDOW_S
 
 
 class Service:
@@ -61,7 +79,13 @@ class Service:
             config.store_dir, self.hub, config.workers, config.scheduler,
             list_runs=lambda: list_regular_runs(Store(config.store_dir)),
         )  # fmt: skip
-        self.capture = CaptureController(self.link, config.store_dir, self.hub, on_sealed=self.jobs.submit)
+        self.capture = CaptureController(
+            self.link,
+            config.store_dir,
+            self.hub,
+            on_sealed=self.jobs.submit,
+            undo_window_s=config.undo_window_s,
+        )
         self._results = _ResultCache(self.store)
         # The lock lives in the store: every process finds it whatever its environment.
         self._store_lock = store_lock(config.store_dir, holder=f"daq serve at {config.url}")
