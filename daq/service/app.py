@@ -210,9 +210,13 @@ def create_app(service: Service) -> FastAPI:
     def capture_abort() -> dict[str, Any]:
         return _stop(service, "abort")
 
-    @app.get("/api/capture/hits/{index}", dependencies=reads, summary="One hit's time records")
+    @app.get(
+        "/api/capture/hits/{index}",
+        dependencies=reads,
+        summary="One hit's time records and quality: windows, force spectrum, its FRF, the running average",
+    )
     def capture_hit(index: int) -> dict[str, Any]:
-        traces = service.capture.hit_traces(index)
+        traces = service.capture.hit_quality(index)
         if traces is None:
             raise HTTPException(404, f"the current capture has no hit {index}")
         return plain(traces)

@@ -250,11 +250,30 @@ class CaptureController:
             force, response = self.traces[index]
             return {
                 "index": index,
+                "number": index + 1,
+                "hit_index_base": 0,
                 "sample_rate_hz": self.sample_rate_hz,
                 "start_s": self.start_s,
                 "force_n": np.real(force),
                 "response_m_s2": np.real(response),
             }
+
+    def hit_quality(self, index: int) -> dict[str, Any] | None:
+        """Hit ``index``'s records with its quality view (daq/workflows/hit_quality.py):
+        windows, force spectrum against the tip check's limit, its FRF, the running
+        average after it. None when the capture has no such hit."""
+        from daq.workflows.hit_quality import hit_quality
+
+        with self._cond:
+            if not 0 <= index < len(self.traces):
+                return None
+            records = list(self.traces)
+            accepted = [h["accepted"] if h["decided"] else None for h in self.hits]
+            settings = dict(self.actual_settings or {})
+            rate, center = self.sample_rate_hz, self.center_hz
+        out = self.hit_traces(index) or {}
+        out.update(hit_quality(settings, records, accepted, index, rate, center))
+        return out
 
     def frf(self) -> dict[str, Any] | None:
         with self._cond:

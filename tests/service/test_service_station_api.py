@@ -79,3 +79,38 @@ def test_abort_during_a_held_decision_discards_the_hits(tmp_path, monkeypatch):
         state = served.get("/api/capture").json()
         assert state["last_outcome"] == "aborted"
         assert state["undo_until_s"] is None
+
+
+def test_a_hits_quality_arrays_have_the_records_and_spans_shapes(tmp_path, monkeypatch):
+    monkeypatch.setenv("DAQ_UNDO_WINDOW_S", "0")
+    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served:
+        served.post("/api/capture", {"hits": 2})
+        for index in (0, 1):
+            _pending(served, index)
+            assert served.post("/api/capture/decision", {"index": index, "accept": True}).status_code == 200
+        wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", 30, "idle")
+        settings = served.get("/api/capture").json()["settings"]
+        hit = served.get("/api/capture/hits/1").json()
+        assert (hit["index"], hit["number"], hit["hit_index_base"]) == (1, 2, 0)
+        n = len(hit["force_n"])
+        assert n == 1024  # the 35660A's record: 2.56 x 400 lines
+        assert len(hit["force_window"]) == len(hit["response_window"]) == n
+        assert min(hit["force_window"]) >= 0
+        assert max(hit["response_window"]) <= 1
+        # The force window is 1 for t < its width (sample i at i / fs), 0 after.
+        width_s = settings["hammer"]["force_width_s"]
+        ones = sum(1 for i in range(n) if i / hit["sample_rate_hz"] < width_s)
+        assert hit["force_window"] == [1.0] * ones + [0.0] * (n - ones)
+        spectrum = hit["force_spectrum"]
+        lines = 401  # 0..span in 400 lines
+        assert len(spectrum["frequency_hz"]) == len(spectrum["level_db"]) == lines
+        assert spectrum["rolloff_limit_db"] == -10.0
+        assert spectrum["rolloff_hz"] == pytest.approx(0.9 * settings["span_hz"])
+        frf, average = hit["frf"], hit["average"]
+        assert len(frf["frequency_hz"]) == len(frf["magnitude"]) == len(frf["phase_deg"]) == lines
+        assert average["n_averaged"] == 2
+        assert len(average["coherence"]) == lines
+        # The running average after the last hit is the live FRF the service publishes.
+        live = served.get("/api/capture/frf").json()
+        assert average["magnitude"] == pytest.approx(live["frf_abs"], rel=1e-9, nan_ok=True)
+        assert served.get("/api/capture/hits/2").status_code == 404
