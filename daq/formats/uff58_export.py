@@ -143,7 +143,9 @@ def _time_sets(run: Run, force: _Dof, responses: list[_Dof]) -> list[dict]:
     hits = run.hits
     if hits is None:
         return []
-    ids = (run.start_time, f"center_hz={float(hits.center_hz)!r}")
+    # ID line 3: the start time and how the titles count hits (from 1, as people read
+    # them; the records' own numbers and the API's indices count from 0).
+    ids = (_id_text(f"{run.start_time} hit numbers count from 1"), f"center_hz={float(hits.center_hz)!r}")
     ids += (f"sample_rate_hz={float(hits.sample_rate_hz)!r} start_s={float(hits.start_s)!r}",)
     sets = []
     for k in range(hits.n_hits):
@@ -151,7 +153,7 @@ def _time_sets(run: Run, force: _Dof, responses: list[_Dof]) -> list[dict]:
             ("force", hits.force_n[k], force, 13, "N"),
             ("response", hits.response_m_s2[k], responses[0], 12, "m/s^2"),
         ):
-            title = f"{run.run_id} hit {k} {what}"
+            title = f"{run.run_id} hit {k + 1} {what}"
             if not hits.accepted[k]:
                 # The verdict travels in ID line 1 (80 characters), read back by read_uff.
                 title = f"{title} rejected: {one_line(str(hits.reject_reason[k]))}"[:80]

@@ -25,11 +25,37 @@ def summary_dict(s) -> dict[str, Any]:
     }
 
 
+#: Where the JSON's hit ``index`` starts: 0, as in the run file and the API. People read
+#: ``number`` (= index + 1): `daq runs show`, the report, the page and the capture prompt
+#: count hits from 1.
+HIT_INDEX_BASE = 0
+
+
+def failed_check_names(checks: dict[str, Any]) -> list[str]:
+    """The names of the checks that failed in one hit's stored check results (each a dict
+    with a ``passed`` flag, analysis/hit_checks.py HitCheck.as_dict); other entries
+    (flags, numbers) are not checks and are skipped."""
+    return [name for name, c in checks.items() if isinstance(c, dict) and c.get("passed") is False]
+
+
+def accepted_against_checks(run) -> list[int]:
+    """The 0-based indices of the hits of ``run`` that were accepted although one of their
+    checks failed (the operator overrode it), in order; [] for a run without hits."""
+    hits = run.hits
+    if hits is None:
+        return []
+    return [i for i in range(int(hits.n_hits)) if hits.accepted[i] and failed_check_names(hits.checks[i])]
+
+
 def run_dict(run, path: Path) -> dict[str, Any]:
     """The JSON of a whole ``run`` (daq.store.Run) read from ``path``: its metadata, every
-    hit's verdict, and the shape of its FRFs and spectra (not the arrays)."""
+    hit's verdict, and the shape of its FRFs and spectra (not the arrays). Each hit has
+    its 0-based ``index`` (``hit_index_base`` says so) and its ``number`` from 1, as people
+    read it; ``accepted_against_checks`` with ``failed_checks`` marks a hit accepted
+    although a check failed."""
     hits = run.hits
     hits_data = None
+    against = set(accepted_against_checks(run))
     n_hits = n_accepted = 0
     if hits is not None:
         n_hits, n_accepted = int(hits.n_hits), int(hits.accepted.sum())
@@ -42,10 +68,14 @@ def run_dict(run, path: Path) -> dict[str, Any]:
             "start_s": float(hits.start_s),
             "center_hz": float(hits.center_hz),
             "zoom": bool(hits.is_zoom),
+            "n_accepted_against_checks": len(against),
             "hits": [
                 {
                     "index": i,
+                    "number": i + 1,
                     "accepted": bool(hits.accepted[i]),
+                    "accepted_against_checks": i in against,
+                    "failed_checks": failed_check_names(hits.checks[i]),
                     "reject_reason": str(hits.reject_reason[i]),
                     "peak_force_n": float(hits.peak_force_n[i]),
                     "overload_force": bool(hits.overload[i, 0]),
@@ -72,6 +102,7 @@ def run_dict(run, path: Path) -> dict[str, Any]:
         "points": {**run.resolved_points().to_dicts(), "recorded": run.points is not None},
         "n_hits": n_hits,
         "n_accepted": n_accepted,
+        "hit_index_base": HIT_INDEX_BASE,
         "hits": hits_data,
         "analyzer": frf_dict(run.analyzer),
         "measured_frf": frf_dict(run.measured_frfs),

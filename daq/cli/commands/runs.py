@@ -180,6 +180,16 @@ def _one_line(value: Any) -> str:
     return " ".join(text.split())
 
 
+def _failed_text(names: list[str]) -> str:
+    """The failed checks in words: "the double impact check failed", "the a and b checks failed"."""
+    names = [_one_line(n) for n in names]
+    if not names:
+        return "a check failed"
+    if len(names) == 1:
+        return f"the {names[0]} check failed"
+    return f"the {', '.join(names[:-1])} and {names[-1]} checks failed"
+
+
 def _print_run(d: dict[str, Any], store: str) -> None:
     from daq.store.model import FRF_FORM_UNITS
 
@@ -197,6 +207,14 @@ def _print_run(d: dict[str, Any], store: str) -> None:
     field("note", _one_line(d["note"]) or "-")
     field("software", d["software"])
     field("provenance", _one_line(d["provenance"]) if d["provenance"] else "-")
+    prov = d["provenance"] if isinstance(d["provenance"], dict) else {}
+    setup = prov.get("setup")
+    if isinstance(setup, dict) and setup.get("name"):
+        version = f" version {setup['version']}" if setup.get("version") is not None else ""
+        field("setup", f"{_one_line(setup['name'])}{version}")
+    cautions = prov.get("cautions")
+    for text in cautions if isinstance(cautions, list) else []:
+        field("caution", _one_line(text).removeprefix("caution: "))
     inst = d["instrument"]
     if inst is None:
         field("instrument", "-")
@@ -233,19 +251,24 @@ def _print_run(d: dict[str, Any], store: str) -> None:
             "hits",
             f"{hits['n_hits']}: {hits['n_accepted']} accepted, {hits['n_rejected']} rejected; "
             f"{hits['n_samples']} samples at {hits['sample_rate_hz']:g} Hz from "
-            f"{hits['start_s']:g} s, {band}",
+            f"{hits['start_s']:g} s, {band}; numbered from 1",
         )
         for h in hits["hits"]:
             overload = [
                 c for c, on in (("force", h["overload_force"]), ("response", h["overload_response"])) if on
             ]
             verdict = "accepted" if h["accepted"] else f"rejected: {_one_line(h['reject_reason'])}"
+            if h.get("accepted_against_checks"):
+                verdict = f"accepted although {_failed_text(h['failed_checks'])}"
             extra = f", OVERLOAD {'+'.join(overload)}" if overload else ""
             field(
                 "",
-                f"hit {h['index']:>3}  {h['timestamp_utc']}  "
+                f"hit {h['number']:>3}  {h['timestamp_utc']}  "
                 f"peak {h['peak_force_n']:.4g} N{extra}  {verdict}",
             )
+        against = [h for h in hits["hits"] if h.get("accepted_against_checks")]
+        for h in against:
+            field("caution", f"hit {h['number']}: accepted although {_failed_text(h['failed_checks'])}")
     for name, key in (("analyzer", "analyzer"), ("measured FRF", "measured_frf")):
         frf = d[key]
         if frf is None:
