@@ -1,0 +1,100 @@
+"""The transducer table (daq/store/transducers.py): built-ins, units, round trip,
+overdue calibrations and bad tables refused naming the file and the field."""
+
+from __future__ import annotations
+
+from datetime import date
+
+import pytest
+
+from daq.store import StoreError
+from daq.store.transducers import Transducer, TransducerTable
+
+
+def test_the_built_ins_are_there_without_a_file(tmp_path):
+    table = TransducerTable(tmp_path)
+    assert [t.id for t in table.all()] == ["accel-default", "hammer-default"]
+    hammer = table.get("hammer-default")
+    assert hammer.sensitivity_v_per_eu == pytest.approx(2.25e-3)
+    assert table.get("accel-default").sensitivity_v_per_eu == pytest.approx(10e-3 / 9.80665)
+    assert not (tmp_path / "transducers.toml").exists()
+
+
+@pytest.mark.parametrize(
+    ("unit", "kind", "v_per_eu"),
+    [
+        ("mV/N", "hammer", 2e-3),
+        ("V/N", "hammer", 2.0),
+        ("mV/lbf", "hammer", 2e-3 / 4.4482216152605),
+        ("mV/g", "accelerometer", 2e-3 / 9.80665),
+        ("V/g", "accelerometer", 2 / 9.80665),
+        ("mV/(m/s^2)", "accelerometer", 2e-3),
+        ("V/(m/s^2)", "accelerometer", 2.0),
+    ],
+)
+def test_every_unit_gives_volts_per_engineering_unit(unit, kind, v_per_eu):
+    assert Transducer("t", kind, "m", "s", 2.0, unit).sensitivity_v_per_eu == pytest.approx(v_per_eu)
+
+
+def test_a_transducer_round_trips_and_replaces_one_of_its_id(tmp_path):
+    table = TransducerTable(tmp_path)
+    h = Transducer("h-12", "hammer", 'PCB "086C03"', "SN 1", 2.31, "mV/N", "2025-01-10", "2026-01-10")
+    table.put(h)
+    assert TransducerTable(tmp_path).get("h-12") == h
+    table.put(Transducer("h-12", "hammer", "PCB", "SN 1", 2.4, "mV/N"))
+    assert table.get("h-12").sensitivity == 2.4
+    table.put(Transducer("hammer-default", "hammer", "mine", "", 3.0, "mV/N"))  # overwrites the built-in
+    assert table.get("hammer-default").model == "mine"
+    assert [t.id for t in table.all()] == ["accel-default", "h-12", "hammer-default"]
+
+
+def test_overdue_and_to_dict():
+    h = Transducer("h-12", "hammer", "PCB", "1", 2.25, "mV/N", "2025-01-01", "2026-01-01")
+    assert h.overdue(date(2026, 1, 2))
+    assert not h.overdue(date(2026, 1, 1))
+    d = h.to_dict(date(2026, 6, 1))
+    assert d["overdue"] is True
+    assert d["sensitivity_v_per_eu"] == pytest.approx(2.25e-3)
+    assert Transducer.from_dict(d, "x") == h
+    assert not Transducer("a", "hammer", "", "", 1.0, "mV/N").overdue(date(2099, 1, 1))
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"due": "2026-13-01"}, "transducer hammer-1: due: not a date YYYY-MM-DD"),
+        ({"calibrated": 5}, "transducer hammer-1: calibrated: not a date YYYY-MM-DD"),
+        ({"kind": "mic"}, "transducer hammer-1: kind: must be hammer or accelerometer"),
+        (
+            {"sensitivity_unit": "mV/g"},
+            "transducer hammer-1: sensitivity_unit: mV/g is not a unit of a hammer",
+        ),
+        ({"sensitivity_unit": "pC/N"}, "transducer hammer-1: sensitivity_unit: must be one of"),
+        ({"sensitivity": -1.0}, "transducer hammer-1: sensitivity: must be a positive number"),
+        ({"sensitivity": True}, "transducer hammer-1: sensitivity: must be a positive number"),
+        ({"id": "a b"}, "transducer hammer-1: id: 'a b' is not a plain name"),
+        ({"colour": "red"}, "transducer hammer-1: colour: unknown field"),
+        ({"calibrated": "2026-02-01", "due": "2026-01-01"}, "transducer hammer-1: due: 2026-01-01 is before"),
+    ],
+)
+def test_bad_fields_are_named(fields, message):
+    base = {"id": "hammer-1", "kind": "hammer", "model": "m", "serial": "s", "sensitivity": 2.25,
+            "sensitivity_unit": "mV/N", "calibrated": "", "due": ""}  # fmt: skip
+    with pytest.raises(StoreError) as info:
+        Transducer.from_dict({**base, **fields}, "transducer hammer-1")
+    assert str(info.value).startswith(message)
+
+
+def test_a_bad_table_is_refused_naming_the_file_and_the_field(tmp_path):
+    path = tmp_path / "transducers.toml"
+    path.write_text(
+        '[[transducer]]\nid = "h-1"\nkind = "hammer"\nsensitivity = 2.0\nsensitivity_unit = "mV/N"\n'
+        "due = 2026-01-01\n"  # a TOML date is taken as the date it is
+        '[[transducer]]\nid = "h-2"\nkind = "hammer"\nsensitivity = 2.0\nsensitivity_unit = "mV/N"\n'
+        'due = "soon"\n'
+    )
+    with pytest.raises(StoreError) as info:
+        TransducerTable(tmp_path).all()
+    assert str(info.value) == f"{path}: transducer h-2: due: not a date YYYY-MM-DD ('soon')"
+    with pytest.raises(StoreError, match="no transducer 'nope' \\(known: accel-default, hammer-default\\)"):
+        TransducerTable(tmp_path / "empty").get("nope")
