@@ -59,6 +59,18 @@ class CaptureRequest(BaseModel):
     operator: str = Field("", max_length=200)
     note: str = Field("", max_length=2000)
     auto: bool = Field(False, description="Decide each hit by the checks instead of waiting for a decision.")
+    setup: str | None = Field(
+        None, max_length=200, description="A named setup (GET /api/setups); default: the service's."
+    )
+    test: str | None = Field(None, max_length=200, description="The multi-point test the run measures.")
+    point: str | None = Field(
+        None, max_length=200, description='The test\'s point to measure, or "next" (the first not measured).'
+    )
+
+    @field_validator("setup", "test", "point")
+    @classmethod
+    def _names(cls, value: str | None) -> str | None:
+        return None if value is None else _plain_text(value, one_line=True)
 
     @field_validator("operator")
     @classmethod
@@ -174,8 +186,11 @@ def create_app(service: Service) -> FastAPI:
 
     @app.post("/api/capture", dependencies=writes, status_code=202, summary="Start a capture")
     def capture_start(body: CaptureRequest) -> dict[str, Any]:
+        where = _test_point(service, body.test, body.point)
         try:
-            run_id = service.capture.start(body.hits, body.operator, body.note, body.auto)
+            run_id = service.capture.start(body.hits, body.operator, body.note, body.auto, where=where)
+        except ValueError as exc:
+            raise HTTPException(422, str(exc)) from None
         except Conflict as exc:
             raise HTTPException(409, str(exc)) from None
         except DriverError as exc:
@@ -227,6 +242,29 @@ def create_app(service: Service) -> FastAPI:
         if frf is None:
             raise HTTPException(404, "no hit accepted yet")
         return plain(frf)
+
+    # ------------------------------------------------------------ tests
+    @app.get(
+        "/api/tests", dependencies=reads, summary="The store's multi-point tests, their points and the next"
+    )
+    def tests() -> dict[str, Any]:
+        from daq.workflows.errors import WorkflowError
+        from daq.workflows.test_views import tests_listing
+
+        try:
+            return plain(tests_listing(service.store.path))
+        except WorkflowError as exc:
+            raise HTTPException(404, service.public(str(exc))) from None
+
+    @app.get("/api/tests/{name}", dependencies=reads, summary="One test: its points, runs and coherence")
+    def test_detail(name: str) -> dict[str, Any]:
+        from daq.workflows.errors import WorkflowError
+        from daq.workflows.test_views import test_detail
+
+        try:
+            return plain(test_detail(service.store.path, name))
+        except WorkflowError as exc:
+            raise HTTPException(404, service.public(str(exc))) from None
 
     # ------------------------------------------------------------ runs
     # Every read of a run file goes through service.reads (bounded, with a timeout): a
@@ -485,6 +523,26 @@ def _stop(service: Service, how: str) -> dict[str, Any]:
     except Conflict as exc:
         raise HTTPException(409, str(exc)) from None
     return {"state": service.capture.state}
+
+
+def _test_point(service: Service, test: str | None, point: str | None) -> Any:
+    """The test's point a capture measures (``point`` a name or "next"), None without a
+    test; 422 naming the field otherwise."""
+    from daq.workflows.errors import WorkflowError
+    from daq.workflows.test import point_to_measure
+
+    if test is None and point is None:
+        return None
+    if test is None:
+        raise HTTPException(422, "test: a point needs the test it belongs to")
+    if point is None:
+        raise HTTPException(422, 'point: give the test\'s point to measure, or "next"')
+    try:
+        return point_to_measure(service.store.path, test, None if point == "next" else point, point == "next")
+    except WorkflowError as exc:
+        text = service.public(str(exc))
+        field = "point" if "has no point" in text or "every point" in text else "test"
+        raise HTTPException(422, f"{field}: {text}") from None
 
 
 def _store_call(service: Service, fn: Any, *args: Any) -> Any:

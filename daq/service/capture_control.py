@@ -35,9 +35,11 @@ from daq.workflows.capture import (
     HitArrived,
     HitDecided,
 )
+from daq.workflows.errors import WorkflowError
 from daq.workflows.instrument_link import InstrumentLink
 from daq.workflows.live_frf import live_frf
 from daq.workflows.setup_codec import settings_to_dict
+from daq.workflows.test import TestPoint, join
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings
 
@@ -75,6 +77,9 @@ class CaptureController:
         self.settings = settings or ImpactSettings()
         self._cond = threading.Condition()
         self._thread: threading.Thread | None = None
+        self.where: TestPoint | None = None
+        # The simulator's hammer and accelerometer before any test's point moved them.
+        self._sim_home: tuple[float, float] | None = None
         self.state = "idle"
         self.last_run_id: str | None = None
         self.last_outcome: str | None = None
@@ -102,9 +107,24 @@ class CaptureController:
         self._frf: dict[str, Any] | None = None
 
     # ------------------------------------------------------------ requests
-    def start(self, hits_wanted: int, operator: str = "", note: str = "", auto: bool = False) -> str:
+    def start(
+        self,
+        hits_wanted: int,
+        operator: str = "",
+        note: str = "",
+        auto: bool = False,
+        where: TestPoint | None = None,
+        **capture_options: Any,
+    ) -> str:
         """Open the analyzer and start a capture; its run id. Conflict if one runs;
-        DriverError if the analyzer cannot be reached."""
+        DriverError if the analyzer cannot be reached; ValueError (one line naming the
+        field) when the simulator cannot play the test's point.
+
+        where : the test and point the run measures (daq/workflows/test.py
+            ``point_to_measure``): the run records its points and joins the test when
+            sealed; on the simulator the hammer and accelerometer move there first.
+        capture_options : passed on to the Capture workflow (settings, transducers,
+            setup_name, setup_version, cautions)."""
         if not 1 <= hits_wanted <= MAX_HITS_WANTED:
             raise ValueError(f"hits must be 1..{MAX_HITS_WANTED}")
         with self._cond:
@@ -117,27 +137,59 @@ class CaptureController:
             with self._cond:
                 self.state = "idle"
             raise
-        simulator = self.link.simulator_for_capture()
+        try:
+            simulator = self.link.simulator_for_capture()
+            if simulator is not None:
+                simulator.update(self._place_simulator(dsa, where))
+        except (DriverError, ValueError):
+            with contextlib.suppress(Exception):
+                dsa.close()
+            with self._cond:
+                self.state = "idle"
+            raise
+        settings = capture_options.pop("settings", None) or self.settings
         job = Capture(
-            dsa, self.settings, hits_wanted, resource=self.link.resource, transport=self.link.transport_name,
+            dsa, settings, hits_wanted, resource=self.link.resource, transport=self.link.transport_name,
             simulator=simulator, operator=operator, note=note, store_dir=self.store_dir,
+            points=where.points if where is not None else None, **capture_options,
         )  # fmt: skip
         with self._cond:
             self._reset(job, hits_wanted, auto)
+            self.where = where
             self.state = "running"
             self._thread = threading.Thread(target=self._run, args=(job, dsa), name="capture", daemon=True)
-        self.hub.publish(
-            "capture_started",
-            {
-                "run_id": job.run_id,
-                "hits_wanted": hits_wanted,
-                "auto": auto,
-                "operator": operator,
-                "note": note,
-            },
-        )
+        started = {
+            "run_id": job.run_id,
+            "hits_wanted": hits_wanted,
+            "auto": auto,
+            "operator": operator,
+            "note": note,
+        }
+        if where is not None:
+            started["test"] = {"name": where.test, "point": where.point}
+        self.hub.publish("capture_started", started)
         self._thread.start()
         return job.run_id
+
+    def _place_simulator(self, dsa: Any, where: TestPoint | None) -> dict[str, Any]:
+        """On the simulator: the hammer and accelerometer at the test's point (as ``daq
+        capture --sim --test`` places them), else where they were before any test moved
+        them; their positions for the run's provenance. ValueError naming the point
+        when the simulated beam has no such position."""
+        if self._sim_home is None:
+            self._sim_home = (float(dsa.query("SIM:FORCE?")), float(dsa.query("SIM:SENSOR?")))
+        force_at, sensor_at = self._sim_home
+        if where is not None:
+            force_at = where.force_at_m if where.force_at_m is not None else force_at
+            sensor_at = where.sensor_at_m if where.sensor_at_m is not None else sensor_at
+        dsa.send(f"SIM:FORCE {force_at!r}")
+        dsa.send(f"SIM:SENSOR {sensor_at!r}")
+        try:
+            dsa.check_errors()
+        except DriverError as exc:
+            what = f"point: {where.point} of test {where.test}" if where is not None else "the simulator"
+            raise ValueError(f"{what}: the simulated beam cannot take it ({exc})") from None
+        return {"force_at_m": float(dsa.query("SIM:FORCE?")), "sensor_at_m": float(dsa.query("SIM:SENSOR?"))}
 
     def decide(self, index: int, accept: bool, reason: str = "") -> None:
         with self._cond:
@@ -235,6 +287,7 @@ class CaptureController:
                 "pending": self.pending,
                 "undo_until_s": left,
                 "undo_window_s": self.undo_window_s,
+                "test": None if self.where is None else {"name": self.where.test, "point": self.where.point},
                 "hits": hits,
                 "settings": self.actual_settings,
                 "last_run_id": self.last_run_id,
@@ -332,6 +385,17 @@ class CaptureController:
                 {"run_id": job.run_id, "index": hit["index"], "number": hit["index"] + 1, "accepted": False,
                  "reason": reason, "accepted_against_checks": False, "accepted_so_far": accepted_so_far},
             )  # fmt: skip
+        with self._cond:
+            where = self.where
+        if sealed is not None and where is not None:
+            try:
+                join(self.store_dir, where, sealed.run_id, accepted=sealed.complete)
+                counted = "" if sealed.complete else ", not counted (incomplete)"
+                message = f"{message}; joined test {where.test} at point {where.point}{counted}"
+            except WorkflowError as exc:
+                message = f"{message}; {exc}"
+            with self._cond:
+                self.last_message = message
         self.hub.publish("capture_ended", {"run_id": job.run_id, "outcome": outcome, "message": message})
         if sealed is not None:
             self.on_sealed(sealed.run_id)

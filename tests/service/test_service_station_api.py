@@ -114,3 +114,51 @@ def test_a_hits_quality_arrays_have_the_records_and_spans_shapes(tmp_path, monke
         live = served.get("/api/capture/frf").json()
         assert average["magnitude"] == pytest.approx(live["frf_abs"], rel=1e-9, nan_ok=True)
         assert served.get("/api/capture/hits/2").status_code == 404
+
+
+def test_a_capture_at_the_next_point_of_a_test_moves_the_simulator_and_joins_the_test(tmp_path, monkeypatch):
+    from daq.workflows.test import new_test
+
+    monkeypatch.setenv("DAQ_UNDO_WINDOW_S", "0")
+    store = tmp_path / "store"
+    new_test(store, "beam", None, "p1=0.1,p2=0.2", "tip", "hammer")
+    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0", store=store) as served:
+        (listed,) = served.get("/api/tests").json()["tests"]
+        assert listed["name"] == "beam"
+        assert listed["next"] == "p1"
+        assert [(p["name"], p["position_m"], p["measured"]) for p in listed["points"]] == [
+            ("p1", 0.1, False),
+            ("p2", 0.2, False),
+        ]
+        bad = served.post("/api/capture", {"hits": 1, "test": "beam", "point": "p9"})
+        assert bad.status_code == 422
+        assert bad.json()["detail"].startswith("point: test beam has no point 'p9'")
+        assert served.post("/api/capture", {"hits": 1, "test": "nope", "point": "next"}).status_code == 422
+        assert served.post("/api/capture", {"hits": 1, "point": "next"}).json()["detail"].startswith("test:")
+
+        answer = served.post("/api/capture", {"hits": 1, "auto": True, "test": "beam", "point": "next"})
+        assert answer.status_code == 202, answer.text
+        run_id = answer.json()["run_id"]
+        assert served.get("/api/capture").json()["test"] == {"name": "beam", "point": "p1"}
+        wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", 60, "idle")
+        state = served.get("/api/capture").json()
+        assert state["last_outcome"] == "sealed", state
+        assert "joined test beam at point p1" in state["last_message"]
+        run = Store(store).open(run_id)
+        assert run.points.force_point.name == "p1"
+        simulator = run.provenance["simulator"]
+        assert simulator["force_at_m"] == pytest.approx(0.1)  # the hammer struck at p1
+        assert run.sample.force_position_m == pytest.approx(0.1)
+
+        detail = served.get("/api/tests/beam").json()
+        assert detail["next"] == "p2"
+        (p1,) = [p for p in detail["points"] if p["name"] == "p1"]
+        assert p1["measured"] is True
+        assert p1["counted_run"] == run_id
+        assert served.get("/api/tests/nope").status_code == 404
+
+        # Without a test the simulator plays its own positions again (the tip).
+        again = served.post("/api/capture", {"hits": 1, "auto": True}).json()["run_id"]
+        wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", 60, "idle")
+        home = Store(store).open(again).provenance["simulator"]
+        assert home["force_at_m"] == pytest.approx(run.sample.length_m)
