@@ -36,14 +36,14 @@ KINDS = ("hammer", "accelerometer")
 #: Standard gravity, m/s^2 (a "g" of an accelerometer's sheet); pound-force, N.
 STANDARD_GRAVITY = 9.80665
 POUND_FORCE_N = 4.4482216152605
-#: Sensitivity units: (kind, factor to V/N or V/(m/s^2)).
+#: Sensitivity units: (kind, what divides the number to give V/N or V/(m/s^2)).
 UNITS: dict[str, tuple[str, float]] = {
-    "mV/N": ("hammer", 1e-3),
+    "mV/N": ("hammer", 1e3),
     "V/N": ("hammer", 1.0),
-    "mV/lbf": ("hammer", 1e-3 / POUND_FORCE_N),
-    "mV/g": ("accelerometer", 1e-3 / STANDARD_GRAVITY),
-    "V/g": ("accelerometer", 1.0 / STANDARD_GRAVITY),
-    "mV/(m/s^2)": ("accelerometer", 1e-3),
+    "mV/lbf": ("hammer", 1e3 * POUND_FORCE_N),
+    "mV/g": ("accelerometer", 1e3 * STANDARD_GRAVITY),
+    "V/g": ("accelerometer", STANDARD_GRAVITY),
+    "mV/(m/s^2)": ("accelerometer", 1e3),
     "V/(m/s^2)": ("accelerometer", 1.0),
 }
 #: The engineering unit of each kind.
@@ -113,7 +113,7 @@ class Transducer:
     @property
     def sensitivity_v_per_eu(self) -> float:
         """V/N for a hammer, V/(m/s^2) for an accelerometer."""
-        return self.sensitivity * UNITS[self.sensitivity_unit][1]
+        return self.sensitivity / UNITS[self.sensitivity_unit][1]
 
     @property
     def eu(self) -> str:

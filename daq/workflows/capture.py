@@ -169,6 +169,12 @@ class Capture:
         points); None records ``sample`` (default the seed's beam at the tip).
     store_dir : the run store; when set, the hits are journaled there as they are taken
         (and the store is checked for room for the whole run before the first hit).
+    transducers : {"hammer"|"accelerometer": Transducer} the setup names; each is stored
+        in the run's settings[channel]["transducer"] (daq/workflows/setups.py,
+        transducer_record).
+    setup_name, setup_version : the named setup (or setup file) the settings came from;
+        stored as provenance["setup"] = {"name", "version"} when a name is given.
+    cautions : sentences the run carries (a calibration past due), provenance["cautions"].
     """
 
     driver: SignalAnalyzer
@@ -187,6 +193,10 @@ class Capture:
     stop_after_hits: int | None = None
     replayed_from: dict[str, Any] | None = None
     store_dir: Path | None = None
+    transducers: dict[str, Any] | None = None
+    setup_name: str = ""
+    setup_version: int | None = None
+    cautions: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if not 1 <= self.hits_wanted <= 9999:
@@ -400,8 +410,19 @@ class Capture:
             resource=self.resource,
             transport=self.transport,
             dialect=self.driver.dialect.name,
-            settings=settings_to_dict(self.actual),
+            settings=self._settings_record(),
         )
+
+    def _settings_record(self) -> dict[str, Any]:
+        """The settings as the analyzer holds them, each channel with its transducer."""
+        assert self.actual is not None
+        settings = settings_to_dict(self.actual)
+        if self.transducers:
+            from daq.workflows.setups import transducer_record
+
+            for channel, record in transducer_record(self.transducers).items():
+                settings[channel]["transducer"] = record
+        return settings
 
     def _provenance(self) -> dict[str, Any]:
         provenance: dict[str, Any] = {"hits_wanted": self.hits_wanted}
@@ -409,6 +430,10 @@ class Capture:
             provenance["simulator"] = self.simulator
         if self.replayed_from is not None:
             provenance["replayed_from"] = self.replayed_from
+        if self.setup_name:
+            provenance["setup"] = {"name": self.setup_name, "version": self.setup_version}
+        if self.cautions:
+            provenance["cautions"] = list(self.cautions)
         return provenance
 
     def _kind(self) -> str:

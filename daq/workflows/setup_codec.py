@@ -13,7 +13,8 @@ the fields cannot say, all in the layout below:
 
 Two readings of a dict: a setup file's (``settings_from_dict(data, where)``, each
 error "<where>: ..." naming the bad key) and a stored run's (``stored=True``: the
-dict ``settings_to_dict`` wrote, None where a field allows it, ``preview`` included).
+dict ``settings_to_dict`` wrote, None where a field allows it, ``preview`` included;
+a channel's ``transducer`` record is skipped).
 """
 
 from __future__ import annotations
@@ -43,6 +44,10 @@ __all__ = [
 
 #: The ``where`` of a stored run's settings: the start of every error about them.
 STORED = "stored settings do not describe an impact test"
+
+#: A stored run's channel may carry its transducer's record under this key
+#: (daq/workflows/setups.py, transducer_record); reading the settings skips it.
+TRANSDUCER_KEY = "transducer"
 
 #: The fields that hold a channel, and the header line of the setup file.
 CHANNELS = ("hammer", "accelerometer")
@@ -244,6 +249,8 @@ def settings_from_dict(data: dict[str, Any], where: str = STORED, *, stored: boo
             channel: dict[str, Any] = {}
             defaults = ImpactSettings.__dataclass_fields__[key].default_factory()  # type: ignore[misc]
             for ckey, craw in raw.items():
+                if stored and ckey == TRANSDUCER_KEY:
+                    continue  # a record of the transducer beside the settings, not a setting
                 if ckey not in channel_table:
                     known = ", ".join(channel_table)
                     raise WorkflowError(f"{where}: unknown key {key}.{ckey}; known: {known}")
