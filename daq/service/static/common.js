@@ -503,6 +503,7 @@
           label: s.label,
           stroke: s.stroke || "#1f5fbf",
           width: s.width || 1.5,
+          dash: s.dash || undefined,
           points: { show: false },
           spanGaps: false,
           value: valueFmt,

@@ -25,7 +25,98 @@
     last_outcome: null,
     last_error: null,
     ended_run_id: null, // the capture the outcome is about, when we know it
+    undo_window_s: null, // how long the service holds a decision before the analyzer gets it
+    setup: null, // {name, version} of the capture's setup
+    transducers: null,
+    cautions: [],
   };
+
+  /* The last decision and until when (performance.now() ms) it can be undone. */
+  const undo = { index: null, accepted: null, until: 0, busy: false, supported: true, timer: null };
+
+  /* ----------------------------------------------------------------- sound */
+
+  /* Short tones made with WebAudio (no audio files): a beep per hit, a rising pair on
+   * accept, a low buzz on reject, a falling pair on undo. Off by default; the choice is
+   * kept in localStorage. Browsers let a page sound only after a click or a key. */
+  const SOUND_KEY = "daq-sound";
+  const soundedDecision = new Set(); // "<run>:<index>:<accepted>" already sounded
+  const sound = (function () {
+    let on = false;
+    let ctx = null;
+    try {
+      on = localStorage.getItem(SOUND_KEY) === "on";
+    } catch (e) {
+      on = false;
+    }
+
+    function context() {
+      if (!ctx) {
+        const AC = window.AudioContext || window.webkitAudioContext;
+        if (!AC) return null;
+        ctx = new AC();
+      }
+      if (ctx.state === "suspended") ctx.resume().catch(() => {});
+      return ctx;
+    }
+
+    function tone(freq, startS, durS, type) {
+      const c = context();
+      if (!c) return;
+      const t0 = c.currentTime + startS;
+      const osc = c.createOscillator();
+      const gain = c.createGain();
+      osc.type = type || "sine";
+      osc.frequency.value = freq;
+      gain.gain.setValueAtTime(0.0001, t0);
+      gain.gain.exponentialRampToValueAtTime(0.25, t0 + 0.01);
+      gain.gain.exponentialRampToValueAtTime(0.0001, t0 + durS);
+      osc.connect(gain).connect(c.destination);
+      osc.start(t0);
+      osc.stop(t0 + durS + 0.02);
+    }
+
+    function play(fn, name) {
+      document.body.dataset.lastSound = name; // for tests and the curious
+      if (!on) return;
+      try {
+        fn();
+      } catch (e) {
+        /* no sound, no harm */
+      }
+    }
+
+    function render() {
+      const b = $("sound-toggle");
+      b.textContent = "Sound: " + (on ? "on" : "off");
+      b.setAttribute("aria-pressed", on ? "true" : "false");
+    }
+
+    return {
+      hit: () => play(() => tone(1200, 0, 0.08), "hit"),
+      accept: () => play(() => { tone(660, 0, 0.1); tone(990, 0.11, 0.14); }, "accept"),
+      reject: () => play(() => tone(180, 0, 0.3, "square"), "reject"),
+      undo: () => play(() => { tone(880, 0, 0.08); tone(520, 0.09, 0.12); }, "undo"),
+      toggle() {
+        on = !on;
+        try {
+          localStorage.setItem(SOUND_KEY, on ? "on" : "off");
+        } catch (e) {
+          /* for this page only */
+        }
+        if (on) context(); // made inside the click: browsers allow it then
+        render();
+        if (on) tone(990, 0, 0.08);
+      },
+      wake() {
+        if (on) context();
+      },
+      render,
+      get on() {
+        return on;
+      },
+    };
+  })();
 
   let instrument = {};
   let instrumentReq = 0;
@@ -50,20 +141,78 @@
 
   /* ------------------------------------------------------------------ plots */
 
+  const WINDOW_STROKE = "#6b7280";
   const plots = {
     force: DAQ.plot($("force-plot"), {
       xLabel: "Time (ms)",
       yLabel: "Force (N)",
-      series: [{ label: "Force (N)", stroke: "#1d4ed8" }],
+      series: [
+        { label: "Force (N)", stroke: "#1d4ed8" },
+        { label: "force window", stroke: WINDOW_STROKE, dash: [6, 4], width: 1 },
+      ],
       group: "traces",
       emptyText: "no hit yet",
     }),
     response: DAQ.plot($("response-plot"), {
       xLabel: "Time (ms)",
       yLabel: "Response (m/s²)",
-      series: [{ label: "Response (m/s²)", stroke: "#c2410c" }],
+      series: [
+        { label: "Response (m/s²)", stroke: "#c2410c" },
+        { label: "exponential window", stroke: WINDOW_STROKE, dash: [6, 4], width: 1 },
+      ],
       group: "traces",
       emptyText: "no hit yet",
+    }),
+    pulse: DAQ.plot($("pulse-plot"), {
+      xLabel: "Time (ms)",
+      yLabel: "Force (N)",
+      series: [{ label: "Force (N)", stroke: "#1d4ed8" }],
+      height: 170,
+      emptyText: "no hit yet",
+    }),
+    spectrum: DAQ.plot($("spectrum-plot"), {
+      xLabel: "Frequency (Hz)",
+      yLabel: "Force (dB)",
+      series: [
+        { label: "force (dB)", stroke: "#1d4ed8" },
+        { label: "roll-off limit (dB)", stroke: "#b91c1c", dash: [6, 4], width: 1.5 },
+      ],
+      height: 170,
+      group: "quality",
+      emptyText: "no spectrum from the service",
+    }),
+    hitFrf: DAQ.plot($("hit-frf-plot"), {
+      xLabel: "Frequency (Hz)",
+      yLabel: "|H| ((m/s²)/N)",
+      series: [
+        { label: "this hit", stroke: "#c2410c" },
+        { label: "average", stroke: "#1d4ed8" },
+      ],
+      logY: true,
+      height: 170,
+      group: "quality",
+      emptyText: "no FRF from the service",
+    }),
+    hitPhase: DAQ.plot($("hit-phase-plot"), {
+      xLabel: "Frequency (Hz)",
+      yLabel: "Phase (°)",
+      series: [
+        { label: "this hit", stroke: "#c2410c" },
+        { label: "average", stroke: "#1d4ed8" },
+      ],
+      yRange: [-180, 180],
+      height: 170,
+      group: "quality",
+      emptyText: "no FRF from the service",
+    }),
+    hitCoherence: DAQ.plot($("hit-coherence-plot"), {
+      xLabel: "Frequency (Hz)",
+      yLabel: "Coherence",
+      series: [{ label: "coherence", stroke: "#15803d" }],
+      yRange: [0, 1],
+      height: 170,
+      group: "quality",
+      emptyText: "no accepted hit yet",
     }),
     frf: DAQ.plot($("frf-plot"), {
       xLabel: "Frequency (Hz)",
@@ -87,13 +236,37 @@
 
   /* --------------------------------------------------------------- helpers */
 
+  /* People count hits from 1: the API's "number", else its 0-based index + 1. */
+  function hitNumber(h) {
+    if (h && Number.isInteger(h.number)) return h.number;
+    return h && Number.isInteger(h.index) ? h.index + 1 : null;
+  }
+
+  function numberOf(index) {
+    const h = cap.hits.get(index);
+    return h ? hitNumber(h) : index + 1;
+  }
+
+  /* accepted although a check failed */
+  function againstChecks(h) {
+    if (typeof h.accepted_against_checks === "boolean") return h.accepted_against_checks;
+    return Boolean(h.decided && h.accepted && h.passed === false);
+  }
+
   function latestIndex() {
     let best = null;
     for (const i of cap.hits.keys()) if (best === null || i > best) best = i;
     return best;
   }
 
+  /* A held decision (undo_window_s before the analyzer gets it) reads as made; the row
+   * says "held" beside it (CSS, not in the text). */
   function verdictText(h) {
+    if (!h.decided && h.held) {
+      if (h.heldAccepted === true) return "accepted";
+      if (h.heldAccepted === false) return h.reason ? "rejected: " + h.reason : "rejected";
+      return "held";
+    }
     if (!h.decided) return "pending";
     if (h.accepted) return "accepted";
     return h.reason ? "rejected: " + h.reason : "rejected";
@@ -113,6 +286,7 @@
   function summaryFromEvent(ev) {
     return {
       index: ev.index,
+      number: ev.number,
       decided: false,
       accepted: null,
       reason: "",
@@ -137,9 +311,13 @@
     $("abort").disabled = st !== "running";
     document.body.dataset.captureState = st || "unknown";
     renderProgress();
+    renderUndo();
   }
 
   function renderProgress() {
+    $("large-accepted").textContent = String(cap.accepted || 0);
+    $("large-wanted").textContent = String(cap.hits_wanted || 0);
+    $("large-taken").textContent = cap.run_id ? fmt.plural(cap.hits.size, "hit", "hits") + " taken" : "";
     const box = $("capture-progress");
     if (!cap.run_id) {
       box.textContent = cap.state === "idle" ? "No capture yet." : "";
@@ -176,6 +354,22 @@
     box.textContent = parts.length ? "Analyzer settings: " + parts.join(" · ") : "";
   }
 
+  /* The capture's setup and transducers, and its cautions (an overdue calibration) in view. */
+  function renderSetupLine() {
+    const box = $("capture-setup-note");
+    const parts = [];
+    if (cap.setup && cap.setup.name) {
+      parts.push("setup " + cap.setup.name + (cap.setup.version !== undefined ? " v" + cap.setup.version : ""));
+    }
+    const tr = cap.transducers || {};
+    for (const ch of ["hammer", "accelerometer"]) {
+      const t = tr[ch];
+      if (t && typeof t === "object") parts.push(ch + " " + (t.id || t.model || "?"));
+    }
+    box.textContent = cap.run_id && parts.length ? "This capture: " + parts.join(" · ") : "";
+    $("station-cautions").replaceChildren(...DAQ.cautionLines(cap.cautions));
+  }
+
   function renderInstrument() {
     const box = $("instrument-status");
     const i = instrument;
@@ -202,7 +396,14 @@
 
   function hitRow(h) {
     const verdict = verdictText(h);
-    const state = !h.decided ? "pending" : h.accepted ? "accepted" : "rejected";
+    const state =
+      !h.decided && h.held
+        ? "held row-" + (h.heldAccepted === false ? "rejected" : "accepted")
+        : !h.decided
+          ? "pending"
+          : h.accepted
+            ? "accepted"
+            : "rejected";
     const tr = el(
       "tr",
       {
@@ -210,7 +411,26 @@
         class: "hit-row row-" + state + (shownHitKey === cap.run_id + ":" + h.index ? " shown" : ""),
         title: h.timestamp_utc ? "taken " + fmt.time(h.timestamp_utc) + " (click to see its traces)" : null,
       },
-      el("td", { class: "num" }, String(h.index + 1)),
+      el(
+        "td",
+        { class: "num hit-number" },
+        againstChecks(h)
+          ? el(
+              "span",
+              {
+                class: "against-mark",
+                role: "img",
+                "aria-label": "accepted against a failed check",
+                title:
+                  "accepted although the checks failed" +
+                  (h.suggested_reason ? ": " + h.suggested_reason : "") +
+                  "; the report marks it too",
+              },
+              "⚠"
+            )
+          : null,
+        String(hitNumber(h))
+      ),
       el("td", { class: "num" }, fmt.fixed(h.peak_force_n, 2)),
       el(
         "td",
@@ -220,8 +440,9 @@
         },
         checksText(h)
       ),
-      el("td", { class: "verdict" }, verdict)
+      el("td", { class: "verdict", title: h.held && !h.decided ? "held: Undo [U] takes it back until the analyzer gets it" : null }, verdict)
     );
+    if (againstChecks(h)) tr.classList.add("against-checks");
     return tr;
   }
 
@@ -265,7 +486,7 @@
     const panel = $("pending");
     const waiting = idx !== null && idx !== undefined;
     panel.classList.toggle("waiting", waiting);
-    if (waiting) $("pending-index").textContent = "Hit " + (idx + 1);
+    if (waiting) $("pending-index").textContent = "Hit " + numberOf(idx);
     else if (cap.auto && cap.state === "running") $("pending-index").textContent = "none (the checks decide)";
     else $("pending-index").textContent = "none";
 
@@ -301,6 +522,82 @@
     reason.placeholder = h && !h.passed && h.suggested_reason ? h.suggested_reason : "";
     $("accept").disabled = !waiting || deciding;
     $("reject").disabled = !waiting || deciding;
+    document.body.classList.toggle("hit-waiting", waiting);
+    renderUndo();
+  }
+
+  /* ------------------------------------------------------------------ undo */
+
+  function undoLeftS() {
+    return Math.max(0, (undo.until - performance.now()) / 1000);
+  }
+
+  function renderUndo() {
+    const button = $("undo");
+    const note = $("undo-note");
+    const live = cap.state === "running" && undo.index !== null && undoLeftS() > 0;
+    button.disabled = !undo.supported || !live || undo.busy || deciding;
+    if (!undo.supported) note.textContent = "";
+    else if (live) {
+      note.textContent =
+        "Hit " + numberOf(undo.index) + " " + (undo.accepted === true ? "accepted" : undo.accepted === false ? "rejected" : "decided") +
+        ": held " + Math.ceil(undoLeftS()) + " s more before the analyzer gets it (Undo [U] takes it back).";
+    } else note.textContent = "";
+    if (live && !undo.timer) {
+      undo.timer = setInterval(() => {
+        if (undoLeftS() <= 0) {
+          clearInterval(undo.timer);
+          undo.timer = null;
+        }
+        renderUndo();
+      }, 250);
+    }
+  }
+
+  /* A decision was made (here, or seen in a snapshot that holds one). */
+  function noteDecision(index, accepted, heldS) {
+    const s = typeof heldS === "number" && Number.isFinite(heldS) ? heldS : cap.undo_window_s;
+    undo.index = index;
+    undo.accepted = accepted;
+    // the service did not say: let the page offer undo for 3 s (its default); a late one gets 409
+    undo.until = performance.now() + 1000 * (typeof s === "number" ? s : 3);
+    renderUndo();
+  }
+
+  async function undoLast() {
+    if (!undo.supported || undo.busy || undo.index === null || cap.state !== "running") return;
+    undo.busy = true;
+    renderUndo();
+    try {
+      const r = await api("POST", "/api/capture/undo", {});
+      const index = r && Number.isInteger(r.index) ? r.index : r && Number.isInteger(r.number) ? r.number - 1 : undo.index;
+      const h = cap.hits.get(index);
+      if (h) {
+        h.decided = false;
+        h.held = false;
+        delete h.heldAccepted;
+        h.accepted = null;
+        h.reason = "";
+        upsertHitRow(h);
+      }
+      cap.pending = index;
+      undo.index = null;
+      undo.until = 0;
+      sound.undo();
+      renderPending();
+      renderProgress();
+    } catch (e) {
+      if (e.status === 404 || e.status === 405) {
+        undo.supported = false;
+        DAQ.showError("this service cannot undo a decision (it has no /api/capture/undo)");
+      }
+      undo.index = null;
+      undo.until = 0;
+    } finally {
+      undo.busy = false;
+      renderUndo();
+    }
+    rebuild(false);
   }
 
   function renderAverages(n) {
@@ -535,6 +832,7 @@
   function renderAll() {
     renderState();
     renderSettings();
+    renderSetupLine();
     renderHitsTable();
     renderPending();
     renderLastRun();
@@ -542,24 +840,120 @@
 
   /* --------------------------------------------------------- traces, FRF */
 
+  function peakAbs(y) {
+    let m = 0;
+    for (const v of y) if (Number.isFinite(v) && Math.abs(v) > m) m = Math.abs(v);
+    return m;
+  }
+
+  /* A window (0..1 on the time axis) drawn to the trace's peak; none when the service does not send it. */
+  function windowOver(win, trace) {
+    if (!Array.isArray(win) || win.length !== trace.length) return [];
+    const peak = peakAbs(trace) || 1;
+    return win.map((w) => (Number.isFinite(w) ? w * peak : null));
+  }
+
+  /* The force pulse zoomed: from the peak, ± a few pulse widths, at least ± 12 ms so that a
+   * second hit 10 ms later shows; the whole record if it is shorter. */
+  function showPulse(t, force, fs) {
+    const n = force.length;
+    if (!n) {
+      plots.pulse.clear();
+      return;
+    }
+    let k = 0;
+    for (let i = 1; i < n; i++) if (Math.abs(force[i]) > Math.abs(force[k])) k = i;
+    const peak = Math.abs(force[k]);
+    let lo = k;
+    let hi = k;
+    while (lo > 0 && Math.abs(force[lo - 1]) > 0.1 * peak) lo--;
+    while (hi < n - 1 && Math.abs(force[hi + 1]) > 0.1 * peak) hi++;
+    const widthS = (hi - lo + 1) / fs;
+    const halfS = Math.max(0.012, 4 * widthS);
+    const half = Math.max(8, Math.ceil(halfS * fs));
+    const a = Math.max(0, k - Math.floor(half / 3));
+    const b = Math.min(n, k + half + 1);
+    plots.pulse.setData(t.slice(a, b), force.slice(a, b));
+  }
+
   function showTraces(runId, h) {
     const fs = Number(h.sample_rate_hz);
     const start = Number(h.start_s) || 0;
-    const force = h.force_n || [];
-    const resp = h.response_m_s2 || [];
+    const force = Array.from(h.force_n || []);
+    const resp = Array.from(h.response_m_s2 || []);
     const n = Math.max(force.length, resp.length);
     const t = new Array(n);
     for (let k = 0; k < n; k++) t[k] = (start + k / fs) * 1000;
-    plots.force.setData(t, force);
-    plots.response.setData(t, resp);
+    plots.force.setData(t, force, windowOver(h.force_window, force));
+    plots.response.setData(t, resp, windowOver(h.response_window, resp));
+    showPulse(t, force, fs);
     shownHitKey = runId + ":" + h.index;
-    $("traces-hit").textContent = "hit " + (h.index + 1);
+    const label = "hit " + (Number.isInteger(h.number) ? h.number : numberOf(h.index));
+    $("traces-hit").textContent = label;
+    $("quality-hit").textContent = label;
+    if ("force_spectrum" in h || "frf" in h) showQuality(h);
     markShownRow();
+  }
+
+  /* The same frequency axis, or nothing (a series must match the x axis). */
+  function along(x, y) {
+    return Array.isArray(y) && y.length === x.length ? y : [];
+  }
+
+  function showQuality(h) {
+    const fsp = h.force_spectrum && typeof h.force_spectrum === "object" ? h.force_spectrum : null;
+    const notes = [];
+    if (fsp && Array.isArray(fsp.frequency_hz)) {
+      const f = fsp.frequency_hz;
+      let limit = [];
+      if (Array.isArray(fsp.rolloff_limit_db)) limit = along(f, fsp.rolloff_limit_db);
+      else if (Number.isFinite(fsp.rolloff_limit_db)) {
+        const from = Number.isFinite(fsp.rolloff_hz) ? fsp.rolloff_hz : -Infinity;
+        limit = f.map((v) => (v >= from ? fsp.rolloff_limit_db : null));
+      }
+      plots.spectrum.setData(f, along(f, fsp.level_db), limit);
+      $("rolloff-note").textContent = Number.isFinite(fsp.rolloff_limit_db)
+        ? "(limit " + fmt.sig(fsp.rolloff_limit_db, 3) + " dB" +
+          (Number.isFinite(fsp.rolloff_hz) ? " from " + fmt.sig(fsp.rolloff_hz, 4) + " Hz" : "") + ")"
+        : "";
+    } else {
+      plots.spectrum.clear();
+      $("rolloff-note").textContent = "";
+      notes.push("spectrum");
+    }
+    const frf = h.frf && typeof h.frf === "object" ? h.frf : null;
+    const avg = h.average && typeof h.average === "object" ? h.average : null;
+    if (frf && Array.isArray(frf.frequency_hz)) {
+      const f = frf.frequency_hz;
+      const same = avg && Array.isArray(avg.frequency_hz) && avg.frequency_hz.length === f.length;
+      plots.hitFrf.setData(f, along(f, frf.magnitude), same ? along(f, avg.magnitude) : []);
+      plots.hitPhase.setData(f, along(f, frf.phase_deg), same ? along(f, avg.phase_deg) : []);
+      if (same) plots.hitCoherence.setData(f, along(f, avg.coherence));
+      else plots.hitCoherence.clear();
+    } else {
+      plots.hitFrf.clear();
+      plots.hitPhase.clear();
+      plots.hitCoherence.clear();
+      notes.push("FRF");
+    }
+    $("quality-note").textContent = notes.length === 2 ? "This service sends no per-hit quality data (spectrum, FRF) yet." : "";
+  }
+
+  function clearQuality() {
+    plots.pulse.clear();
+    plots.spectrum.clear();
+    plots.hitFrf.clear();
+    plots.hitPhase.clear();
+    plots.hitCoherence.clear();
+    $("quality-hit").textContent = "";
+    $("rolloff-note").textContent = "";
+    $("quality-note").textContent = "";
   }
 
   function clearTraces() {
     plots.force.clear();
     plots.response.clear();
+    clearQuality();
     shownHitKey = null;
     $("traces-hit").textContent = "";
     markShownRow();
@@ -716,12 +1110,27 @@
     cap.accepted = s.accepted || 0;
     cap.auto = Boolean(s.auto);
     cap.pending = s.pending === undefined ? null : s.pending;
-    cap.hits = new Map((s.hits || []).map((h) => [h.index, h]));
+    const before = newRun ? new Map() : cap.hits;
+    cap.hits = new Map(
+      (s.hits || []).map((h) => {
+        const old = before.get(h.index);
+        if (h.held && !h.decided && old && typeof old.heldAccepted === "boolean") {
+          h.heldAccepted = old.heldAccepted;
+          if (!h.reason) h.reason = old.reason || "";
+        }
+        return [h.index, h];
+      })
+    );
     cap.settings = s.settings || null;
     cap.last_run_id = s.last_run_id || null;
     cap.last_outcome = s.last_outcome || null;
     cap.last_error = s.last_message || s.last_error || null; // the capture_ended message
     cap.ended_run_id = cap.state === "idle" && cap.last_outcome ? cap.run_id : null;
+    cap.undo_window_s = typeof s.undo_window_s === "number" ? s.undo_window_s : cap.undo_window_s;
+    cap.setup = s.setup && typeof s.setup === "object" ? s.setup : null;
+    cap.transducers = s.transducers && typeof s.transducers === "object" ? s.transducers : null;
+    cap.cautions = Array.isArray(s.cautions) ? s.cautions : [];
+    snapshotUndo(s);
     if (newRun) {
       // another capture than the one on the plots: clear them until its data come
       tracesReq++;
@@ -730,6 +1139,29 @@
       clearFrf();
     }
     renderAll();
+  }
+
+  /* A decision the service holds (undo_until_s seconds left): offer its undo. */
+  function snapshotUndo(s) {
+    let left = typeof s.undo_until_s === "number" ? s.undo_until_s : null;
+    let index = null;
+    for (const h of s.hits || []) {
+      if (h.held || (typeof h.undo_until_s === "number" && h.undo_until_s > 0)) {
+        if (typeof h.undo_until_s === "number") left = h.undo_until_s;
+        index = h.index;
+      }
+    }
+    if (left === null || left <= 0) {
+      if (cap.state !== "running") undo.index = null;
+      return;
+    }
+    if (index === null) {
+      const decided = (s.hits || []).filter((h) => h.decided);
+      if (!decided.length) return;
+      index = decided[decided.length - 1].index;
+    }
+    const h = cap.hits.get(index);
+    noteDecision(index, h && typeof h.heldAccepted === "boolean" ? h.heldAccepted : h && h.decided ? h.accepted : null, left);
   }
 
   let rebuildRunning = false;
@@ -817,6 +1249,9 @@
   const isLastRun = (ev) => ev && ev.run_id && ev.run_id === cap.last_run_id;
 
   on("capture_started", (ev) => {
+    undo.index = null;
+    undo.until = 0;
+    soundedDecision.clear();
     cap.state = "running";
     cap.run_id = ev.run_id;
     cap.hits_wanted = ev.hits_wanted || 0;
@@ -853,6 +1288,8 @@
     upsertHitRow(h);
     tracesReq++; // a fetch of older traces must not overwrite these
     if (Array.isArray(ev.force_n)) showTraces(cap.run_id, ev);
+    loadTraces(h.index); // with its quality: windows, spectrum, FRF
+    sound.hit();
     renderPending();
     renderProgress();
   });
@@ -865,16 +1302,71 @@
     h.reason = ev.reason || "";
     cap.hits.set(ev.index, h);
     if (typeof ev.accepted_so_far === "number") cap.accepted = ev.accepted_so_far;
+    if (typeof ev.accepted_against_checks === "boolean") h.accepted_against_checks = ev.accepted_against_checks;
+    h.held = false;
+    delete h.heldAccepted;
+    if (undo.index === ev.index) {
+      undo.index = null; // it is in the analyzer now
+      undo.until = 0;
+    }
+    if (Number.isInteger(ev.number)) h.number = ev.number;
     if (cap.pending === ev.index) cap.pending = null;
+    if (!soundedDecision.has(cap.run_id + ":" + ev.index + ":" + h.accepted)) {
+      soundedDecision.add(cap.run_id + ":" + ev.index + ":" + h.accepted);
+      if (h.accepted) sound.accept();
+      else sound.reject();
+    }
+    if (typeof ev.undo_until_s === "number" && ev.undo_until_s > 0) noteDecision(ev.index, h.accepted, ev.undo_until_s);
     upsertHitRow(h);
     renderPending();
     renderProgress();
+  });
+
+  on("decision_held", (ev) => {
+    if (!isCurrent(ev)) return;
+    const h = cap.hits.get(ev.index);
+    if (!h) return;
+    h.held = true;
+    h.decided = false;
+    h.heldAccepted = Boolean(ev.accepted);
+    h.reason = ev.reason || "";
+    if (cap.pending === ev.index) cap.pending = null;
+    noteDecision(ev.index, h.heldAccepted, ev.undo_until_s);
+    const key = cap.run_id + ":" + ev.index + ":" + h.heldAccepted;
+    if (!soundedDecision.has(key)) {
+      soundedDecision.add(key);
+      if (h.heldAccepted) sound.accept();
+      else sound.reject();
+    }
+    upsertHitRow(h);
+    renderPending();
+  });
+
+  on("decision_undone", (ev) => {
+    if (!isCurrent(ev)) return;
+    const h = cap.hits.get(ev.index);
+    if (h) {
+      h.held = false;
+      h.decided = false;
+      delete h.heldAccepted;
+      h.reason = "";
+      upsertHitRow(h);
+    }
+    cap.pending = ev.index;
+    if (undo.index === ev.index) {
+      undo.index = null;
+      undo.until = 0;
+    }
+    soundedDecision.clear();
+    renderPending();
   });
 
   on("frf", (ev) => {
     if (!isCurrent(ev)) return;
     frfReq++;
     showFrf(cap.run_id, ev);
+    // the hit on the plots is drawn over the average: draw it over the new one
+    if (shownHitKey && shownHitKey.startsWith(cap.run_id + ":")) loadTraces(Number(shownHitKey.split(":").pop()));
   });
 
   on("run_sealed", (ev) => {
@@ -973,6 +1465,8 @@
       note: $("note").value.trim(),
       auto: $("auto").checked,
     };
+    // the setup, test and point chosen (station.js); nothing when left at the service's own
+    if (DAQ.station && typeof DAQ.station.captureFields === "function") Object.assign(body, DAQ.station.captureFields());
     starting = true;
     renderState();
     try {
@@ -1031,12 +1525,24 @@
       // The hit_decided event confirms; show the decision now so a second tap cannot repeat it.
       const hit = cap.hits.get(index);
       if (hit && !hit.decided) {
-        hit.decided = true;
-        hit.accepted = r && typeof r.accepted === "boolean" ? r.accepted : accept;
+        if (cap.undo_window_s) {
+          hit.held = true; // until the analyzer gets it (hit_decided)
+          hit.heldAccepted = accept;
+        } else {
+          hit.decided = true;
+          hit.accepted = r && typeof r.accepted === "boolean" ? r.accepted : accept;
+        }
         hit.reason = accept ? "" : body.reason || "";
         upsertHitRow(hit);
       }
       if (cap.pending === index) cap.pending = null;
+      noteDecision(index, accept, r && typeof r.undo_until_s === "number" ? r.undo_until_s : undefined);
+      const key = cap.run_id + ":" + index + ":" + accept;
+      if (!soundedDecision.has(key)) {
+        soundedDecision.add(key);
+        if (accept) sound.accept();
+        else sound.reject();
+      }
     } catch (e) {
       if (e.status === 409) rebuild(false);
     } finally {
@@ -1047,6 +1553,7 @@
 
   $("accept").addEventListener("click", () => decide(true));
   $("reject").addEventListener("click", () => decide(false));
+  $("undo").addEventListener("click", () => undoLast());
   $("reject-reason").addEventListener("keydown", (e) => {
     if (e.key === "Enter") {
       e.preventDefault();
@@ -1066,6 +1573,65 @@
   });
 
   DAQ.onToken(() => renderLastRun());
+
+  /* ------------------------------------------------------ keys, large display */
+
+  function typing(target) {
+    if (!target || !(target instanceof Element)) return false;
+    if (target.isContentEditable) return true;
+    const tag = target.tagName;
+    if (tag === "TEXTAREA" || tag === "SELECT") return true;
+    if (tag !== "INPUT") return false;
+    const type = (target.getAttribute("type") || "text").toLowerCase();
+    return !["checkbox", "radio", "button", "submit", "reset"].includes(type);
+  }
+
+  function setLarge(large) {
+    document.body.classList.toggle("large", large);
+    const b = $("large-toggle");
+    b.setAttribute("aria-pressed", large ? "true" : "false");
+    b.replaceChildren(large ? "Normal " : "Large ", el("kbd", null, "L"));
+    const url = new URL(window.location.href);
+    if (large) url.searchParams.set("display", "large");
+    else url.searchParams.delete("display");
+    window.history.replaceState(null, "", url.pathname + url.search + url.hash);
+  }
+
+  /* a: accept, r: reject, u: undo, s: start, x or Escape: stop, l: large display;
+   * not while typing in a field, nor with Ctrl, Alt or Meta (the browser's own keys). */
+  document.addEventListener("keydown", (e) => {
+    if (e.defaultPrevented || e.ctrlKey || e.altKey || e.metaKey || e.isComposing) return;
+    if (typing(e.target)) {
+      // Escape leaves the field, so that the keys work again without reaching for the mouse
+      if (e.key === "Escape") e.target.blur();
+      return;
+    }
+    sound.wake();
+    const key = e.key.length === 1 ? e.key.toLowerCase() : e.key;
+    let done = true;
+    if (key === "a") {
+      if (!$("accept").disabled) decide(true);
+    } else if (key === "r") {
+      if (!$("reject").disabled) decide(false);
+    } else if (key === "u") {
+      undoLast();
+    } else if (key === "s") {
+      if (!$("start").disabled) $("capture-form").requestSubmit();
+    } else if (key === "x" || key === "Escape") {
+      if (!$("stop").disabled) $("stop").click();
+      else done = key !== "Escape" ? true : false;
+    } else if (key === "l") {
+      setLarge(!document.body.classList.contains("large"));
+    } else {
+      done = false;
+    }
+    if (done) e.preventDefault();
+  });
+
+  $("large-toggle").addEventListener("click", () => setLarge(!document.body.classList.contains("large")));
+  $("sound-toggle").addEventListener("click", () => sound.toggle());
+  sound.render();
+  if (new URLSearchParams(window.location.search).get("display") === "large") setLarge(true);
 
   /* ------------------------------------------------------------------ start */
 
