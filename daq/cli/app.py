@@ -60,6 +60,9 @@ from daq.cli.commands import (
 from daq.cli.commands import (
     serve as serve_command,
 )
+from daq.cli.commands import (
+    setup as setup_command,
+)
 from daq.cli.commands import talk
 from daq.cli.commands import (
     test as test_command,
@@ -155,6 +158,7 @@ report_command.register(app)
 config_command.register(app)
 serve_command.register(app)
 test_command.register(app)
+setup_command.register(app)
 
 
 def _fail(message: str, exit_code: int) -> int:

@@ -178,12 +178,15 @@ class SetupStore:
                     old_text = fh.read()
             if expected_version is not None and expected_version != current:
                 if current == 0:
-                    why = "it does not exist yet (save it as version 0, new)"
+                    text = f"setup {name}: version {expected_version} was changed, but it does not exist yet"
+                elif expected_version == 0:
+                    text = f"setup {name} exists already (version {current}); choose another name"
                 else:
-                    why = f"it is at version {current} now (someone saved it meanwhile)"
-                raise VersionConflict(
-                    f"setup {name}: version {expected_version} was changed, but {why}", current
-                )
+                    text = (
+                        f"setup {name}: version {expected_version} was changed, but it is at version "
+                        f"{current} now (someone saved it meanwhile)"
+                    )
+                raise VersionConflict(text, current)
             saved = StoredSetup(name, current + 1, _now_utc(), _copy(data))
             text = body + _saved_table(saved)
             if old_text is not None:

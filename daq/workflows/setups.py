@@ -101,6 +101,8 @@ def resolve_setup(
         except tomllib.TOMLDecodeError as exc:
             raise WorkflowError(f"{where}: not valid TOML ({exc})") from None
         name, version, data = str(path), 0, strip_saved(doc)
+        # A file's errors keep the codec's wording, as `daq capture --setup FILE` always gave them.
+        settings = check_setup_data(data, where)
     else:
         try:
             stored = SetupStore(store_dir).get(str(name_or_path))
@@ -108,10 +110,10 @@ def resolve_setup(
             raise WorkflowError(str(exc)) from None
         name, version, data = stored.name, stored.version, stored.data
         where = f"setup {name}"
-    try:
-        settings = check_setup_data(data)
-    except WorkflowError as exc:
-        raise WorkflowError(f"{where}: {exc}") from None
+        try:
+            settings = check_setup_data(data)
+        except WorkflowError as exc:
+            raise WorkflowError(f"{where}: {exc}") from None
     transducers = _named_transducers(store_dir, data, where)
     settings = with_transducers(settings, transducers)
     return ResolvedSetup(name, version, settings, transducers, calibration_cautions(transducers, today), data)
@@ -182,11 +184,12 @@ _REWORDS = (
 _WHERE = "\x00setup"
 
 
-def check_setup_data(data: dict[str, Any]) -> ImpactSettings:
+def check_setup_data(data: dict[str, Any], where: str | None = None) -> ImpactSettings:
     """The settings of setup ``data`` (a setup file's dict; channels may name a
     ``transducer``, a ``[saved]`` table is ignored); WorkflowError naming the field
     first, e.g. "span_hz: must be a positive number, got -5.0". Transducer sensitivities
-    are not applied here (resolve_setup does, knowing the store)."""
+    are not applied here (resolve_setup does, knowing the store). With ``where`` the
+    errors are the codec's, "<where>: span_hz must be ..." (a setup file's)."""
     if not isinstance(data, dict):
         raise WorkflowError("setup: must be a table of settings")
     named_transducer_ids(data)
@@ -198,6 +201,8 @@ def check_setup_data(data: dict[str, Any]) -> ImpactSettings:
         )
         for k, v in strip_saved(data).items()
     }
+    if where is not None:
+        return settings_from_dict(plain, where)
     try:
         return settings_from_dict(plain, _WHERE)
     except WorkflowError as exc:
@@ -293,3 +298,50 @@ def transducer_record(transducers: dict[str, Transducer], today: date | None = N
         d["calibration_date"], d["due_date"] = t.calibrated, t.due
         record[channel] = d
     return record
+
+
+def save_setup(
+    store_dir: Path | str,
+    name: str,
+    data: dict[str, Any],
+    expected_version: int | None = None,
+    model: str | None = None,
+) -> ResolvedSetup:
+    """Check setup ``data`` (its settings, the transducers it names, and, with ``model``,
+    that this analyzer can measure it) and save it as the next version of setup ``name``;
+    the setup as resolved after the save. WorkflowError naming the field (nothing is
+    written); VersionConflict (a StoreError) when ``expected_version`` is not the current
+    one (0: the setup must be new)."""
+    settings = check_setup_data(data)
+    transducers = _named_transducers(store_dir, data, "setup")
+    if model is not None:
+        validate_for_model(with_transducers(settings, transducers), model)
+    try:
+        SetupStore(store_dir).put(name, data, expected_version)
+    except StoreError as exc:
+        if type(exc) is StoreError:  # a bad name or value; a VersionConflict stays one
+            raise WorkflowError(str(exc)) from None
+        raise
+    return resolve_setup(store_dir, name)
+
+
+def setup_view(store_dir: Path | str, name: str, today: date | None = None) -> dict[str, Any]:
+    """What ``daq setup show --json`` and GET /api/setups/{name} answer: name, version,
+    saved_utc, the setup's data ("setup"), the resolved settings (setup_codec's
+    settings_to_dict), the transducers by channel (Transducer.to_dict) and the cautions."""
+    from daq.workflows.setup_codec import settings_to_dict
+
+    try:
+        stored = SetupStore(store_dir).get(name)
+    except StoreError as exc:
+        raise WorkflowError(str(exc)) from None
+    resolved = resolve_setup(store_dir, name, today)
+    return {
+        "name": stored.name,
+        "version": stored.version,
+        "saved_utc": stored.saved_utc,
+        "setup": stored.data,
+        "settings": settings_to_dict(resolved.settings),
+        "transducers": {ch: t.to_dict(today) for ch, t in resolved.transducers.items()},
+        "cautions": resolved.cautions,
+    }

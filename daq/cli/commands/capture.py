@@ -69,7 +69,18 @@ def capture(
     ] = False,
     dialect: DialectOption = None,
     setup: Annotated[
-        Path | None, typer.Option(metavar="<file.toml>", help="Settings file (see --print-setup).")
+        str | None,
+        typer.Option(
+            metavar="<name|file.toml>",
+            help="A setup of the store (daq setup list), or a setup file (see --print-setup).",
+        ),
+    ] = None,
+    auto_range: Annotated[
+        int | None,
+        typer.Option(
+            metavar="<n>",
+            help="Take n practice hits first (not kept) and set the ranges and trigger from them.",
+        ),
     ] = None,
     hits: Annotated[
         int | None,
@@ -123,7 +134,10 @@ def capture(
         sys.stdout.write(settings_to_toml(ImpactSettings()))
         return
     check_operator_and_note(operator, note)
-    settings = read_setup(setup) if setup is not None else ImpactSettings()
+    if auto_range is not None and not 1 <= auto_range <= 100:
+        raise UserError("--auto-range must be 1..100 practice hits", exit_code=2)
+    resolved = resolve(store, setup) if setup is not None else None
+    settings = resolved.settings if resolved is not None else ImpactSettings()
     hits_wanted = hits if hits is not None else settings.averages
     if not 1 <= hits_wanted <= 9999:
         raise UserError("--hits must be 1..9999", exit_code=2)
@@ -158,8 +172,20 @@ def capture(
         time_scale=DEFAULT_TIME_SCALE if time_scale is None else time_scale, hammer=hammer, sim_asked=sim,
         dialect=check_dialect(dialect), model=(simulated or SimModel.hp35660a).value,
         force_at_m=force_at if real is None else None, sensor_at_m=sensor_at if real is None else None,
-        where=where,
+        where=where, resolved=resolved, auto_range=auto_range,
     )  # fmt: skip
+
+
+def resolve(store: str | None, setup: str):
+    """The setup ``setup`` (a name in the store, or a .toml file), its cautions printed
+    as "caution: ..." lines; UserError (one line) when it does not resolve."""
+    from daq.cli.commands.setup import print_cautions
+    from daq.store import resolve_store_dir
+    from daq.workflows.setups import resolve_setup
+
+    resolved = resolve_setup(resolve_store_dir(store)[0], setup)
+    print_cautions(resolved.cautions)
+    return resolved
 
 
 def test_point(store: str | None, test: str, point: str | None, next_point: bool):
@@ -233,6 +259,8 @@ def run_capture(
     force_at_m: float | None = None,
     sensor_at_m: float | None = None,
     where=None,
+    resolved=None,
+    auto_range: int | None = None,
 ) -> None:
     """Open the analyzer (or start the simulator when ``resource`` is None, playing
     ``seed``, or a fresh random seed when None: printed and recorded in the run), run the
@@ -290,10 +318,14 @@ def run_capture(
             dsa = stack.enter_context(open_analyzer(resource, dialect=dialect))
         except ValueError as exc:
             raise UserError(f"--resource {resource}: {exc}") from None
+        settings = check_for_analyzer(console, dsa, settings, auto_range)
         job = Capture(
             dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
             simulator=simulator, operator=operator, note=note, store_dir=store_dir,
-            points=points,
+            points=points, transducers=resolved.transducers if resolved is not None else None,
+            setup_name=resolved.name if resolved is not None else "",
+            setup_version=resolved.version if resolved is not None else None,
+            cautions=resolved.cautions if resolved is not None else [],
         )  # fmt: skip
         try:
             run = drive(console, job, store_dir, ask=not yes)
@@ -304,3 +336,34 @@ def run_capture(
             raise
     if where is not None:
         join_test(store_dir, where, run.run_id)
+
+
+def check_for_analyzer(console, dsa, settings: ImpactSettings, auto_range: int | None) -> ImpactSettings:
+    """``settings`` checked against the analyzer that answered (lines, span, ranges, the
+    trigger level; one error line naming the field, before any hit); with ``auto_range``
+    the practice hits first, their peaks and the ranges and trigger chosen printed, and
+    the settings with those."""
+    from daq.workflows.auto_range import practice_hits
+    from daq.workflows.setups import validate_for_model
+    from drivers.dialects import model_of
+
+    model = model_of(dsa.dialect, dsa.identify())
+    if auto_range is None:
+        validate_for_model(settings, model)
+        return settings
+
+    def shown(index: int, force_n: float, response_m_s2: float) -> None:
+        console.print(
+            f"practice hit {index + 1} of {auto_range}: peak force {force_n:.3g} N, "
+            f"peak response {response_m_s2:.3g} m/s^2 (not kept)"
+        )
+
+    console.print(f"Auto-range: {auto_range} practice hit(s) at the analyzer's widest span and largest range")
+    found = practice_hits(dsa, settings, auto_range, on_hit=shown)
+    console.print(
+        f"Auto-range: hammer range {found.hammer_range_v:.4g} V, accelerometer range "
+        f"{found.accelerometer_range_v:.4g} V, trigger level {found.trigger_level_eu:.3g} "
+        f"{'m/s^2' if found.settings.trigger_source == 'CH2' else 'N'}"
+    )
+    validate_for_model(found.settings, model)
+    return found.settings

@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -68,6 +69,13 @@ def serve(
     time_scale: SimTimeScaleOption = None,
     analyzer: SimModelOption = None,
     model: OldSimModelOption = None,
+    setup: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<name|file.toml>",
+            help="The setup captures use when a request names none [default: the built-in default].",
+        ),
+    ] = None,
 ) -> None:
     """Run the lab service: the analyzer, the store, a live web page and an HTTP API.
 
@@ -117,12 +125,24 @@ def serve(
     forced = check_dialect(dialect)
     address = _scheduler(scheduler)
     store_dir, _ = resolve_store_dir(store)
+    if setup is not None:
+        setup = service_setup(store_dir, setup)
     run_service(
         store_dir, real, sim, host, port, token, created, path, n_jobs, address,
         scenario=(scenario or DEFAULT_SCENARIO).value, seed=seed,
         time_scale=DEFAULT_TIME_SCALE if time_scale is None else time_scale,
-        model=(simulated or SimModel.hp35660a).value, dialect=forced,
+        model=(simulated or SimModel.hp35660a).value, dialect=forced, setup=setup,
     )  # fmt: skip
+
+
+def service_setup(store_dir, setup: str) -> str:
+    """The setup the service is to use, checked now (one error line if it does not
+    resolve; its cautions printed): a name as given, a file as its absolute path."""
+    from daq.cli.commands.setup import print_cautions
+    from daq.workflows.setups import is_setup_path, resolve_setup
+
+    print_cautions(resolve_setup(store_dir, setup).cautions)
+    return str(Path(setup).resolve()) if is_setup_path(setup) else setup
 
 
 def _scheduler(option: str | None) -> str | None:
@@ -136,6 +156,7 @@ def _scheduler(option: str | None) -> str | None:
 def run_service(
     store_dir, resource, sim, host, port, token, created, token_file, workers, scheduler,
     scenario: str, seed: int | None, time_scale: float, model: str = "35660A", dialect: str | None = None,
+    setup: str | None = None,
 ) -> None:  # fmt: skip
     import socket
 
@@ -168,7 +189,7 @@ def run_service(
     spec = SimSpec(scenario, seed, time_scale, model=model) if resource is None else None
     config = ServiceConfig(
         store_dir=store_dir, resource=resource, sim=spec, host=host, port=sock.getsockname()[1],
-        token=token, reads_need_token=not loopback, scheduler=scheduler, dialect=dialect,
+        token=token, reads_need_token=not loopback, scheduler=scheduler, dialect=dialect, setup=setup,
     )  # fmt: skip
     if workers is not None:
         config.workers = workers

@@ -1,0 +1,129 @@
+"""`daq setup`, `daq transducer`, and `daq capture --setup NAME --auto-range N` as a
+user runs them: saved versions, JSON, cautions on stderr, one-line errors."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from daq.store import Store, open_run
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+
+SETUP = 'span_hz = 200.0\naverages = 2\n[hammer]\ntransducer = "h-12"\n'
+
+
+@pytest.fixture
+def store(tmp_path):
+    folder = tmp_path / "runs"
+    added = invoke_daq(
+        "transducer", "add", "h-12", "--kind", "hammer", "--model", "PCB 086C03", "--serial", "4711",
+        "--sensitivity", "2.31 mV/N", "--calibrated", "2025-01-10", "--due", "2026-01-10",
+        "--store", str(folder),
+    )  # fmt: skip
+    assert added.returncode == 0, added.stderr
+    assert "2.31 mV/N = 0.00231 V/N" in added.stdout
+    return folder
+
+
+def _save(store, tmp_path, text=SETUP, *extra):
+    path = tmp_path / "beam.toml"
+    path.write_text(text)
+    return invoke_daq("setup", "save", "beam", "--from", str(path), "--store", str(store), *extra)
+
+
+def test_transducer_list_json_and_text(store):
+    listed = invoke_daq("transducer", "list", "--json", "--store", str(store))
+    assert listed.returncode == 0, listed.stderr
+    ids = {t["id"]: t for t in json.loads(listed.stdout)["transducers"]}
+    assert set(ids) == {"accel-default", "h-12", "hammer-default"}
+    assert ids["h-12"]["sensitivity_v_per_eu"] == pytest.approx(2.31e-3)
+    text = invoke_daq("transducer", "list", "--store", str(store)).stdout
+    assert "OVERDUE" in next(line for line in text.splitlines() if line.startswith("h-12"))
+
+
+def test_setup_save_list_show_and_versions(store, tmp_path):
+    saved = _save(store, tmp_path)
+    assert saved.returncode == 0, saved.stderr
+    assert saved.stdout == "Saved setup beam version 1\n"
+    assert saved.stderr == "caution: hammer transducer h-12 calibration was due 2026-01-10\n"
+    assert _save(store, tmp_path, SETUP.replace("200.0", "400.0"), "--expect-version", "1").returncode == 0
+    listed = json.loads(invoke_daq("setup", "list", "--json", "--store", str(store)).stdout)
+    assert [(s["name"], s["version"]) for s in listed["setups"]] == [("beam", 2), ("default", 0)]
+    shown = json.loads(invoke_daq("setup", "show", "beam", "--json", "--store", str(store)).stdout)
+    assert shown["settings"]["span_hz"] == 400.0
+    assert shown["settings"]["hammer"]["sensitivity_v_per_eu"] == pytest.approx(2.31e-3)
+    assert shown["transducers"]["hammer"]["serial"] == "4711"
+    assert shown["cautions"] == ["hammer transducer h-12 calibration was due 2026-01-10"]
+    old = invoke_daq("setup", "show", "beam", "--version", "1", "--store", str(store))
+    assert "span_hz = 200.0" in old.stdout
+    history = json.loads(invoke_daq("setup", "history", "beam", "--json", "--store", str(store)).stdout)
+    assert [v["version"] for v in history["versions"]] == [1, 2]
+
+
+@pytest.mark.parametrize(
+    ("args", "fragments"),
+    [
+        (("setup", "show", "nope"), ("no setup 'nope'", "known: default")),
+        (("transducer", "add", "h-1", "--kind", "hammer", "--sensitivity", "2.25"), ("--sensitivity",)),
+        (
+            ("transducer", "add", "h-1", "--kind", "hammer", "--sensitivity", "2.25 mV/N", "--due", "soon"),
+            ("transducer h-1: due: not a date YYYY-MM-DD",),
+        ),
+        (
+            ("transducer", "add", "h-1", "--kind", "hammer", "--sensitivity", "10 mV/g"),
+            ("sensitivity_unit: mV/g is not a unit of a hammer",),
+        ),
+    ],
+)
+def test_bad_input_is_one_line(store, args, fragments):
+    assert_one_line_error(invoke_daq(*args, "--store", str(store)), *fragments)
+
+
+def test_setup_save_refuses_bad_files_and_old_versions_in_one_line(store, tmp_path):
+    assert_one_line_error(_save(store, tmp_path, "span_hz = -5.0\n"), "span_hz: must be a positive number")
+    assert_one_line_error(
+        _save(store, tmp_path, '[hammer]\ntransducer = "zz"\n'), "hammer.transducer: no transducer 'zz'"
+    )
+    assert _save(store, tmp_path).returncode == 0
+    assert_one_line_error(_save(store, tmp_path, SETUP, "--expect-version", "0"), "setup beam exists already")
+
+
+def test_capture_with_a_named_setup_and_auto_range_on_the_simulator(store, tmp_path):
+    assert _save(store, tmp_path).returncode == 0
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--seed", "3", "--scenario", "realistic", "--time-scale", "0",
+        "--setup", "beam", "--auto-range", "2", "--store", str(store),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "caution: hammer transducer h-12 calibration was due 2026-01-10" in result.stderr
+    assert result.stdout.count("(not kept)") == 2
+    assert "Auto-range: hammer range" in result.stdout
+    (summary,) = Store(store).list()
+    run = open_run(store / summary.file_name)
+    assert run.provenance["setup"] == {"name": "beam", "version": 1}
+    assert run.provenance["cautions"] == ["hammer transducer h-12 calibration was due 2026-01-10"]
+    assert run.instrument.settings["hammer"]["transducer"]["id"] == "h-12"
+    assert not run.hits.overload.any()
+    assert run.hits.accepted.sum() == 2
+
+
+def test_an_impossible_setup_is_refused_before_any_hit(store, tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("trigger_level_eu = 1000.0\n")
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--time-scale", "0", "--setup", str(path), "--store", str(store)
+    )
+    assert_one_line_error(result, "trigger_level_eu: 1000 N is above the hammer's range (8.89 N")
+    assert Store(store).list() == []
+    lines = tmp_path / "lines.toml"
+    lines.write_text("lines = 800\n")
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--time-scale", "0", "--setup", str(lines), "--store", str(store)
+    )
+    assert_one_line_error(result, "lines: the 35660A offers 400 lines only")
+
+
+def test_capture_with_an_unknown_setup_name_is_one_line(store):
+    result = invoke_daq("capture", "--sim", "--yes", "--setup", "nope", "--store", str(store))
+    assert_one_line_error(result, "no setup 'nope'")
