@@ -127,3 +127,30 @@ def test_an_impossible_setup_is_refused_before_any_hit(store, tmp_path):
 def test_capture_with_an_unknown_setup_name_is_one_line(store):
     result = invoke_daq("capture", "--sim", "--yes", "--setup", "nope", "--store", str(store))
     assert_one_line_error(result, "no setup 'nope'")
+
+
+def test_serve_refuses_a_setup_that_does_not_resolve_before_it_starts(store, tmp_path):
+    env = {"DAQ_TOKEN_FILE": str(tmp_path / "token")}
+    result = invoke_daq("serve", "--sim", "--port", "0", "--setup", "nope", "--store", str(store), env=env)
+    assert_one_line_error(result, "no setup 'nope'")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("span_hz = -1.0\n")
+    result = invoke_daq("serve", "--sim", "--port", "0", "--setup", str(bad), "--store", str(store), env=env)
+    assert_one_line_error(result, "span_hz must be a positive number")
+
+
+def test_serve_passes_the_setup_to_the_service(store, tmp_path, monkeypatch):
+    from daq.cli.commands import serve as serve_command
+
+    seen = {}
+    monkeypatch.setattr(serve_command, "run_service", lambda *a, **k: seen.update(k))
+    assert _save(store, tmp_path).returncode == 0
+    env = {"DAQ_TOKEN_FILE": str(tmp_path / "token")}
+    result = invoke_daq("serve", "--sim", "--port", "0", "--setup", "beam", "--store", str(store), env=env)
+    assert result.returncode == 0, result.stderr
+    assert seen["setup"] == "beam"
+    assert "caution: hammer transducer h-12" in result.stderr
+    (tmp_path / "mine.toml").write_text("span_hz = 400.0\n")
+    monkeypatch.chdir(tmp_path)
+    invoke_daq("serve", "--sim", "--port", "0", "--setup", "mine.toml", "--store", str(store), env=env)
+    assert seen["setup"] == str(tmp_path / "mine.toml")
