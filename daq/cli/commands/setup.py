@@ -168,9 +168,9 @@ def transducer_list(store: StoreOption = None, as_json: JsonOption = False) -> N
     for t in items:
         due = f"due {t['due']}" if t["due"] else "no due date"
         mark = "  OVERDUE" if t["overdue"] else ""
+        sens = f"{t['sensitivity']:g} {t['sensitivity_unit']}"
         print(
-            f"{t['id']:<{width}}  {t['kind']:<13}  {t['sensitivity']:g} {t['sensitivity_unit']:<10}  "
-            f"{t['model']} {t['serial']}".rstrip()
+            f"{t['id']:<{width}}  {t['kind']:<13}  {sens:<16}  {t['model']} {t['serial']}".rstrip()
             + f"  ({due}){mark}"
         )
 
