@@ -67,6 +67,10 @@ class CaptureRequest(BaseModel):
         None, max_length=200, description='The test\'s point to measure, or "next" (the first not measured).'
     )
 
+    setup_version: int | None = Field(
+        None, ge=0, description="The setup's version the client shows; 409 if it was saved since."
+    )
+
     @field_validator("setup", "test", "point")
     @classmethod
     def _names(cls, value: str | None) -> str | None:
@@ -81,6 +85,20 @@ class CaptureRequest(BaseModel):
     @classmethod
     def _note(cls, value: str) -> str:
         return _plain_text(value, one_line=False)
+
+
+class SetupPut(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+    setup: dict[str, Any] = Field(
+        description="The setup file's tables (setup_codec keys, channels' transducer)."
+    )
+    version: int = Field(ge=0, description="The version this save starts from; 0 for a new setup.")
+
+
+class PracticeRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+    setup: str | None = Field(None, max_length=200, description="The setup to range; default: the service's.")
+    hits: int = Field(3, ge=1, le=100, description="Practice hits to take (none is kept).")
 
 
 class Decision(BaseModel):
@@ -187,8 +205,11 @@ def create_app(service: Service) -> FastAPI:
     @app.post("/api/capture", dependencies=writes, status_code=202, summary="Start a capture")
     def capture_start(body: CaptureRequest) -> dict[str, Any]:
         where = _test_point(service, body.test, body.point)
+        setup = _capture_setup(service, body.setup, body.setup_version)
         try:
-            run_id = service.capture.start(body.hits, body.operator, body.note, body.auto, where=where)
+            run_id = service.capture.start(
+                body.hits, body.operator, body.note, body.auto, where=where, setup=setup
+            )
         except ValueError as exc:
             raise HTTPException(422, str(exc)) from None
         except Conflict as exc:
@@ -204,6 +225,24 @@ def create_app(service: Service) -> FastAPI:
         except Conflict as exc:
             raise HTTPException(409, str(exc)) from None
         return {"index": body.index, "accepted": body.accept}
+
+    @app.post(
+        "/api/capture/practice",
+        dependencies=writes,
+        status_code=202,
+        summary="Practice hits (none kept): the ranges and trigger level for a setup",
+    )
+    def capture_practice(body: PracticeRequest) -> dict[str, Any]:
+        setup = _capture_setup(service, body.setup, None)
+        try:
+            service.capture.start_practice(setup, body.hits)
+        except ValueError as exc:
+            raise HTTPException(422, str(exc)) from None
+        except Conflict as exc:
+            raise HTTPException(409, str(exc)) from None
+        except DriverError as exc:
+            raise HTTPException(503, f"the analyzer cannot be reached: {exc}") from None
+        return {"state": service.capture.state, "hits": body.hits}
 
     @app.post(
         "/api/capture/undo",
@@ -242,6 +281,51 @@ def create_app(service: Service) -> FastAPI:
         if frf is None:
             raise HTTPException(404, "no hit accepted yet")
         return plain(frf)
+
+    # ------------------------------------------------------------ setups, transducers
+    @app.get("/api/setups", dependencies=reads, summary='The named setups ("default" always)')
+    def setups() -> dict[str, Any]:
+        from daq.workflows.station_setups import setups_listing
+
+        return plain(_station_call(service, setups_listing, service.store.path))
+
+    @app.get("/api/setups/{name}", dependencies=reads, summary="One setup: its tables, settings, cautions")
+    def setup_get(name: str) -> dict[str, Any]:
+        from daq.workflows.station_setups import setup_view
+
+        return plain(_station_call(service, setup_view, service.store.path, name))
+
+    @app.put(
+        "/api/setups/{name}",
+        dependencies=writes,
+        summary="Save a setup (a new version), checked against the connected analyzer",
+    )
+    def setup_put(name: str, body: SetupPut) -> dict[str, Any]:
+        from daq.workflows.station_setups import connected_model, save_setup
+
+        status = service.link.status()
+        model = connected_model(status.get("dialect"), status.get("identification"))
+        return plain(
+            _station_call(service, save_setup, service.store.path, name, body.setup, body.version, model)
+        )
+
+    @app.get("/api/transducers", dependencies=reads, summary="The transducers (built-ins included)")
+    def transducers() -> dict[str, Any]:
+        from daq.workflows.station_setups import transducers_listing
+
+        return plain(_station_call(service, transducers_listing, service.store.path))
+
+    @app.get("/api/transducers/{ident}", dependencies=reads, summary="One transducer")
+    def transducer_get(ident: str) -> dict[str, Any]:
+        from daq.workflows.station_setups import transducer_view
+
+        return plain(_station_call(service, transducer_view, service.store.path, ident))
+
+    @app.put("/api/transducers/{ident}", dependencies=writes, summary="Save a transducer")
+    def transducer_put(ident: str, body: dict[str, Any]) -> dict[str, Any]:
+        from daq.workflows.station_setups import save_transducer
+
+        return plain(_station_call(service, save_transducer, service.store.path, ident, body))
 
     # ------------------------------------------------------------ tests
     @app.get(
@@ -423,8 +507,9 @@ def create_app(service: Service) -> FastAPI:
 #: What each error answer of the API means; every one has the body ``{"detail": "..."}``.
 ERROR_ANSWERS = {
     "401": "no token, or the wrong one (writes always; reads when the service is not on loopback)",
-    "404": "no such run, hit or result",
-    "409": "the capture is not in a state that allows this (one already running, no pending hit, ...)",
+    "404": "no such run, hit, result, test, setup or transducer",
+    "409": "the capture is not in a state that allows this (one already running, no pending hit, a "
+    "decision already with the analyzer, ...), or a setup saved since the version given",
     "411": "a body without a Content-Length header (chunked bodies are refused)",
     "413": "a body larger than the service accepts",
     "422": "a parameter or the body is not valid; detail names the field",
@@ -432,6 +517,7 @@ ERROR_ANSWERS = {
 }
 _CAPTURE_CONTROL = (
     "/api/capture", "/api/capture/decision", "/api/capture/undo", "/api/capture/stop", "/api/capture/abort",
+    "/api/capture/practice",
 )  # fmt: skip
 
 
@@ -465,11 +551,17 @@ def _document_error_answers(app: FastAPI, reads_need_token: bool) -> None:
                     codes |= {"411", "413"}
                 if operation.get("parameters") or operation.get("requestBody"):
                     codes.add("422")
-                if "{" in path or path == "/api/capture/frf":
+                if ("{" in path and method != "put") or path == "/api/capture/frf":
                     codes.add("404")
                 if method == "post" and path in _CAPTURE_CONTROL:
                     codes.add("409")
-                if (method == "post" and path == "/api/capture") or path.startswith("/api/runs"):
+                if method == "put" and path.startswith("/api/setups/"):
+                    codes.add("409")
+                if method == "put":
+                    codes.add("422")
+                if (
+                    method == "post" and path in ("/api/capture", "/api/capture/practice")
+                ) or path.startswith("/api/runs"):
                     codes.add("503")
                 answers = operation.setdefault("responses", {})
                 for code in sorted(codes):
@@ -523,6 +615,45 @@ def _stop(service: Service, how: str) -> dict[str, Any]:
     except Conflict as exc:
         raise HTTPException(409, str(exc)) from None
     return {"state": service.capture.state}
+
+
+def _station_call(service: Service, fn: Any, *args: Any) -> Any:
+    """``fn(*args)`` of daq/workflows/station_setups.py with its errors as HTTP answers:
+    an unknown name 404, a version conflict 409, a setup or transducer that does not
+    check 422 (the field first), a store that cannot be read 422."""
+    from daq.store.setups import VersionConflict
+    from daq.workflows.errors import WorkflowError
+    from daq.workflows.station_setups import UnknownName
+
+    try:
+        return fn(*args)
+    except UnknownName as exc:
+        raise HTTPException(404, service.public(str(exc))) from None
+    except VersionConflict as exc:
+        raise HTTPException(409, service.public(str(exc))) from None
+    except (WorkflowError, StoreError, ValueError) as exc:
+        raise HTTPException(422, service.public(str(exc))) from None
+
+
+def _capture_setup(service: Service, name: str | None, version: int | None) -> Any:
+    """The setup a capture (or practice) uses: ``name``, else the service's (``daq serve
+    --setup``), else None (the service's settings). 422 naming the field, 409 when
+    ``version`` is given and the setup was saved since."""
+    from daq.workflows.station_setups import setup_for_capture
+
+    name = name or service.config.setup
+    if name is None:
+        if version is not None:
+            raise HTTPException(422, "setup_version: needs a setup")
+        return None
+    try:
+        return _station_call(service, setup_for_capture, service.store.path, name, version)
+    except HTTPException as exc:
+        if exc.status_code == 404:  # a field of the request, not an address
+            raise HTTPException(422, str(exc.detail)) from None
+        if exc.status_code == 422 and not str(exc.detail).startswith("setup"):
+            raise HTTPException(422, f"setup {name}: {exc.detail}") from None
+        raise
 
 
 def _test_point(service: Service, test: str | None, point: str | None) -> Any:

@@ -39,6 +39,8 @@ from daq.workflows.errors import WorkflowError
 from daq.workflows.instrument_link import InstrumentLink
 from daq.workflows.live_frf import live_frf
 from daq.workflows.setup_codec import settings_to_dict
+from daq.workflows.setups import ResolvedSetup
+from daq.workflows.station_setups import check_for_model, connected_model
 from daq.workflows.test import TestPoint, join
 from drivers.errors import DriverError, Interrupted
 from drivers.settings import ImpactSettings
@@ -78,6 +80,8 @@ class CaptureController:
         self._cond = threading.Condition()
         self._thread: threading.Thread | None = None
         self.where: TestPoint | None = None
+        self.setup: ResolvedSetup | None = None
+        self.practice: dict[str, Any] | None = None
         # The simulator's hammer and accelerometer before any test's point moved them.
         self._sim_home: tuple[float, float] | None = None
         self.state = "idle"
@@ -103,6 +107,7 @@ class CaptureController:
         # A decision held for undo: until when (time.monotonic()), and for which hit.
         self._held_until = 0.0
         self._held_index: int | None = None
+        self._job_driver: Any = None
         self._stop: str | None = None
         self._frf: dict[str, Any] | None = None
 
@@ -114,7 +119,7 @@ class CaptureController:
         note: str = "",
         auto: bool = False,
         where: TestPoint | None = None,
-        **capture_options: Any,
+        setup: ResolvedSetup | None = None,
     ) -> str:
         """Open the analyzer and start a capture; its run id. Conflict if one runs;
         DriverError if the analyzer cannot be reached; ValueError (one line naming the
@@ -123,8 +128,10 @@ class CaptureController:
         where : the test and point the run measures (daq/workflows/test.py
             ``point_to_measure``): the run records its points and joins the test when
             sealed; on the simulator the hammer and accelerometer move there first.
-        capture_options : passed on to the Capture workflow (settings, transducers,
-            setup_name, setup_version, cautions)."""
+        setup : the named setup (daq/workflows/setups.py ``resolve_setup``): its settings,
+            transducers and cautions go to the run; checked against the connected model
+            before the first hit (ValueError naming the field). None: the service's
+            settings, no setup recorded."""
         if not 1 <= hits_wanted <= MAX_HITS_WANTED:
             raise ValueError(f"hits must be 1..{MAX_HITS_WANTED}")
         with self._cond:
@@ -138,6 +145,11 @@ class CaptureController:
                 self.state = "idle"
             raise
         try:
+            if setup is not None:
+                try:
+                    check_for_model(setup.settings, connected_model(dsa.dialect.name, dsa.identify()))
+                except WorkflowError as exc:
+                    raise ValueError(str(exc)) from None
             simulator = self.link.simulator_for_capture()
             if simulator is not None:
                 simulator.update(self._place_simulator(dsa, where))
@@ -147,15 +159,22 @@ class CaptureController:
             with self._cond:
                 self.state = "idle"
             raise
-        settings = capture_options.pop("settings", None) or self.settings
+        options: dict[str, Any] = {}
+        if setup is not None:
+            options = {
+                "transducers": dict(setup.transducers), "setup_name": setup.name,
+                "setup_version": setup.version, "cautions": list(setup.cautions),
+            }  # fmt: skip
         job = Capture(
-            dsa, settings, hits_wanted, resource=self.link.resource, transport=self.link.transport_name,
+            dsa, setup.settings if setup is not None else self.settings, hits_wanted,
+            resource=self.link.resource, transport=self.link.transport_name,
             simulator=simulator, operator=operator, note=note, store_dir=self.store_dir,
-            points=where.points if where is not None else None, **capture_options,
+            points=where.points if where is not None else None, **options,
         )  # fmt: skip
         with self._cond:
             self._reset(job, hits_wanted, auto)
             self.where = where
+            self.setup = setup
             self.state = "running"
             self._thread = threading.Thread(target=self._run, args=(job, dsa), name="capture", daemon=True)
         started = {
@@ -170,6 +189,82 @@ class CaptureController:
         self.hub.publish("capture_started", started)
         self._thread.start()
         return job.run_id
+
+    def start_practice(self, setup: ResolvedSetup | None, n_hits: int) -> None:
+        """Take ``n_hits`` practice hits (none kept) and choose the ranges and trigger
+        level for ``setup`` (daq/workflows/auto_range.py); the answer lands in the
+        snapshot's ``practice``. Conflict while a capture runs; DriverError when the
+        analyzer cannot be reached."""
+        if not 1 <= n_hits <= 100:
+            raise ValueError("hits: must be 1..100")
+        with self._cond:
+            if self.state != "idle":
+                raise Conflict(f"a capture is {self.state} (run {self.run_id})")
+            self.state = "starting"
+        try:
+            dsa = self.link.open_driver()
+            if self.link.sim is not None:
+                self.link.simulator_for_capture()
+                self._place_simulator(dsa, None)
+        except (DriverError, ValueError):
+            with self._cond:
+                self.state = "idle"
+            raise
+        settings = setup.settings if setup is not None else self.settings
+        name = setup.name if setup is not None else None
+        with self._cond:
+            self._reset(None, 0, False)
+            self._job_driver = dsa
+            self.practice = {"state": "running", "setup": name, "hits_wanted": n_hits, "hits_taken": 0}
+            self.state = "practice"
+            self._thread = threading.Thread(
+                target=self._practise, args=(dsa, settings, n_hits, name), name="practice", daemon=True
+            )
+        self.hub.publish("practice_started", {"setup": name, "hits_wanted": n_hits})
+        self._thread.start()
+
+    def _practise(self, dsa: Any, settings: ImpactSettings, n_hits: int, name: str | None) -> None:
+        from daq.workflows.auto_range import practice_hits
+
+        def on_hit(index: int, peak_force_n: float, peak_response_m_s2: float) -> None:
+            with self._cond:
+                if self.practice is not None:
+                    self.practice["hits_taken"] = index + 1
+            self.hub.publish(
+                "practice_hit",
+                {"index": index, "number": index + 1, "peak_force_n": peak_force_n,
+                 "peak_response_m_s2": peak_response_m_s2},
+            )  # fmt: skip
+
+        result: dict[str, Any]
+        try:
+            found = practice_hits(dsa, settings, n_hits, on_hit=on_hit)
+            result = {"state": "done", "setup": name, "hits_wanted": n_hits, **found.to_dict(), "error": None}
+        except Interrupted:
+            result = {"state": "stopped", "setup": name, "hits_wanted": n_hits, "error": None}
+        except (DriverError, WorkflowError) as exc:
+            if isinstance(exc, DriverError):
+                self.link.note_error(str(exc))
+            result = {"state": "failed", "setup": name, "hits_wanted": n_hits, "error": str(exc)}
+        except Exception as exc:  # a bug: the service stays up and says so
+            log.exception("practice hits failed")
+            result = {
+                "state": "failed",
+                "setup": name,
+                "hits_wanted": n_hits,
+                "error": f"internal error: {exc}",
+            }
+        finally:
+            with contextlib.suppress(Exception):
+                dsa.close()
+        with self._cond:
+            taken = (self.practice or {}).get("hits_taken", 0)
+            self.practice = {"hits_taken": taken, **result}
+            self._job_driver = None
+            self._stop = None
+            self.state = "idle"
+            self._cond.notify_all()
+        self.hub.publish("practice_done", self.practice)
 
     def _place_simulator(self, dsa: Any, where: TestPoint | None) -> dict[str, Any]:
         """On the simulator: the hammer and accelerometer at the test's point (as ``daq
@@ -248,6 +343,12 @@ class CaptureController:
     def stop(self, how: str = "stop") -> None:
         """End the capture: ``stop`` seals the hits so far, ``abort`` discards them."""
         with self._cond:
+            if self.state == "practice":
+                self._stop = how
+                driver = self._job_driver
+                if driver is not None:
+                    driver.interrupt.set()
+                return
             if self.state not in ("running", "stopping"):
                 raise Conflict("no capture is running")
             if self._stop is None or how == "abort":
@@ -288,6 +389,12 @@ class CaptureController:
                 "undo_until_s": left,
                 "undo_window_s": self.undo_window_s,
                 "test": None if self.where is None else {"name": self.where.test, "point": self.where.point},
+                "setup": None if self.setup is None else self.setup.provenance(),
+                "transducers": {}
+                if self.setup is None
+                else {channel: t.to_dict() for channel, t in self.setup.transducers.items()},
+                "cautions": [] if self.setup is None else list(self.setup.cautions),
+                "practice": self.practice,
                 "hits": hits,
                 "settings": self.actual_settings,
                 "last_run_id": self.last_run_id,

@@ -162,3 +162,124 @@ def test_a_capture_at_the_next_point_of_a_test_moves_the_simulator_and_joins_the
         wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", 60, "idle")
         home = Store(store).open(again).provenance["simulator"]
         assert home["force_at_m"] == pytest.approx(run.sample.length_m)
+
+
+def test_setups_are_versioned_checked_against_the_analyzer_and_recorded_with_their_transducers(
+    tmp_path, monkeypatch
+):
+    monkeypatch.setenv("DAQ_UNDO_WINDOW_S", "0")
+    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served:
+        listed = served.get("/api/setups").json()["setups"]
+        assert {"name": "default", "version": 0, "saved_utc": ""} in listed
+        default = served.get("/api/setups/default").json()
+        assert default["settings"]["hammer"]["sensitivity_v_per_eu"] == pytest.approx(2.25e-3)
+        assert served.get("/api/setups/nope").status_code == 404
+
+        # A hammer of our own, calibration past due.
+        hammer = {
+            "kind": "hammer", "model": "PCB 086C01", "serial": "SN-4711", "sensitivity": 2.3,
+            "sensitivity_unit": "mV/N", "calibrated": "2020-01-01", "due": "2021-01-01",
+        }  # fmt: skip
+        with served.client() as c:
+            put = c.put("/api/transducers/h-12", json=hammer)
+            bad = c.put("/api/transducers/h-13", json={**hammer, "sensitivity": -1})
+        assert put.status_code == 200, put.text
+        assert put.json()["sensitivity_v_per_eu"] == pytest.approx(2.3e-3)
+        assert put.json()["overdue"] is True
+        ids = [t["id"] for t in served.get("/api/transducers").json()["transducers"]]
+        assert {"hammer-default", "accel-default", "h-12"} <= set(ids)
+        assert bad.status_code == 422
+        assert bad.json()["detail"].startswith("sensitivity:")
+
+        # The 35660A offers 400 lines only; a trigger above the hammer's range is refused.
+        with served.client() as c:
+            data = {"span_hz": 400.0, "hammer": {"transducer": "h-12"}, "accelerometer": {}}
+            too_fine = c.put("/api/setups/bench", json={"setup": {**data, "lines": 800}, "version": 0})
+            assert too_fine.status_code == 422
+            assert too_fine.json()["detail"] == "lines: the 35660A offers 400 lines only"
+            too_high = c.put(
+                "/api/setups/bench", json={"setup": {**data, "trigger_level_eu": 1000}, "version": 0}
+            )
+            assert too_high.status_code == 422
+            assert too_high.json()["detail"].startswith(
+                "trigger_level_eu: 1000 N is above the hammer's range"
+            )
+            negative = c.put("/api/setups/bench", json={"setup": {**data, "span_hz": -5}, "version": 0})
+            assert negative.json()["detail"].startswith("span_hz:")
+
+            saved = c.put("/api/setups/bench", json={"setup": data, "version": 0})
+            assert saved.status_code == 200, saved.text
+            assert saved.json()["version"] == 1
+            assert saved.json()["settings"]["hammer"]["sensitivity_v_per_eu"] == pytest.approx(2.3e-3)
+            assert saved.json()["cautions"]  # the hammer's calibration is past due
+            stale = c.put("/api/setups/bench", json={"setup": data, "version": 0})
+            assert stale.status_code == 409
+            again = c.put("/api/setups/bench", json={"setup": {**data, "span_hz": 200.0}, "version": 1})
+            assert again.json()["version"] == 2
+        assert served.get("/api/setups/bench").json()["setup"]["span_hz"] == 200.0
+        conflict = served.post("/api/capture", {"hits": 1, "setup": "bench", "setup_version": 1})
+        assert conflict.status_code == 409
+        unknown = served.post("/api/capture", {"hits": 1, "setup": "nope"})
+        assert unknown.status_code == 422
+        assert unknown.json()["detail"].startswith("setup: no setup 'nope'")
+
+        # A capture with the named setup records it, its transducers and cautions.
+        run_id = served.post("/api/capture", {"hits": 1, "setup": "bench", "setup_version": 2}).json()[
+            "run_id"
+        ]
+        state = served.get("/api/capture").json()
+        assert state["setup"] == {"name": "bench", "version": 2}
+        assert state["transducers"]["hammer"]["serial"] == "SN-4711"
+        assert any("calibration" in c for c in state["cautions"])
+        _pending(served, 0)
+        assert served.post("/api/capture/decision", {"index": 0, "accept": True}).status_code == 200
+        wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", 30, "idle")
+        run = Store(served.store).open(run_id)
+        assert run.provenance["setup"] == {"name": "bench", "version": 2}
+        recorded = run.instrument.settings["hammer"]["transducer"]
+        assert (recorded["id"], recorded["serial"], recorded["due_date"]) == ("h-12", "SN-4711", "2021-01-01")
+        assert run.instrument.settings["hammer"]["sensitivity_v_per_eu"] == pytest.approx(2.3e-3)
+        assert any("calibration" in c for c in run.provenance["cautions"])
+
+
+def test_practice_hits_choose_ranges_and_a_trigger_level(tmp_path):
+    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served:
+        answer = served.post("/api/capture/practice", {"setup": "default", "hits": 2})
+        assert answer.status_code == 202, answer.text
+        wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", 60, "idle")
+        practice = served.get("/api/capture").json()["practice"]
+        assert practice["state"] == "done", practice
+        assert practice["hits_taken"] == 2
+        assert len(practice["peaks_force_n"]) == 2
+        assert practice["trigger_level_eu"] == pytest.approx(0.1 * min(practice["peaks_force_n"]), rel=0.01)
+        assert practice["hammer_range_v"] >= 1.5 * max(practice["peaks_force_n"]) * 2.25e-3
+        assert served.post("/api/capture/practice", {"hits": 0}).status_code == 422
+
+
+def test_the_station_routes_describe_their_error_answers(tmp_path):
+    from tests.service.test_service_openapi import _error_codes
+
+    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served:
+        spec = served.get("/openapi.json").json()
+        assert _error_codes(spec, "/api/capture/undo", "post") == {"401", "409", "411", "413", "422"}
+        assert _error_codes(spec, "/api/capture/practice", "post") == {
+            "401",
+            "409",
+            "411",
+            "413",
+            "422",
+            "503",
+        }
+        assert _error_codes(spec, "/api/setups/{name}", "put") == {"401", "409", "411", "413", "422"}
+        assert _error_codes(spec, "/api/setups/{name}", "get") == {"404", "422"}
+        assert _error_codes(spec, "/api/transducers/{ident}", "put") == {"401", "411", "413", "422"}
+        assert _error_codes(spec, "/api/tests/{name}", "get") == {"404", "422"}
+        assert _error_codes(spec, "/api/tests", "get") == set()
+        answers = {
+            "409": served.post("/api/capture/undo"),
+            "404": served.get("/api/setups/nope"),
+            "422": served.post("/api/capture", {"hits": 1, "test": "nope", "point": "next"}),
+        }
+        for code, answer in answers.items():
+            assert str(answer.status_code) == code, (code, answer.text)
+            assert set(answer.json()) == {"detail"}
