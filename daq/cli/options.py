@@ -28,6 +28,16 @@ StoreOption = Annotated[
     ),
 ]
 JsonOption = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+#: A capture setup: a name in the store (daq setup list) or a path ending in .toml.
+SetupOption = Annotated[
+    str | None,
+    typer.Option(
+        "--setup",
+        metavar="<name|file.toml>",
+        show_default=False,
+        help="A setup of the store (daq setup list), or a setup file (daq capture --print-setup).",
+    ),
+]
 
 # --------------------------------------------------------------- the analyzer
 # Optional for typer, so that a missing resource can say where else it may come from.

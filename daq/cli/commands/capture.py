@@ -26,6 +26,7 @@ from daq.cli.options import (
     OldSimModelOption,
     PointOption,
     SensorAtOption,
+    SetupOption,
     SimModel,
     SimModelOption,
     SimScenarioOption,
@@ -68,13 +69,7 @@ def capture(
         bool, typer.Option("--sim", help="Use the built-in simulator even if an analyzer is configured.")
     ] = False,
     dialect: DialectOption = None,
-    setup: Annotated[
-        str | None,
-        typer.Option(
-            metavar="<name|file.toml>",
-            help="A setup of the store (daq setup list), or a setup file (see --print-setup).",
-        ),
-    ] = None,
+    setup: SetupOption = None,
     auto_range: Annotated[
         int | None,
         typer.Option(

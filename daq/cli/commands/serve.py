@@ -20,6 +20,7 @@ from daq.cli.options import (
     DEFAULT_TIME_SCALE,
     DialectOption,
     OldSimModelOption,
+    SetupOption,
     SimModel,
     SimModelOption,
     SimScenarioOption,
@@ -69,13 +70,7 @@ def serve(
     time_scale: SimTimeScaleOption = None,
     analyzer: SimModelOption = None,
     model: OldSimModelOption = None,
-    setup: Annotated[
-        str | None,
-        typer.Option(
-            metavar="<name|file.toml>",
-            help="The setup captures use when a request names none [default: the built-in default].",
-        ),
-    ] = None,
+    setup: SetupOption = None,
 ) -> None:
     """Run the lab service: the analyzer, the store, a live web page and an HTTP API.
 
