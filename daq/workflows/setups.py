@@ -121,15 +121,16 @@ def resolve_setup(
 
 def _named_transducers(store_dir: Path | str, data: dict[str, Any], where: str) -> dict[str, Transducer]:
     table = TransducerTable(store_dir)
+    where = f"{where}: " if where else ""
     found = {}
     for channel, ident in named_transducer_ids(data).items():
         try:
             transducer = table.get(ident)
         except StoreError as exc:
-            raise WorkflowError(f"{where}: {channel}.transducer: {exc}") from None
+            raise WorkflowError(f"{where}{channel}.transducer: {exc}") from None
         if transducer.kind != channel:
             raise WorkflowError(
-                f"{where}: {channel}.transducer: {ident} is {_a(transducer.kind)}, not {_a(channel)}"
+                f"{where}{channel}.transducer: {ident} is {_a(transducer.kind)}, not {_a(channel)}"
             )
         found[channel] = transducer
     return found
@@ -313,7 +314,7 @@ def save_setup(
     written); VersionConflict (a StoreError) when ``expected_version`` is not the current
     one (0: the setup must be new)."""
     settings = check_setup_data(data)
-    transducers = _named_transducers(store_dir, data, "setup")
+    transducers = _named_transducers(store_dir, data, "")
     if model is not None:
         validate_for_model(with_transducers(settings, transducers), model)
     try:

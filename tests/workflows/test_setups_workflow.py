@@ -168,3 +168,22 @@ def test_transducer_record_carries_what_the_report_reads():
         "id", "model", "serial", "sensitivity", "sensitivity_unit", "calibration_date", "due_date", "overdue",
     }  # fmt: skip
     assert record["hammer"]["overdue"] is False
+
+
+def test_save_setup_checks_data_transducers_and_model_before_writing(tmp_path):
+    from daq.store.setups import VersionConflict
+    from daq.workflows.setups import save_setup, setup_view
+
+    with pytest.raises(WorkflowError, match=r"^hammer\.transducer: no transducer 'zz'"):
+        save_setup(tmp_path, "beam", {"hammer": {"transducer": "zz"}}, 0)
+    with pytest.raises(WorkflowError, match=r"^lines: the 35660A offers 400 lines only"):
+        save_setup(tmp_path, "beam", {"lines": 800}, 0, model="HP 35660A")
+    with pytest.raises(WorkflowError, match="not a plain name"):
+        save_setup(tmp_path, "../x", {}, 0)
+    assert SetupStore(tmp_path).names() == ["default"]
+    resolved = save_setup(tmp_path, "beam", {"lines": 800}, 0, model="35670A")
+    assert (resolved.name, resolved.version, resolved.settings.lines) == ("beam", 1, 800)
+    with pytest.raises(VersionConflict):
+        save_setup(tmp_path, "beam", {"lines": 400}, 0)
+    view = setup_view(tmp_path, "beam")
+    assert (view["version"], view["setup"], view["settings"]["lines"]) == (1, {"lines": 800}, 800)
