@@ -59,6 +59,9 @@ def service_env(tmp_path: Path) -> dict[str, str]:
         DAQ_LOCK_DIR=str(tmp_path / "locks"),
         DAQ_CONFIG=str(tmp_path / "no-config.toml"),
     )
+    # A decision held for undo would add seconds to every test's hit; the tests of undo
+    # set their own window.
+    env.setdefault("DAQ_UNDO_WINDOW_S", "0")
     return env
 
 
