@@ -59,6 +59,13 @@ def build_report_files(store_dir: Path, run_id: str, options: Any = None, pdf: b
     }
     if the_run.hits is not None:
         drawers["hits"] = lambda: figures.draw_hits(the_run)
+        indices = figures.quality_indices(the_run)
+        views, average = figures.hit_quality_views(the_run, indices)
+        for i in views:
+            verdict = page.hit_verdict(the_run, i)[0]
+            drawers[f"hit_quality_{i + 1}"] = lambda i=i, verdict=verdict: figures.draw_hit_quality(
+                the_run, i, views[i], average, verdict
+            )
     if with_response and the_run.hits is not None:
         drawers["response_fit"] = lambda: figures.draw_response_fit(the_run, with_response[0])
     if any("history" in f for f in fits.values()):

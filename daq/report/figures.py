@@ -40,7 +40,9 @@ def _png(fig: Any, close: bool = True) -> bytes:
 
 def failed_checks(checks: dict[str, Any]) -> list[str]:
     """The names of a hit's checks that failed (its stored check results)."""
-    return [name for name, c in checks.items() if isinstance(c, dict) and c.get("passed") is False]
+    from daq.workflows.run_views import failed_check_names
+
+    return failed_check_names(checks)
 
 
 def hits_figure(run: Any) -> bytes:
@@ -78,6 +80,162 @@ def draw_hits(run: Any) -> Any:
     for ax in axes[-1]:
         ax.set_xlabel("time after trigger (ms)", fontsize=8)
     fig.suptitle(f"Run {run.run_id}: time records ({hits.n_hits} hits, {int(hits.accepted.sum())} accepted)")
+    return fig
+
+
+#: Hits given a quality figure of their own: the first QUALITY_HITS, and every hit
+#: accepted although a check failed (the report's note names the others).
+QUALITY_HITS = 6
+
+
+def quality_indices(run: Any) -> list[int]:
+    """The 0-based hits the report draws a quality figure for, in order."""
+    from daq.workflows.run_views import accepted_against_checks
+
+    hits = run.hits
+    if hits is None:
+        return []
+    return sorted(set(range(min(hits.n_hits, QUALITY_HITS))) | set(accepted_against_checks(run)))
+
+
+def hit_quality_views(
+    run: Any, indices: list[int]
+) -> tuple[dict[int, dict[str, Any]], dict[str, Any] | None]:
+    """({hit index: daq.workflows.hit_quality.hit_quality of it}, the average of every
+    accepted hit or None): the numbers of the quality figures, computed by the view the
+    service's page shows (nothing is computed twice). A hit whose view cannot be made
+    (a record too short for the span's ends) is left out; the page lists it as not drawn."""
+    from daq.workflows.hit_quality import hit_quality
+
+    hits = run.hits
+    settings = run.instrument.settings if run.instrument is not None else {}
+    imported = (run.provenance or {}).get("imported_from", {})
+    if not settings and isinstance(imported, dict) and isinstance(imported.get("windows"), dict):
+        settings = imported["windows"]  # the windows an importer read (as the analysis takes them)
+    records = [(hits.force_n[i], hits.response_m_s2[i]) for i in range(hits.n_hits)]
+    accepted = [bool(a) for a in hits.accepted]
+
+    def view(i: int) -> dict[str, Any]:
+        return hit_quality(settings, records, accepted, i, float(hits.sample_rate_hz), float(hits.center_hz))
+
+    views: dict[int, dict[str, Any]] = {}
+    for i in indices:
+        try:
+            views[i] = view(i)
+        except ValueError:  # a record too short to resolve the span's ends: not drawn
+            continue
+    last = hits.n_hits - 1
+    try:
+        average = (views[last] if last in views else view(last))["average"]
+    except ValueError:
+        average = None
+    return views, average
+
+
+#: The pulse zoom: the samples where |force| exceeds this share of the peak (a second
+#: pulse the double-impact check would count included), widened by PULSE_MARGIN widths.
+PULSE_SHARE = 0.2
+PULSE_MARGIN = 3.0
+
+
+def pulse_zoom_s(t_s: np.ndarray, force: np.ndarray) -> tuple[float, float]:
+    """(start, end) s of the force pulse's zoom: every sample above PULSE_SHARE of the
+    peak |force|, widened by PULSE_MARGIN times that stretch (and 4 samples) each side."""
+    magnitude = np.abs(np.asarray(force))
+    above = np.flatnonzero(magnitude >= PULSE_SHARE * magnitude.max()) if magnitude.max() > 0 else []
+    if len(above) == 0:
+        return float(t_s[0]), float(t_s[-1])
+    first, last = int(above[0]), int(above[-1])
+    pad = max(4, int(PULSE_MARGIN * (last - first + 1)))
+    return float(t_s[max(0, first - pad)]), float(t_s[min(t_s.size - 1, last + pad)])
+
+
+def draw_hit_quality(
+    run: Any, index: int, quality: dict[str, Any], average: dict[str, Any] | None, verdict: str
+) -> Any:
+    """One hit's quality (hit ``index``, 0-based; titled from 1), six panels: the force
+    pulse zoomed with the force window over it; the whole response with its (exponential)
+    window over it; the force autospectrum in dB against the tip check's roll-off limit;
+    this hit's FRF magnitude and phase over the average of the run's accepted hits; the
+    average's coherence. ``quality``: daq.workflows.hit_quality.hit_quality of the hit;
+    ``average``: its "average" for the last hit (every accepted hit), or None."""
+    plt = _pyplot()
+    hits = run.hits
+    t_s = hits.time_s()
+    t_ms = t_s * 1e3
+    force, response = hits.force_n[index], hits.response_m_s2[index]
+    failed = failed_checks(hits.checks[index])
+    colour = ("#b35900" if failed else "#1f4e9c") if hits.accepted[index] else "#c0392b"
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6.4))
+    (ax_f, ax_r, ax_s), (ax_m, ax_p, ax_c) = axes
+
+    def trace(ax: Any, data: np.ndarray, window: np.ndarray, unit: str, name: str) -> None:
+        if np.iscomplexobj(data):  # zoom: the envelope's real part and magnitude
+            ax.plot(t_ms, data.real, color=colour, lw=0.8)
+            ax.plot(t_ms, np.abs(data), color=colour, lw=0.8, alpha=0.4)
+        else:
+            ax.plot(t_ms, data, color=colour, lw=0.8)
+        scale = float(np.max(np.abs(data))) or 1.0
+        ax.plot(t_ms, scale * np.asarray(window), color="#2a7f62", lw=1.0, ls="--", label=f"{name} (x peak)")
+        ax.set_ylabel(unit)
+        ax.set_xlabel("time after trigger (ms)")
+        ax.legend(fontsize=7, loc="upper right")
+
+    trace(ax_f, force, quality["force_window"], "force (N)", "force window")
+    lo, hi = pulse_zoom_s(t_s, force)
+    ax_f.set_xlim(1e3 * lo, 1e3 * hi)
+    ax_f.set_title("force pulse (zoom)", fontsize=9, loc="left")
+    trace(ax_r, response, quality["response_window"], "response (m/s²)", "response window")
+    ax_r.set_title("response, whole record", fontsize=9, loc="left")
+
+    spectrum = quality["force_spectrum"]
+    f_spec = np.asarray(spectrum["frequency_hz"]) + float(hits.center_hz)
+    ax_s.plot(f_spec, spectrum["level_db"], color=colour, lw=0.8)
+    limit, from_hz = spectrum["rolloff_limit_db"], spectrum["rolloff_hz"] + float(hits.center_hz)
+    ax_s.hlines(limit, from_hz, f_spec[-1], color="#c0392b", lw=1.2, ls="--",
+                label=f"roll-off limit {limit:g} dB (top band mean)")  # fmt: skip
+    ax_s.axhline(0.0, color="#999999", lw=0.6)
+    ax_s.axvspan(from_hz, f_spec[-1], color="#e0a040", alpha=0.15, lw=0)
+    drop = spectrum.get("drop_db")
+    ax_s.set_title(
+        "force autospectrum" + (f": falls {drop:.1f} dB" if drop is not None else ""), fontsize=9, loc="left"
+    )
+    finite = np.asarray(spectrum["level_db"])[np.isfinite(spectrum["level_db"])]
+    if finite.size:
+        ax_s.set_ylim(max(float(finite.min()), limit - 30.0) - 3, float(finite.max()) + 3)
+    ax_s.set_ylabel("dB re low band")
+    ax_s.set_xlabel("frequency (Hz)")
+    ax_s.legend(fontsize=7, loc="lower left")
+
+    frf = quality["frf"]
+    ax_m.semilogy(frf["frequency_hz"], frf["magnitude"], color=colour, lw=0.8, label=f"hit {index + 1}")
+    ax_p.plot(frf["frequency_hz"], frf["phase_deg"], color=colour, lw=0.8)
+    if average is not None:
+        label = f"average of {average['n_averaged']} accepted"
+        ax_m.semilogy(
+            average["frequency_hz"], average["magnitude"], color="#444444", lw=0.9, ls="--", label=label
+        )
+        ax_p.plot(average["frequency_hz"], average["phase_deg"], color="#444444", lw=0.9, ls="--")
+        ax_c.plot(average["frequency_hz"], average["coherence"], color="#2a7f62", lw=0.9)
+        ax_c.set_title(f"coherence of the average ({average['n_averaged']} hits)", fontsize=9, loc="left")
+    else:
+        ax_c.text(0.5, 0.5, "no accepted hit: no average", ha="center", va="center", transform=ax_c.transAxes)
+        ax_c.set_title("coherence", fontsize=9, loc="left")
+    ax_m.set_ylabel("|H| ((m/s²)/N)")
+    ax_m.set_title("FRF magnitude: this hit over the average", fontsize=9, loc="left")
+    ax_m.legend(fontsize=7, loc="upper right")
+    ax_p.set_ylabel("phase (°)")
+    ax_p.set_yticks([-180, -90, 0, 90, 180])
+    ax_p.set_title("FRF phase", fontsize=9, loc="left")
+    ax_c.set_ylim(0, 1.05)
+    ax_c.set_ylabel("coherence")
+    for ax in (ax_m, ax_p, ax_c):
+        ax.set_xlabel("frequency (Hz)")
+    for ax in axes.flat:
+        ax.grid(alpha=0.3, which="both")
+        ax.tick_params(labelsize=7)
+    fig.suptitle(f"Run {run.run_id}, hit {index + 1} of {hits.n_hits}: {verdict}", color=colour, fontsize=10)
+    fig.tight_layout()
     return fig
 
 

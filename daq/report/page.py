@@ -18,7 +18,10 @@ import textwrap
 from dataclasses import dataclass, field
 from typing import Any
 
-from daq.report.figures import failed_checks, psi_unit
+from analysis.hit_checks import BAND_FRACTION, MAX_DROP_DB
+from daq.report.figures import QUALITY_HITS, psi_unit
+from daq.workflows.run_views import accepted_against_checks as _against
+from daq.workflows.run_views import failed_check_names
 
 STYLE = """
 body { font: 14px/1.45 system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
@@ -137,16 +140,14 @@ def _compact(value: Any, limit: int = 240) -> str:
 
 
 def accepted_against_checks(run: Any) -> list[str]:
-    """One line per hit accepted although a check failed (hits counted from 1)."""
+    """One line per hit accepted although a check failed (hits counted from 1), from
+    daq.workflows.run_views.accepted_against_checks, as `daq runs show` marks them."""
     hits = run.hits
-    if hits is None:
-        return []
     lines = []
-    for i in range(hits.n_hits):
-        failed = failed_checks(hits.checks[i])
-        if bool(hits.accepted[i]) and failed:
-            details = "; ".join(f"{name}: {hits.checks[i][name].get('detail', 'failed')}" for name in failed)
-            lines.append(f"hit {i + 1} was accepted although its check failed ({details})")
+    for i in _against(run):
+        failed = failed_check_names(hits.checks[i])
+        details = "; ".join(f"{name}: {hits.checks[i][name].get('detail', 'failed')}" for name in failed)
+        lines.append(f"hit {i + 1} was accepted although its check failed ({details})")
     return lines
 
 
@@ -179,13 +180,48 @@ def _channel_rows(settings: dict[str, Any]) -> tuple[list[list[str]], list[list[
             window += f", time constant {_time(tau)} (decay {1 / tau:.4g} 1/s)"
         channels.append([f"{inp} {role}", sens_text, range_text, coupling, window])
         transducer = setup.get("transducer") if isinstance(setup.get("transducer"), dict) else {}
+        due = str(transducer.get("due_date") or NOT_RECORDED)
+        if transducer.get("overdue") is True:
+            due += " OVERDUE"  # at the capture
+        model = str(transducer.get("model") or NOT_RECORDED)
+        if transducer.get("id"):
+            model += f" ({transducer['id']})"  # the id in the station's transducer table
         transducers.append([
-            f"{inp} {role}", str(transducer.get("model") or NOT_RECORDED),
-            str(transducer.get("serial") or NOT_RECORDED), sens_text,
-            str(transducer.get("calibration_date") or NOT_RECORDED),
-            str(transducer.get("due_date") or NOT_RECORDED),
+            f"{inp} {role}", model, str(transducer.get("serial") or NOT_RECORDED),
+            _transducer_sensitivity(transducer, sens_text),
+            str(transducer.get("calibration_date") or NOT_RECORDED), due,
         ])  # fmt: skip
     return channels, transducers
+
+
+def _transducer_sensitivity(transducer: dict[str, Any], sens_text: str) -> str:
+    """The transducer's sensitivity in the unit of its calibration sheet, with the
+    channel's (V per SI unit, as the analyzer used it) when that unit differs."""
+    value, unit = transducer.get("sensitivity"), transducer.get("sensitivity_unit")
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not unit:
+        return sens_text
+    own = f"{value:.4g} {unit}"
+    if sens_text == NOT_RECORDED:
+        return own
+    return sens_text if own in sens_text else f"{own} (channel: {sens_text})"
+
+
+def run_setup(run: Any) -> tuple[str, Any] | None:
+    """(name, version) of the named setup the run was captured with, None when the run
+    records none (settings from options or a setup file)."""
+    setup = (run.provenance or {}).get("setup")
+    if isinstance(setup, dict) and setup.get("name"):
+        return str(setup["name"]), setup.get("version")
+    return None
+
+
+def stored_cautions(run: Any) -> list[str]:
+    """The cautions the capture stored with the run (e.g. a transducer's calibration past
+    due), without their leading "caution: " (the report adds its own)."""
+    cautions = (run.provenance or {}).get("cautions")
+    if not isinstance(cautions, list):
+        return []
+    return [str(text).removeprefix("caution: ") for text in cautions if str(text).strip()]
 
 
 def _point_text(point: Any) -> str:
@@ -218,6 +254,12 @@ def acquisition_section(run: Any) -> Section:
     else:
         blocks.append(Para("No analyzer: the run holds no analyzer settings (see its origin below).", "note"))
     rows = []
+    named = run_setup(run)
+    if named is not None:
+        name, version = named
+        rows.append(["setup", name + (f", version {version}" if version is not None else "")])
+    elif inst is not None:
+        rows.append(["setup", "no named setup recorded (options or a setup file)"])
     span, lines = settings.get("span_hz"), settings.get("lines")
     if span is not None:
         rows.append(["span", _g(span, "Hz")])
@@ -256,7 +298,9 @@ def acquisition_section(run: Any) -> Section:
         blocks += [
             Para("Transducers, as far as the run records them:", "note"),
             Table(
-                ["channel", "model", "serial", "sensitivity", "calibrated", "calibration due"], transducers
+                ["channel", "model (id)", "serial", "sensitivity", "calibrated", "calibration due"],
+                transducers,
+                classes=["caution" if "OVERDUE" in row[5] else "" for row in transducers],
             ),
         ]
     other = {k: v for k, v in settings.items() if k not in SHOWN_SETTINGS}
@@ -318,7 +362,7 @@ def _origin(run: Any) -> list[Any]:
         for key, value in imported.items():
             rows.append([f"imported {key.replace('_', ' ')}", _compact(value)])
     for key, value in sorted(prov.items()):
-        if key not in {"hits_wanted", "simulator", "replayed_from", "imported_from"}:
+        if key not in {"hits_wanted", "simulator", "replayed_from", "imported_from", "setup", "cautions"}:
             rows.append([key.replace("_", " "), _compact(value)])
     if not rows:
         return []
@@ -328,6 +372,58 @@ def _origin(run: Any) -> list[Any]:
 def _window_cautions(summary: dict[str, Any]) -> list[str]:
     windows_from = summary.get("windows", {}).get("from", "")
     return [f"windows {windows_from}"] if str(windows_from).startswith("unknown") else []
+
+
+def hit_verdict(run: Any, i: int) -> tuple[str, str]:
+    """(verdict text, row class) of hit ``i`` (0-based): "accepted", "rejected: why" or,
+    marked "caution", "accepted against failed check: names"."""
+    hits = run.hits
+    failed = failed_check_names(hits.checks[i])
+    if hits.accepted[i] and failed:
+        return f"accepted against failed check: {', '.join(failed)}", "caution"
+    return ("accepted", "") if hits.accepted[i] else (f"rejected: {hits.reject_reason[i]}", "rejected")
+
+
+def hit_quality_section(run: Any, figures: Any) -> Section | None:
+    """Each drawn hit's quality figure (names ``hit_quality_<number>``), with a note on
+    what the panels show and which hits are not drawn."""
+    numbers = sorted(int(name.rsplit("_", 1)[1]) for name in figures if name.startswith("hit_quality_"))
+    if not numbers:
+        return None
+    n = run.hits.n_hits
+    rest = [k for k in range(1, n + 1) if k not in numbers]
+    section = Section("Hit quality")
+    section.blocks.append(Para(
+        "For each hit: the force pulse (zoomed) with the force window over it; the response with its "
+        f"window over it; the force autospectrum in dB against the tip check's roll-off limit "
+        f"({-MAX_DROP_DB:g} dB over the top {BAND_FRACTION:.0%} of the span, against the lowest "
+        f"{BAND_FRACTION:.0%}); the hit's own FRF (H1 with the windows) over the average of the run's "
+        "accepted hits, magnitude and phase; and the coherence of that average.",
+        "note",
+    ))  # fmt: skip
+    if rest:
+        section.blocks.append(Para(
+            f"Drawn: hits {_numbers_text(numbers)} (the first {QUALITY_HITS} and every hit accepted against "
+            f"a failed check, as far as their records resolve the span); not drawn: hits "
+            f"{_numbers_text(rest)}, listed in the Hits table.",
+            "note",
+        ))  # fmt: skip
+    for k in numbers:
+        verdict, _ = hit_verdict(run, k - 1)
+        section.blocks.append(Fig(f"hit_quality_{k}", f"hit {k}: {verdict}"))
+    return section
+
+
+def _numbers_text(numbers: list[int]) -> str:
+    """ "1-6, 9, 11": runs of consecutive numbers joined."""
+    parts, start = [], None
+    for j, k in enumerate(numbers):
+        if start is None:
+            start = k
+        if j + 1 == len(numbers) or numbers[j + 1] != k + 1:
+            parts.append(str(start) if start == k else f"{start}-{k}")
+            start = None
+    return ", ".join(parts)
 
 
 def cautions_section(run: Any, result: dict[str, Any], fits: dict[str, dict] | None) -> Section:
@@ -342,12 +438,15 @@ def cautions_section(run: Any, result: dict[str, Any], fits: dict[str, dict] | N
         for name, fit in (fits or {}).items()
     ]
     groups.append(("the hits", accepted_against_checks(run)))
+    groups.insert(0, ("the capture (its setup and transducers)", stored_cautions(run)))
     for where, cautions in groups:
         if cautions:
             section.blocks.append(Para(f"From {where}:", "note"))
             section.blocks += [Para(text, "caution") for text in cautions]
     if not section.blocks:
-        section.blocks.append(Para("None: the analysis, the fits and the hits raised no caution.", "note"))
+        section.blocks.append(
+            Para("None: the capture, the analysis, the fits and the hits raised no caution.", "note")
+        )
     return section
 
 
@@ -375,14 +474,7 @@ def sections(
     if run.hits is not None:
         rows, classes = [], []
         for i in range(run.hits.n_hits):
-            ok = bool(run.hits.accepted[i])
-            failed = failed_checks(run.hits.checks[i])
-            if ok and failed:
-                verdict, cls = f"accepted against failed check: {', '.join(failed)}", "caution"
-            else:
-                verdict, cls = (
-                    ("accepted", "") if ok else (f"rejected: {run.hits.reject_reason[i]}", "rejected")
-                )
+            verdict, cls = hit_verdict(run, i)
             rows.append(
                 [str(i + 1), str(run.hits.timestamp_utc[i]), f"{run.hits.peak_force_n[i]:.3g}", verdict]
             )
@@ -401,6 +493,9 @@ def sections(
         if "hits" in figures:
             hits.blocks.append(Fig("hits", "force and response of each hit"))
         out.append(hits)
+        quality = hit_quality_section(run, figures)
+        if quality is not None:
+            out.append(quality)
     source = {"hits": f"{s['n_averages']} accepted hits, {s.get('estimator')}"}.get(s["source"], s["source"])
     windows = s.get("windows", {}).get("from", "")
     band = s.get("band")
