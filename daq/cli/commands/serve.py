@@ -71,6 +71,15 @@ def serve(
     analyzer: SimModelOption = None,
     model: OldSimModelOption = None,
     setup: SetupOption = None,
+    undo_window: Annotated[
+        float | None,
+        typer.Option(
+            "--undo-window",
+            metavar="<s>",
+            help="Seconds a decision made on the page is held before it goes to the analyzer, so "
+            "that Undo can take it back; 0: none [default: $DAQ_UNDO_WINDOW_S, else 3].",
+        ),
+    ] = None,
 ) -> None:
     """Run the lab service: the analyzer, the store, a live web page and an HTTP API.
 
@@ -117,6 +126,8 @@ def serve(
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
     if time_scale is not None and not time_scale >= 0:
         raise UserError("--time-scale must be >= 0", exit_code=2)
+    if undo_window is not None and not 0 <= undo_window <= 60:
+        raise UserError("--undo-window must be 0..60 s", exit_code=2)
     forced = check_dialect(dialect)
     address = _scheduler(scheduler)
     store_dir, _ = resolve_store_dir(store)
@@ -127,6 +138,7 @@ def serve(
         scenario=(scenario or DEFAULT_SCENARIO).value, seed=seed,
         time_scale=DEFAULT_TIME_SCALE if time_scale is None else time_scale,
         model=(simulated or SimModel.hp35660a).value, dialect=forced, setup=setup,
+        undo_window_s=undo_window,
     )  # fmt: skip
 
 
@@ -151,7 +163,7 @@ def _scheduler(option: str | None) -> str | None:
 def run_service(
     store_dir, resource, sim, host, port, token, created, token_file, workers, scheduler,
     scenario: str, seed: int | None, time_scale: float, model: str = "35660A", dialect: str | None = None,
-    setup: str | None = None,
+    setup: str | None = None, undo_window_s: float | None = None,
 ) -> None:  # fmt: skip
     import socket
 
@@ -188,6 +200,8 @@ def run_service(
     )  # fmt: skip
     if workers is not None:
         config.workers = workers
+    if undo_window_s is not None:
+        config.undo_window_s = undo_window_s
     service = Service(config)
     _stop_on_signals()
     # Everything after this point ends in close(): a Ctrl-C that lands during start-up,
