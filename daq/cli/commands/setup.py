@@ -95,7 +95,23 @@ def setup_show(
     print(text, end="")
     from daq.workflows.setups import resolve_setup
 
-    print_cautions(resolve_setup(store_dir, name).cautions)
+    resolved = resolve_setup(store_dir, name)
+    # The file may still hold a sensitivity the named transducer overrides: say which counts.
+    named = _named_channels(setups, name, version)
+    for channel, transducer in sorted(resolved.transducers.items()):
+        if transducer is not None and channel in named:
+            print(
+                f"# {channel}: transducer {transducer.id} sets the sensitivity to "
+                f"{transducer.sensitivity:g} {transducer.sensitivity_unit} "
+                f"({transducer.sensitivity_v_per_eu:.6g} V per EU); sensitivity_v_per_eu above is not used"
+            )
+    print_cautions(resolved.cautions)
+
+
+def _named_channels(setups, name: str, version: int | None) -> set[str]:
+    """The channels whose table in the setup names a transducer."""
+    data = setups.get(name, version).data
+    return {ch for ch, table in data.items() if isinstance(table, dict) and table.get("transducer")}
 
 
 @setup_app.command("history")
