@@ -16,8 +16,10 @@ def _daq(tmp_path, *args):
 
 
 def test_show_names_the_transducer_sensitivity_that_counts(tmp_path):
-    added = _daq(tmp_path, "transducer", "add", "h-7", "--kind", "hammer", "--model", "M", "--serial", "7",
-                 "--sensitivity", "4.1 mV/N", "--calibrated", "2026-01-01", "--due", "2099-01-01")  # fmt: skip
+    added = _daq(
+        tmp_path, "transducer", "add", "h-7", "--kind", "hammer", "--model", "M", "--serial", "7",
+        "--sensitivity", "4.1 mV/N", "--calibrated", "2026-01-01", "--due", "2099-01-01",
+    )  # fmt: skip
     assert added.returncode == 0, added.stderr
     setup = tmp_path / "s.toml"
     setup.write_text(

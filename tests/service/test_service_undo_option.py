@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 
-from tests.service.service_helpers import DAQ, serving, service_env
+from tests.service.service_helpers import DAQ, service_env, serving
 
 pytestmark = pytest.mark.slow
 
@@ -26,4 +26,5 @@ def test_an_impossible_window_is_one_line_and_exit_2(tmp_path, value):
     )  # fmt: skip
     assert done.returncode == 2, done.stderr
     lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and "--undo-window" in lines[0], done.stderr
+    assert len(lines) == 1, done.stderr
+    assert "--undo-window" in lines[0], done.stderr
