@@ -180,7 +180,7 @@ def _channel_rows(settings: dict[str, Any]) -> tuple[list[list[str]], list[list[
             window += f", time constant {_time(tau)} (decay {1 / tau:.4g} 1/s)"
         channels.append([f"{inp} {role}", sens_text, range_text, coupling, window])
         transducer = setup.get("transducer") if isinstance(setup.get("transducer"), dict) else {}
-        due = str(transducer.get("due_date") or NOT_RECORDED)
+        due = str(transducer.get("due_date") or transducer.get("due") or NOT_RECORDED)
         if transducer.get("overdue") is True:
             due += " OVERDUE"  # at the capture
         model = str(transducer.get("model") or NOT_RECORDED)
@@ -189,7 +189,7 @@ def _channel_rows(settings: dict[str, Any]) -> tuple[list[list[str]], list[list[
         transducers.append([
             f"{inp} {role}", model, str(transducer.get("serial") or NOT_RECORDED),
             _transducer_sensitivity(transducer, sens_text),
-            str(transducer.get("calibration_date") or NOT_RECORDED), due,
+            str(transducer.get("calibration_date") or transducer.get("calibrated") or NOT_RECORDED), due,
         ])  # fmt: skip
     return channels, transducers
 
