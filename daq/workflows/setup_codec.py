@@ -48,6 +48,9 @@ STORED = "stored settings do not describe an impact test"
 #: A stored run's channel may carry its transducer's record under this key
 #: (daq/workflows/setups.py, transducer_record); reading the settings skips it.
 TRANSDUCER_KEY = "transducer"
+#: The built-in transducer of each channel (daq/store/transducers.py), named in the
+#: setup file's comment.
+DEFAULT_TRANSDUCERS = {"hammer": "hammer-default", "accelerometer": "accel-default"}
 
 #: The fields that hold a channel, and the header line of the setup file.
 CHANNELS = ("hammer", "accelerometer")
@@ -200,6 +203,12 @@ def settings_to_toml(settings: ImpactSettings) -> str:
     for name in CHANNELS:
         channel = getattr(settings, name)
         out += ["", f"[{name}]", *(_toml_line(line, getattr(channel, line.key)) for line in CHANNEL_LAYOUT)]
+        # Not a setting of the analyzer, so not in the layout: named setups take it
+        # (daq/workflows/setups.py), and the file says so where a technician looks.
+        out.append(
+            f'# {TRANSDUCER_KEY} = "{DEFAULT_TRANSDUCERS[name]}"  # an id of `daq transducer list`: '
+            "its sensitivity replaces sensitivity_v_per_eu, and the run records it"
+        )
     return "\n".join(out) + "\n"
 
 
