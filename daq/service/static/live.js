@@ -179,31 +179,31 @@
       ],
       height: 170,
       group: "quality",
-      emptyText: "no spectrum from the service",
+      emptyText: "no hit yet",
     }),
     hitFrf: DAQ.plot($("hit-frf-plot"), {
       xLabel: "Frequency (Hz)",
       yLabel: "|H| ((m/s²)/N)",
       series: [
-        { label: "this hit", stroke: "#c2410c" },
-        { label: "average", stroke: "#1d4ed8" },
+        { label: "average", stroke: "#1d4ed8", width: 2.5 },
+        { label: "this hit", stroke: "#c2410c", width: 1.25 },
       ],
       logY: true,
       height: 170,
       group: "quality",
-      emptyText: "no FRF from the service",
+      emptyText: "no hit yet",
     }),
     hitPhase: DAQ.plot($("hit-phase-plot"), {
       xLabel: "Frequency (Hz)",
       yLabel: "Phase (°)",
       series: [
-        { label: "this hit", stroke: "#c2410c" },
-        { label: "average", stroke: "#1d4ed8" },
+        { label: "average", stroke: "#1d4ed8", width: 2.5 },
+        { label: "this hit", stroke: "#c2410c", width: 1.25 },
       ],
       yRange: [-180, 180],
       height: 170,
       group: "quality",
-      emptyText: "no FRF from the service",
+      emptyText: "no hit yet",
     }),
     hitCoherence: DAQ.plot($("hit-coherence-plot"), {
       xLabel: "Frequency (Hz)",
@@ -565,7 +565,9 @@
   }
 
   async function undoLast() {
-    if (!undo.supported || undo.busy || undo.index === null || cap.state !== "running") return;
+    // With nothing held here the service is asked anyway: it says why not ("hit 2 is already in
+    // the analyzer's average"), or takes back a decision made from another page.
+    if (!undo.supported || undo.busy || cap.state !== "running") return;
     undo.busy = true;
     renderUndo();
     try {
@@ -926,8 +928,8 @@
     if (frf && Array.isArray(frf.frequency_hz)) {
       const f = frf.frequency_hz;
       const same = avg && Array.isArray(avg.frequency_hz) && avg.frequency_hz.length === f.length;
-      plots.hitFrf.setData(f, along(f, frf.magnitude), same ? along(f, avg.magnitude) : []);
-      plots.hitPhase.setData(f, along(f, frf.phase_deg), same ? along(f, avg.phase_deg) : []);
+      plots.hitFrf.setData(f, same ? along(f, avg.magnitude) : [], along(f, frf.magnitude));
+      plots.hitPhase.setData(f, same ? along(f, avg.phase_deg) : [], along(f, frf.phase_deg));
       if (same) plots.hitCoherence.setData(f, along(f, avg.coherence));
       else plots.hitCoherence.clear();
     } else {
