@@ -21,6 +21,7 @@ $(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
 
 # The demo's runs go to a store of their own, not the lab's.
 DEMO_STORE ?= $(VENV)/demo-runs
+DEMO_TEST_STORE ?= $(VENV)/demo-test-runs
 
 demo: $(VENV)/.installed-run
 	$(BIN)/daq model
@@ -37,6 +38,15 @@ demo: $(VENV)/.installed-run
 	$(BIN)/daq analyze latest --store $(DEMO_STORE)
 	$(BIN)/daq export latest --format sdf --force -o $(VENV)/demo-35670A.sdf --store $(DEMO_STORE)
 	$(BIN)/daq import $(VENV)/demo-35670A.sdf --store $(DEMO_STORE)
+	# A five-point roving-hammer test of the beam: shapes, MAC, Table 2 and its report.
+	rm -rf $(DEMO_TEST_STORE)
+	$(BIN)/daq test new demo-beam --points p1=0.14,p2=0.28,p3=0.42,p4=0.56,p5=0.7 --store $(DEMO_TEST_STORE)
+	for seed in 1 2 3 4 5; do \
+	  $(BIN)/daq capture --sim --seed $$seed --test demo-beam --next --hits 3 --yes --time-scale 0 \
+	    --note "make demo, test" --store $(DEMO_TEST_STORE) > /dev/null || exit 1; \
+	done
+	$(BIN)/daq test analyze demo-beam --store $(DEMO_TEST_STORE)
+	$(BIN)/daq test report demo-beam -o $(VENV)/demo-test-report --force --store $(DEMO_TEST_STORE)
 
 test: lint
 	$(BIN)/python -m pytest -n auto
