@@ -503,6 +503,10 @@ def write_csv(run: Run, path: Path) -> None:
         f"# start_s = {float(hits.start_s)!r}",
         f"# center_hz = {float(hits.center_hz)!r}",
         "# units: time s, force N, response m/s^2",
+        # People count hits from 1 (daq runs show, the page, the report); this file keeps
+        # the run's 0-based index, and says so.
+        "# hit numbering: the hit column and the rejected hit lines count from 0 "
+        "(hit 0 is hit 1 in daq runs show)",
     ]
     # One line per rejected hit with its reason: read back by read_csv, so that
     # export then import keeps every verdict.

@@ -272,7 +272,7 @@ def create_app(service: Service) -> FastAPI:
     def capture_hit(index: int) -> dict[str, Any]:
         traces = service.capture.hit_quality(index)
         if traces is None:
-            raise HTTPException(404, f"the current capture has no hit {index}")
+            raise HTTPException(404, f"the current capture has no hit of index {index} (hit {index + 1})")
         return plain(traces)
 
     @app.get("/api/capture/frf", dependencies=reads, summary="The FRF averaged over the accepted hits so far")

@@ -291,7 +291,10 @@ class CaptureController:
             if self.state != "running" or self.pending is None:
                 raise Conflict("no hit is waiting for a decision")
             if index != self.pending:
-                raise Conflict(f"hit {index} is not the one waiting (hit {self.pending} is)")
+                raise Conflict(
+                    f"hit of index {index} (hit {index + 1}) is not the one waiting "
+                    f"(index {self.pending}, hit {self.pending + 1}, is)"
+                )
             self._decision = (bool(accept), reason)
             held = self.undo_window_s > 0
             if held:
