@@ -340,10 +340,63 @@ def test_the_large_display_from_the_address(tmp_path, station_page, monkeypatch)
         assert page.evaluate("() => localStorage.getItem('daq-sound')") == "on"
         page.reload()
         page.wait_for_function("() => document.querySelector('#sound-toggle').textContent === 'Sound: on'")
+        # the event stream is up: the hit comes as an event, with its beep
+        page.wait_for_function("() => document.querySelector('#conn-status').textContent.trim() === 'live'")
+        page.wait_for_function("() => document.querySelector('#capture-state').textContent.trim() === 'idle'")
         page.keyboard.press("s")
         wait_pending(page, 1)
         assert page.evaluate("() => document.body.dataset.lastSound") == "hit"
         page.keyboard.press("x")  # stop: the hit waiting is kept, rejected
         page.wait_for_function("() => document.querySelector('#capture-state').textContent.trim() === 'idle'")
+    assert errors == []
+    assert outside == []
+
+
+def test_a_capture_at_the_next_point_of_a_test_and_practice_hits_for_the_ranges(
+    tmp_path, station_page, monkeypatch
+):
+    from daq.workflows.test import new_test
+
+    page, errors, outside = station_page
+    monkeypatch.setenv("DAQ_UNDO_WINDOW_S", "0")
+    store = tmp_path / "store"
+    new_test(store, "beam", None, "p1=0.1,p2=0.2", "tip", "hammer")
+    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0.02", store=store) as served:
+        open_live_page(page, served)
+        page.wait_for_selector("#capture-test-field:not([hidden])")
+        page.select_option("#capture-test", "beam")
+        points = page.locator("#capture-point option").all_inner_texts()
+        assert points[0] == "next: p1"
+        assert page.locator("#capture-point").input_value() == "next"
+        page.fill("#hits-wanted", "1")
+        page.check("#auto")
+        page.click("#start")
+        run_id = wait_for(lambda: served.get("/api/capture").json()["last_run_id"], 60, "the run")
+        assert Store(served.store).open(run_id).points.force_point.name == "p1"
+        # the point is measured now, and the next one is offered
+        page.wait_for_function(
+            "() => document.querySelector('#capture-point option').textContent === 'next: p2'"
+        )
+        assert any(t.startswith("✓ p1") for t in page.locator("#capture-point option").all_inner_texts())
+        page.uncheck("#auto")
+
+        # Practice hits: their peaks, the ranges and trigger level proposed, applied to a setup.
+        open_setup_editor(page)
+        page.fill("#setup-name", "ranged")
+        page.fill("#practice-hits", "2")
+        page.click("#practice-start")
+        page.wait_for_selector("#practice-apply:not([hidden])")
+        result = page.locator("#practice-result").inner_text()
+        assert result.startswith("2 practice hits · peaks ")
+        assert "Proposed: hammer range" in result
+        practice = served.get("/api/capture").json()["practice"]
+        page.click("#practice-apply")
+        page.wait_for_function(
+            "() => document.querySelector('#setup-status').textContent.includes('Saved ranged')"
+        )
+        saved = served.get("/api/setups/ranged").json()["setup"]
+        assert saved["hammer"]["range_v"] == pytest.approx(practice["hammer_range_v"])
+        assert saved["accelerometer"]["range_v"] == pytest.approx(practice["accelerometer_range_v"])
+        assert saved["trigger_level_eu"] == pytest.approx(practice["trigger_level_eu"], rel=0.01)
     assert errors == []
     assert outside == []

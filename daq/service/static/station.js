@@ -428,7 +428,8 @@
     }
     const p = s && s.practice;
     if (p && typeof p === "object") showPractice(p, s.state);
-    const done = p && (p.hits_taken >= st.practiceWanted || p.done || p.error || (s.state === "idle" && p.hits_taken !== undefined));
+    const over = p && (p.state === "done" || p.state === "failed" || p.done || p.error);
+    const done = over || (p && s.state === "idle" && p.state === undefined && p.hits_taken !== undefined);
     if (done || (s && s.state === "idle" && !p)) {
       clearInterval(st.practicePoll);
       st.practicePoll = null;
@@ -451,9 +452,10 @@
     if (Number.isFinite(p.trigger_level_eu)) proposed.push("trigger level " + fmt.sig(p.trigger_level_eu, 3) + " N");
     let text = parts.join(" · ");
     if (proposed.length) text += ". Proposed: " + proposed.join(", ") + ".";
-    if (p.error) text += " " + p.error;
+    if (p.state === "failed" || p.error) text += " Failed: " + (p.error || p.message || "no reason given");
     $("practice-result").textContent = text;
-    $("practice-apply").hidden = !proposed.length || (state && state !== "idle" && p.hits_taken < st.practiceWanted);
+    const finished = p.state ? p.state === "done" : !state || state === "idle";
+    $("practice-apply").hidden = !proposed.length || !finished;
   }
 
   async function applyPractice() {
@@ -553,9 +555,11 @@
   $("capture-setup").addEventListener("change", renderCaptureSetupNote);
 
   // a run sealed: the test's points may have a new measured one
-  DAQ.events.on("run_sealed", () => {
-    if (st.testsAvailable) loadTests();
-  });
+  for (const type of ["run_sealed", "capture_ended"]) {
+    DAQ.events.on(type, () => {
+      if (st.testsAvailable) loadTests();
+    });
+  }
   DAQ.events.onHello(() => refresh());
 
   DAQ.station = {
