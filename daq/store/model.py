@@ -74,8 +74,8 @@ class Hits:
         for i, (ok, reason) in enumerate(zip(self.accepted, self.reject_reason, strict=True)):
             if bool(ok) == bool(reason):
                 raise ValueError(
-                    f"hits: hit {i} is {'accepted' if ok else 'rejected'} but its reject_reason "
-                    f"is {reason!r} (must be empty exactly when accepted)"
+                    f"hits: hit {i + 1} (index {i}) is {'accepted' if ok else 'rejected'} but its "
+                    f"reject_reason is {reason!r} (must be empty exactly when accepted)"
                 )
         self.overload = _array(self.overload, "hits.overload", "b", (n_hits, 2), np.bool_)
         self.peak_force_n = _array(self.peak_force_n, "hits.peak_force_n", "fiu", (n_hits,), np.float64)

@@ -32,7 +32,7 @@ def _hits_args(**changes):
         ({"accepted": np.array([1, 1, 0])}, "accepted"),
         ({"accepted": np.array([True, True])}, "shape"),
         ({"reject_reason": ["", "", ""]}, "reject_reason"),
-        ({"reject_reason": ["late", "", "x"]}, "hit 0 is accepted"),
+        ({"reject_reason": ["late", "", "x"]}, r"hit 1 \(index 0\) is accepted"),
         ({"overload": np.zeros((3, 1), bool)}, "overload"),
         ({"peak_force_n": np.zeros(4)}, "peak_force_n"),
         ({"timestamp_utc": ["2026-11-23T10:15:00"] * 3}, "UTC"),
