@@ -142,6 +142,12 @@ SimTimeScaleOption = Annotated[
         metavar="<factor>", help=f"Simulator only. {TIME_SCALE_HELP} [default: {DEFAULT_TIME_SCALE:g}]"
     ),
 ]
+SimHammerOption = Annotated[
+    str | None,
+    typer.Option(
+        metavar="<k=v,...>", help="Simulator only: the simulated hammer, e.g. double_hit_probability=1."
+    ),
+]
 SimModelOption = Annotated[
     SimModel | None,
     typer.Option(

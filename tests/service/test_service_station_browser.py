@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import os
 import re
+import subprocess
 from pathlib import Path
 
 import pytest
 
 from daq.store import Store
 from tests.conftest import NO_BROWSER
-from tests.service.service_helpers import serving, wait_for
+from tests.service.service_helpers import DAQ, service_env, serving, wait_for
 from tests.service.test_service_browser import CHROMIUM, CHROMIUM_ARGS
 
 pytestmark = [
@@ -398,5 +399,38 @@ def test_a_capture_at_the_next_point_of_a_test_and_practice_hits_for_the_ranges(
         assert saved["hammer"]["range_v"] == pytest.approx(practice["hammer_range_v"])
         assert saved["accelerometer"]["range_v"] == pytest.approx(practice["accelerometer_range_v"])
         assert saved["trigger_level_eu"] == pytest.approx(practice["trigger_level_eu"], rel=0.01)
+    assert errors == []
+    assert outside == []
+
+
+def test_a_hit_accepted_against_a_failed_check_is_marked_on_the_page_and_in_the_run(
+    tmp_path, station_page, monkeypatch
+):
+    """A hammer that always bounces (the simulator's double hit): the check fails, the
+    technician accepts anyway; the page marks the hit, and the sealed run says so."""
+    page, errors, outside = station_page
+    monkeypatch.setenv("DAQ_UNDO_WINDOW_S", "0")
+    hammer = "double_hit_probability=1"
+    with serving(tmp_path, "--sim", "--time-scale", "0.02", "--seed", "3", "--hammer", hammer) as served:
+        open_live_page(page, served)
+        page.fill("#hits-wanted", "1")
+        page.keyboard.press("Escape")
+        page.keyboard.press("s")
+        wait_pending(page, 1)
+        page.keyboard.press("a")
+        run_id = wait_for(lambda: served.get("/api/capture").json()["last_run_id"], 60, "the run")
+        wait_verdict(page, 0, "accepted", held=False)
+        mark = page.locator("#hits-table tr[data-index='0'] .against-mark")
+        mark.wait_for()
+        assert mark.get_attribute("aria-label") == "accepted against a failed check"
+        assert served.get("/api/capture").json()["hits"][0]["accepted_against_checks"] is True
+
+    shown = subprocess.run(
+        [str(DAQ), "runs", "show", run_id, "--store", str(served.store)],
+        capture_output=True, text=True, env=service_env(tmp_path), timeout=60,
+    )  # fmt: skip
+    assert shown.returncode == 0, shown.stderr
+    assert "hit   1" in shown.stdout
+    assert "accepted although the double" in shown.stdout
     assert errors == []
     assert outside == []

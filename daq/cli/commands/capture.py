@@ -27,6 +27,7 @@ from daq.cli.options import (
     PointOption,
     SensorAtOption,
     SetupOption,
+    SimHammerOption,
     SimModel,
     SimModelOption,
     SimScenarioOption,
@@ -95,12 +96,7 @@ def capture(
     scenario: SimScenarioOption = None,
     seed: SimSeedOption = None,
     time_scale: SimTimeScaleOption = None,
-    hammer: Annotated[
-        str | None,
-        typer.Option(
-            metavar="<k=v,...>", help="Simulator only: the simulated hammer, e.g. double_hit_probability=1."
-        ),
-    ] = None,
+    hammer: SimHammerOption = None,
     analyzer: SimModelOption = None,
     model: OldSimModelOption = None,
     force_at: ForceAtOption = None,

@@ -21,6 +21,7 @@ from daq.cli.options import (
     DialectOption,
     OldSimModelOption,
     SetupOption,
+    SimHammerOption,
     SimModel,
     SimModelOption,
     SimScenarioOption,
@@ -68,6 +69,7 @@ def serve(
     scenario: SimScenarioOption = None,
     seed: SimSeedOption = None,
     time_scale: SimTimeScaleOption = None,
+    hammer: SimHammerOption = None,
     analyzer: SimModelOption = None,
     model: OldSimModelOption = None,
     setup: SetupOption = None,
@@ -120,12 +122,19 @@ def serve(
         )
     sim_options = {
         "--scenario": scenario, "--seed": seed, "--time-scale": time_scale, "--analyzer": analyzer,
-        "--model": model,
+        "--model": model, "--hammer": hammer,
     }  # fmt: skip
     if real is not None and (given := [k for k, v in sim_options.items() if v is not None]):
         raise UserError(f"{', '.join(given)} only apply to the simulator (use --sim)", exit_code=2)
     if time_scale is not None and not time_scale >= 0:
         raise UserError("--time-scale must be >= 0", exit_code=2)
+    if hammer:
+        from daq.workflows.connect import simulator_source
+
+        try:
+            simulator_source((scenario or DEFAULT_SCENARIO).value, 0, hammer)
+        except ValueError as exc:
+            raise UserError(f"--hammer: {exc}", exit_code=2) from None
     if undo_window is not None and not 0 <= undo_window <= 60:
         raise UserError("--undo-window must be 0..60 s", exit_code=2)
     forced = check_dialect(dialect)
@@ -138,7 +147,7 @@ def serve(
         scenario=(scenario or DEFAULT_SCENARIO).value, seed=seed,
         time_scale=DEFAULT_TIME_SCALE if time_scale is None else time_scale,
         model=(simulated or SimModel.hp35660a).value, dialect=forced, setup=setup,
-        undo_window_s=undo_window,
+        undo_window_s=undo_window, hammer=hammer or "",
     )  # fmt: skip
 
 
@@ -163,7 +172,7 @@ def _scheduler(option: str | None) -> str | None:
 def run_service(
     store_dir, resource, sim, host, port, token, created, token_file, workers, scheduler,
     scenario: str, seed: int | None, time_scale: float, model: str = "35660A", dialect: str | None = None,
-    setup: str | None = None, undo_window_s: float | None = None,
+    setup: str | None = None, undo_window_s: float | None = None, hammer: str = "",
 ) -> None:  # fmt: skip
     import socket
 
@@ -193,7 +202,7 @@ def run_service(
         sock.listen(2048)  # from now on connections queue until uvicorn accepts them
     except OSError as exc:
         raise UserError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
-    spec = SimSpec(scenario, seed, time_scale, model=model) if resource is None else None
+    spec = SimSpec(scenario, seed, time_scale, hammer=hammer, model=model) if resource is None else None
     config = ServiceConfig(
         store_dir=store_dir, resource=resource, sim=spec, host=host, port=sock.getsockname()[1],
         token=token, reads_need_token=not loopback, scheduler=scheduler, dialect=dialect, setup=setup,
