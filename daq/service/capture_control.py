@@ -380,6 +380,10 @@ class CaptureController:
                 hit = dict(h)
                 if hit.get("held"):
                     hit["undo_until_s"] = left
+                    # A page opened during the hold must show the verdict it holds.
+                    if self._decision is not None and self._held_index == hit["index"]:
+                        hit["held_accepted"] = self._decision[0]
+                        hit["held_reason"] = self._decision[1]
                 hits.append(hit)
             return {
                 "hit_index_base": 0,

@@ -40,6 +40,8 @@ def test_a_held_decision_is_undone_within_the_window_and_refused_after_it(tmp_pa
         assert held["pending"] is None
         assert 0 < held["undo_until_s"] <= 2
         assert held["hits"][0]["held"] is True
+        # which verdict is held, for a page opened during the hold
+        assert (held["hits"][0]["held_accepted"], held["hits"][0]["held_reason"]) == (False, "oops")
         answer = served.post("/api/capture/undo")
         assert answer.status_code == 200, answer.text
         assert answer.json() == {"index": 0, "number": 1, "undone": "rejected"}

@@ -1116,7 +1116,11 @@
     cap.hits = new Map(
       (s.hits || []).map((h) => {
         const old = before.get(h.index);
-        if (h.held && !h.decided && old && typeof old.heldAccepted === "boolean") {
+        if (h.held && !h.decided && typeof h.held_accepted === "boolean") {
+          // the service says which verdict it holds (a page opened during the hold)
+          h.heldAccepted = h.held_accepted;
+          if (!h.reason) h.reason = h.held_reason || "";
+        } else if (h.held && !h.decided && old && typeof old.heldAccepted === "boolean") {
           h.heldAccepted = old.heldAccepted;
           if (!h.reason) h.reason = old.reason || "";
         }
