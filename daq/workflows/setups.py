@@ -254,7 +254,7 @@ def validate_for_model(settings: ImpactSettings, model: str) -> None:
     offered = _lines_offered(model)
     if settings.lines is not None and settings.lines not in offered:
         if len(offered) == 1:
-            raise WorkflowError(f"lines: the {model} offers {offered[0]} lines only")
+            raise WorkflowError(f"lines: the {model} offers {offered[0]} lines only, not {settings.lines}")
         choices = ", ".join(str(n) for n in offered)
         raise WorkflowError(f"lines: the {model} offers {choices} lines, not {settings.lines}")
     top = max_span_hz(model)

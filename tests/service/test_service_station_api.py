@@ -198,7 +198,7 @@ def test_setups_are_versioned_checked_against_the_analyzer_and_recorded_with_the
             data = {"span_hz": 400.0, "hammer": {"transducer": "h-12"}, "accelerometer": {}}
             too_fine = c.put("/api/setups/bench", json={"setup": {**data, "lines": 800}, "version": 0})
             assert too_fine.status_code == 422
-            assert too_fine.json()["detail"] == "lines: the 35660A offers 400 lines only"
+            assert too_fine.json()["detail"] == "lines: the 35660A offers 400 lines only, not 800"
             too_high = c.put(
                 "/api/setups/bench", json={"setup": {**data, "trigger_level_eu": 1000}, "version": 0}
             )

@@ -138,7 +138,7 @@ def test_lines_a_model_does_not_offer_are_one_line_before_any_hit(tmp_path):
         "capture", "--sim", "--setup", str(setup), "--hits", "2", "--yes", "--time-scale", "0",
         "--store", str(tmp_path / "store"), env=env,
     )  # fmt: skip
-    assert_one_line_error(result, "the 35660A dialect offers 400 lines, not 800")
+    assert_one_line_error(result, "lines: the 35660A offers 400 lines only, not 800")
 
 
 @pytest.mark.timeout(60)
