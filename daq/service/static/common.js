@@ -441,7 +441,7 @@
 
   /* ------------------------------------------------------------------ plots */
 
-  /* plot(container, {xLabel, yLabel, series: [{label, stroke}], logY, yRange: [lo, hi],
+  /* plot(container, {xLabel, yLabel, series: [{label, stroke}], logY, yRange: [lo, hi], ySplits: [ticks],
    *                  height, group, keepZoom, emptyText})
    * -> {setData(x, ...ys), clear(), u}
    * Width follows the container (ResizeObserver). Drag on the plot zooms x, a
@@ -495,6 +495,8 @@
           grid: o.logY ? { stroke: "#e4e7eb", filter: decadesOnly } : { stroke: "#e4e7eb" },
           ticks: o.logY ? { stroke: "#d0d4d9", size: 5 } : { stroke: "#d0d4d9" },
           values: (u, splits) => splits.map((v) => (v === null || v === undefined ? "" : fmt.sig(v, 3))),
+          // fixed ticks where the caller gives them (a phase reads at -180, -90, 0, 90, 180)
+          splits: o.ySplits ? () => o.ySplits : undefined,
         },
       ],
       series: [

@@ -201,6 +201,7 @@
         { label: "this hit", stroke: "#c2410c", width: 1.25 },
       ],
       yRange: [-180, 180],
+      ySplits: [-180, -90, 0, 90, 180],
       height: 170,
       group: "quality",
       emptyText: "no hit yet",
