@@ -284,10 +284,11 @@ def _stop_on_signals() -> None:
     """SIGTERM (systemd, kill, shutdown) and SIGINT stop the service the same way.
     uvicorn handles both while it serves, then restores these handlers and raises the
     signal again: without them SIGTERM would end the process before the capture in
-    progress is sealed. An ignored SIGINT (a background job of a shell) stays ignored."""
+    progress is sealed. SIGINT is handled even where it arrived ignored (a background
+    job of a script): uvicorn stops on it once serving, so ignoring it only while the
+    service starts made the first `kill -INT` of a starting service do nothing."""
     signal.signal(signal.SIGTERM, _raise_shutdown)
-    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
-        signal.signal(signal.SIGINT, _raise_shutdown)
+    signal.signal(signal.SIGINT, _raise_shutdown)
     # A closed terminal or a dropped ssh session (SIGHUP) stops the service as SIGTERM
     # does, sealing the capture in progress at once: uvicorn handles SIGTERM, not SIGHUP.
     if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
