@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from daq.store.errors import StoreError
-from daq.store.setups import file_lock, toml_string
+from daq.store.setups import SetupStore, file_lock, toml_string
 from daq.store.writer import write_atomically
 
 TRANSDUCERS_FILE = "transducers.toml"
@@ -75,6 +75,11 @@ def _date(value: object, where: str, key: str) -> str:
     except ValueError:
         raise StoreError(f"{where}: {key}: not a date YYYY-MM-DD ({value!r})") from None
     return value
+
+
+def _a(kind: str) -> str:
+    """ "a hammer", "an accelerometer"."""
+    return f"an {kind}" if kind[0] in "aeiou" else f"a {kind}"
 
 
 def _text(value: object, where: str, key: str) -> str:
@@ -155,7 +160,7 @@ class Transducer:
         if unit not in UNITS:
             raise StoreError(f"{where}: sensitivity_unit: must be one of {', '.join(UNITS)}, got {unit!r}")
         if UNITS[unit][0] != kind:
-            raise StoreError(f"{where}: sensitivity_unit: {unit} is not a unit of a {kind}")
+            raise StoreError(f"{where}: sensitivity_unit: {unit} is not a unit of {_a(kind)}")
         value = d["sensitivity"]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < float("inf"):
             raise StoreError(f"{where}: sensitivity: must be a positive number, got {value!r}")
@@ -234,18 +239,58 @@ class TransducerTable:
         known = ", ".join(t.id for t in self.all())
         raise StoreError(f"no transducer {ident!r} (known: {known})")
 
-    def put(self, transducer: Transducer) -> Transducer:
-        """Add ``transducer`` or replace the one of its id (atomic write under a lock)."""
+    def put(self, transducer: Transducer, today: date | None = None) -> Transducer:
+        """Add ``transducer`` or replace the one of its id (atomic write under a lock).
+
+        StoreError "transducer <id>: <field>: ..." (nothing written) when its calibration
+        date is after ``today`` (default: the local date), or when it changes the kind
+        of a transducer that a setup's current version names on the other channel (the
+        setup would no longer resolve): "transducer a-7: kind: a-7 is the accelerometer
+        of setup beam; ...".
+        """
         if not isinstance(transducer, Transducer):
             raise StoreError(f"put takes a Transducer, not a {type(transducer).__name__}")
+        where = f"transducer {transducer.id}"
+        today = today or date.today()
+        if transducer.calibrated and date.fromisoformat(transducer.calibrated) > today:
+            raise StoreError(f"{where}: calibrated: {transducer.calibrated} is in the future")
         with file_lock(self.store_dir, ".transducers.lock", "the transducer table"):
             stored = self._stored()
+            previous = {**BUILTINS, **stored}.get(transducer.id)
+            if previous is not None and previous.kind != transducer.kind:
+                users = setups_naming(self.store_dir, transducer.id)
+                named = sorted(name for name, channel in users if channel != transducer.kind)
+                if named:
+                    which = f"setup {named[0]}" if len(named) == 1 else f"setups {', '.join(named)}"
+                    raise StoreError(
+                        f"{where}: kind: {transducer.id} is the {previous.kind} of {which}; "
+                        f"it cannot become {_a(transducer.kind)} (give the {transducer.kind} another "
+                        f"id, or name another {previous.kind} in the setup first)"
+                    )
             stored[transducer.id] = transducer
             text = dump_transducers(stored.values())
             write_atomically(
                 self.store_dir, self.path, text.encode("utf-8"), what="the transducer table", overwrite=True
             )
         return transducer
+
+
+def setups_naming(store_dir: Path | str, ident: str) -> list[tuple[str, str]]:
+    """(setup name, channel) of each setup whose current version names transducer
+    ``ident`` on a channel (the built-in ``default`` included); a setup whose file does
+    not read is skipped (it resolves to nothing anyway)."""
+    setups = SetupStore(store_dir)
+    found = []
+    for name in setups.names():
+        try:
+            data = setups.get(name).data
+        except StoreError:
+            continue
+        for channel in KINDS:
+            table = data.get(channel)
+            if isinstance(table, dict) and table.get("transducer") == ident:
+                found.append((name, channel))
+    return found
 
 
 def dump_transducers(transducers: Any) -> str:

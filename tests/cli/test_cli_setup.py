@@ -154,3 +154,17 @@ def test_serve_passes_the_setup_to_the_service(store, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     invoke_daq("serve", "--sim", "--port", "0", "--setup", "mine.toml", "--store", str(store), env=env)
     assert seen["setup"] == str(tmp_path / "mine.toml")
+
+
+def test_transducer_add_says_it_replaced_and_refuses_a_kind_change_a_setup_depends_on(store, tmp_path):
+    add = ("transducer", "add", "a-7", "--kind", "accelerometer", "--sensitivity", "10 mV/g")
+    first = invoke_daq(*add, "--store", str(store))
+    assert first.stdout.startswith("Transducer a-7: accelerometer, 10 mV/g = 0.00101972 V/(m/s^2)"), first
+    again = invoke_daq(*add, "--store", str(store))
+    assert again.stdout.startswith("Transducer a-7 replaced: accelerometer"), again
+    assert _save(store, tmp_path, '[accelerometer]\ntransducer = "a-7"\n').returncode == 0
+    hammer = ("transducer", "add", "a-7", "--kind", "hammer", "--sensitivity", "2.25 mV/N")
+    assert_one_line_error(
+        invoke_daq(*hammer, "--store", str(store)), "kind: a-7 is the accelerometer of setup beam;"
+    )
+    assert invoke_daq("setup", "show", "beam", "--store", str(store)).returncode == 0

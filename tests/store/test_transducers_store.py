@@ -98,3 +98,41 @@ def test_a_bad_table_is_refused_naming_the_file_and_the_field(tmp_path):
     assert str(info.value) == f"{path}: transducer h-2: due: not a date YYYY-MM-DD ('soon')"
     with pytest.raises(StoreError, match="no transducer 'nope' \\(known: accel-default, hammer-default\\)"):
         TransducerTable(tmp_path / "empty").get("nope")
+
+
+def test_a_kind_change_is_refused_while_a_setup_names_the_transducer_on_the_other_channel(tmp_path):
+    from daq.store.setups import SetupStore
+
+    table = TransducerTable(tmp_path)
+    table.put(Transducer("a-7", "accelerometer", "PCB", "1", 10.0, "mV/g"))
+    SetupStore(tmp_path).put("beam", {"accelerometer": {"transducer": "a-7"}})
+    SetupStore(tmp_path).put("plate", {"accelerometer": {"transducer": "a-7"}})
+    with pytest.raises(StoreError) as info:
+        table.put(Transducer("a-7", "hammer", "PCB", "1", 2.25, "mV/N"))
+    assert str(info.value).startswith(
+        "transducer a-7: kind: a-7 is the accelerometer of setups beam, plate; it cannot become a hammer"
+    )
+    assert table.get("a-7").kind == "accelerometer"  # nothing written
+    # The built-in default names accel-default as its accelerometer.
+    with pytest.raises(StoreError, match="kind: accel-default is the accelerometer of setup default;"):
+        table.put(Transducer("accel-default", "hammer", "", "", 2.25, "mV/N"))
+    # The same kind replaces it; once no setup names it, the kind may change.
+    table.put(Transducer("a-7", "accelerometer", "PCB", "2", 9.8, "mV/g"))
+    SetupStore(tmp_path).put("beam", {"accelerometer": {"transducer": "accel-default"}})
+    SetupStore(tmp_path).put("plate", {})
+    assert table.put(Transducer("a-7", "hammer", "PCB", "1", 2.25, "mV/N")).kind == "hammer"
+
+
+def test_a_calibration_date_in_the_future_is_refused(tmp_path):
+    table = TransducerTable(tmp_path)
+    future = Transducer("h-1", "hammer", "", "", 2.25, "mV/N", "2030-05-01")
+    with pytest.raises(StoreError, match=r"^transducer h-1: calibrated: 2030-05-01 is in the future$"):
+        table.put(future, today=date(2026, 1, 1))
+    assert table.put(future, today=date(2030, 5, 1)) == future
+
+
+def test_a_unit_of_the_other_kind_reads_as_english():
+    with pytest.raises(StoreError, match="mV/N is not a unit of an accelerometer"):
+        Transducer("a", "accelerometer", "", "", 2.25, "mV/N")
+    with pytest.raises(StoreError, match="mV/g is not a unit of a hammer"):
+        Transducer("h", "hammer", "", "", 10.0, "mV/g")

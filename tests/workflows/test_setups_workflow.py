@@ -187,3 +187,15 @@ def test_save_setup_checks_data_transducers_and_model_before_writing(tmp_path):
         save_setup(tmp_path, "beam", {"lines": 400}, 0)
     view = setup_view(tmp_path, "beam")
     assert (view["version"], view["setup"], view["settings"]["lines"]) == (1, {"lines": 800}, 800)
+
+
+def test_the_service_save_refuses_a_kind_change_that_would_break_a_setup(tmp_path):
+    from daq.store.transducers import Transducer, TransducerTable
+    from daq.workflows.station_setups import save_transducer
+
+    TransducerTable(tmp_path).put(Transducer("a-7", "accelerometer", "", "", 10.0, "mV/g"))
+    SetupStore(tmp_path).put("beam", {"accelerometer": {"transducer": "a-7"}})
+    fields = {"kind": "hammer", "sensitivity": 2.25, "sensitivity_unit": "mV/N"}
+    with pytest.raises(WorkflowError, match=r"^kind: a-7 is the accelerometer of setup beam; "):
+        save_transducer(tmp_path, "a-7", fields)
+    assert resolve_setup(tmp_path, "beam").transducers["accelerometer"].id == "a-7"

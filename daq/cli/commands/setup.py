@@ -241,10 +241,14 @@ def transducer_add(
         transducer = Transducer.from_dict(fields, f"transducer {ident}")
     except StoreError as exc:
         raise UserError(str(exc), exit_code=2) from None
-    TransducerTable(_store_dir(store)).put(transducer)
+    table = TransducerTable(_store_dir(store))
+    replaced = transducer.id in {t.id for t in table.all()}
+    table.put(transducer)
     print(
-        f"Transducer {transducer.id}: {transducer.kind}, {transducer.sensitivity:g} "
-        f"{transducer.sensitivity_unit} = {transducer.sensitivity_v_per_eu:.6g} V/{transducer.eu}"
+        f"Transducer {transducer.id}{' replaced' if replaced else ''}: {transducer.kind}, "
+        f"{transducer.sensitivity:g} "
+        f"{transducer.sensitivity_unit} = {transducer.sensitivity_v_per_eu:.6g} "
+        f"V/{'N' if transducer.eu == 'N' else f'({transducer.eu})'}"
     )
     from datetime import date
 
