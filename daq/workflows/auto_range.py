@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from daq.workflows.errors import WorkflowError
-from daq.workflows.setups import analyzer_ranges_v, max_span_hz
+from daq.workflows.setups import analyzer_ranges_v, max_span_hz, validate_for_model
 from drivers.analyzer import SignalAnalyzer
 from drivers.dialects import model_of
 from drivers.settings import ChannelSetup, ImpactSettings
@@ -111,10 +111,16 @@ def practice_hits(
     """Take ``n_hits`` practice hits with ``driver`` (each waited for up to
     ``timeout_s``; None: the driver's allowance), reject them all, and choose the
     ranges and trigger level for ``settings``. ``on_hit(index, peak_force_n,
-    peak_response_m_s2)``, when given, is called after each hit (a display)."""
+    peak_response_m_s2)``, when given, is called after each hit (a display).
+
+    Before any hit, WorkflowError naming the field when the analyzer's model cannot
+    measure ``settings`` (validate_for_model), or when the trigger level is beyond
+    what even the largest range reaches (no practice hit could ever trigger)."""
     if not 1 <= n_hits <= 100:
         raise WorkflowError(f"practice hits: must be 1..100, got {n_hits}")
     model = model_of(driver.dialect, driver.identify())
+    # The setup first: one the analyzer cannot measure is refused before any practice hit.
+    validate_for_model(settings, model)
     largest = analyzer_ranges_v(model)[-1]
     practice = ImpactSettings(
         span_hz=max_span_hz(model),
@@ -128,6 +134,12 @@ def practice_hits(
         averages=n_hits,
         preview=True,
     )
+    # And a trigger level the largest range cannot reach (a setup whose ranges are
+    # "auto"): the practice hits would wait for a trigger that never comes.
+    try:
+        validate_for_model(practice, model)
+    except WorkflowError as exc:
+        raise WorkflowError(f"{exc} (at the largest range the practice hits use)") from None
     try:
         driver.configure(practice)
     except ValueError as exc:

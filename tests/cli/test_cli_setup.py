@@ -168,3 +168,22 @@ def test_transducer_add_says_it_replaced_and_refuses_a_kind_change_a_setup_depen
         invoke_daq(*hammer, "--store", str(store)), "kind: a-7 is the accelerometer of setup beam;"
     )
     assert invoke_daq("setup", "show", "beam", "--store", str(store)).returncode == 0
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ("trigger_level_eu = 1000.0\n", "trigger_level_eu: 1000 N is above the hammer's range (8.89 N"),
+        ("lines = 800\n", "lines: the 35660A offers 400 lines only, not 800"),
+    ],
+)
+def test_auto_range_checks_the_setup_before_the_practice_hits(store, tmp_path, text, fragment):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--time-scale", "0", "--setup", str(path), "--auto-range", "2",
+        "--store", str(store),
+    )  # fmt: skip
+    assert_one_line_error(result, fragment)
+    assert "Auto-range" not in result.stdout
+    assert "practice hit" not in result.stdout

@@ -13,7 +13,7 @@ from daq.workflows.capture import Capture, HitArrived
 from daq.workflows.connect import open_analyzer, serve_simulator, simulator_source
 from daq.workflows.errors import WorkflowError
 from daq.workflows.setups import analyzer_ranges_v
-from drivers.settings import ImpactSettings
+from drivers.settings import ChannelSetup, ImpactSettings, Window
 
 
 @pytest.mark.parametrize("model", ["35660A", "35670A"])
@@ -45,3 +45,39 @@ def test_practice_hits_choose_ranges_that_hold_the_peaks(model):
 def test_a_peak_beyond_the_largest_range_is_refused():
     with pytest.raises(WorkflowError, match="above what the analyzer's largest range"):
         choose(ImpactSettings(), [20_000.0], [1.0], "35660A")
+
+
+class _NoHits:
+    """The analyzer, but any attempt to set it up or wait for a hit fails the test."""
+
+    def __init__(self, driver):
+        self._driver = driver
+
+    def __getattr__(self, name):
+        if name in ("configure", "start", "wait_for_hit", "fetch_time_records"):
+            raise AssertionError(f"{name} called before the setup was checked")
+        return getattr(self._driver, name)
+
+
+@pytest.mark.parametrize(
+    ("settings", "message"),
+    [
+        (ImpactSettings(trigger_level_eu=1000.0), r"^trigger_level_eu: 1000 N is above the hammer's range"),
+        (ImpactSettings(lines=800), r"^lines: the 35660A offers 400 lines only, not 800$"),
+        # Ranges "auto": the setup passes, but 20 kN is beyond even the largest range
+        # (22.4 V / 2.25 mV/N = 9.96 kN): the practice hits would wait for ever.
+        (
+            ImpactSettings(
+                trigger_level_eu=20_000.0,
+                hammer=ChannelSetup(Window.FORCE, 2.25e-3, range_v=None),
+            ),
+            r"^trigger_level_eu: 20000 N is above the hammer's range .*\(at the largest range",
+        ),
+    ],
+)
+def test_a_setup_the_analyzer_cannot_measure_is_refused_before_any_practice_hit(settings, message):
+    with contextlib.ExitStack() as stack:
+        resource = serve_simulator(stack, simulator_source("realistic", 5), 0.0, "35660A")
+        dsa = stack.enter_context(open_analyzer(resource))
+        with pytest.raises(WorkflowError, match=message):
+            practice_hits(_NoHits(dsa), settings, 2, timeout_s=60.0)

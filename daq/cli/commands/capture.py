@@ -339,8 +339,8 @@ def check_for_analyzer(console, dsa, settings: ImpactSettings, auto_range: int |
     from drivers.dialects import model_of
 
     model = model_of(dsa.dialect, dsa.identify())
+    validate_for_model(settings, model)  # the setup as given, before any hit (practice too)
     if auto_range is None:
-        validate_for_model(settings, model)
         return settings
 
     def shown(index: int, force_n: float, response_m_s2: float) -> None:
