@@ -135,8 +135,7 @@ class CaptureController:
         if not 1 <= hits_wanted <= MAX_HITS_WANTED:
             raise ValueError(f"hits must be 1..{MAX_HITS_WANTED}")
         with self._cond:
-            if self.state != "idle":
-                raise Conflict(f"a capture is {self.state} (run {self.run_id})")
+            self._refuse_unless_idle()
             self.state = "starting"
         try:
             dsa = self.link.open_driver()
@@ -145,11 +144,7 @@ class CaptureController:
                 self.state = "idle"
             raise
         try:
-            if setup is not None:
-                try:
-                    check_for_model(setup.settings, connected_model(dsa.dialect.name, dsa.identify()))
-                except WorkflowError as exc:
-                    raise ValueError(str(exc)) from None
+            self._check_setup(dsa, setup)
             simulator = self.link.simulator_for_capture()
             if simulator is not None:
                 simulator.update(self._place_simulator(dsa, where))
@@ -198,15 +193,23 @@ class CaptureController:
         if not 1 <= n_hits <= 100:
             raise ValueError("hits: must be 1..100")
         with self._cond:
-            if self.state != "idle":
-                raise Conflict(f"a capture is {self.state} (run {self.run_id})")
+            self._refuse_unless_idle()
             self.state = "starting"
         try:
             dsa = self.link.open_driver()
+        except DriverError:
+            with self._cond:
+                self.state = "idle"
+            raise
+        try:
+            # As a capture's: a setup this analyzer cannot take is refused before any hit.
+            self._check_setup(dsa, setup)
             if self.link.sim is not None:
                 self.link.simulator_for_capture()
                 self._place_simulator(dsa, None)
         except (DriverError, ValueError):
+            with contextlib.suppress(Exception):
+                dsa.close()
             with self._cond:
                 self.state = "idle"
             raise
@@ -265,6 +268,28 @@ class CaptureController:
             self.state = "idle"
             self._cond.notify_all()
         self.hub.publish("practice_done", self.practice)
+
+    def _refuse_unless_idle(self) -> None:
+        """Conflict, saying what is under way and what to do, unless idle (under _cond)."""
+        if self.state == "idle":
+            return
+        if self.state == "practice":
+            raise Conflict("practice hits are being taken; stop them first (POST /api/capture/stop)")
+        if self.state == "starting":
+            raise Conflict("a capture or practice is starting (opening the analyzer); try again in a moment")
+        run = f" (run {self.run_id})" if self.run_id else ""
+        if self.state == "stopping":
+            raise Conflict(f"a capture is stopping{run}; try again once it has ended")
+        raise Conflict(f"a capture is {self.state}{run}; stop it first (POST /api/capture/stop)")
+
+    @staticmethod
+    def _check_setup(dsa: Any, setup: ResolvedSetup | None) -> None:
+        """ValueError naming the field when the connected analyzer cannot take ``setup``."""
+        if setup is not None:
+            try:
+                check_for_model(setup.settings, connected_model(dsa.dialect.name, dsa.identify()))
+            except WorkflowError as exc:
+                raise ValueError(str(exc)) from None
 
     def _place_simulator(self, dsa: Any, where: TestPoint | None) -> dict[str, Any]:
         """On the simulator: the hammer and accelerometer at the test's point (as ``daq
