@@ -41,15 +41,64 @@ def setups_listing(store_dir: Path) -> dict[str, Any]:
     return {"setups": [s.summary() for s in SetupStore(store_dir).list()]}
 
 
-def setup_view(store_dir: Path, name: str) -> dict[str, Any]:
+def setup_view(store_dir: Path, name: str, version: int | None = None) -> dict[str, Any]:
     """GET /api/setups/{name} (daq/workflows/setups.py ``setup_view``): ``{"name",
     "version", "saved_utc", "setup": data, "settings": the resolved settings
-    (transducers' sensitivities applied), "transducers", "cautions"}``. UnknownName when
-    the store has no such setup; WorkflowError when it does not check."""
+    (transducers' sensitivities applied), "transducers", "cautions"}``; ``version``: that
+    version of it, from the history (None: the current one). UnknownName when the store
+    has no such setup or version; WorkflowError when it does not check."""
     from daq.workflows.setups import setup_view as view
 
     _known(store_dir, name)
-    return view(store_dir, name)
+    if version is None:
+        return view(store_dir, name)
+    try:
+        stored = SetupStore(store_dir).get(name, version)
+    except StoreError:
+        raise UnknownName(f"setup {name} has no version {version}") from None
+    if stored.version != version:
+        raise UnknownName(f"setup {name} has no version {version}")
+    current = view(store_dir, name)
+    if current["version"] == version:
+        return current
+    return _stored_view(store_dir, stored)
+
+
+def _stored_view(store_dir: Path, stored: Any) -> dict[str, Any]:
+    """setup_view's answer for one stored version (an older one): its settings with the
+    transducers it names as they are now."""
+    from datetime import date
+
+    from daq.workflows.setup_codec import settings_to_dict
+    from daq.workflows.setups import (
+        calibration_cautions,
+        check_setup_data,
+        named_transducer_ids,
+        with_transducers,
+    )
+
+    where = f"setup {stored.name} version {stored.version}"
+    try:
+        settings = check_setup_data(stored.data)
+    except WorkflowError as exc:
+        raise WorkflowError(f"{where}: {exc}") from None
+    table = TransducerTable(store_dir)
+    transducers = {}
+    for channel, ident in named_transducer_ids(stored.data).items():
+        try:
+            transducers[channel] = table.get(ident)
+        except StoreError as exc:
+            raise WorkflowError(f"{where}: {channel}.transducer: {exc}") from None
+    today = date.today()
+    return {
+        "name": stored.name,
+        "version": stored.version,
+        "saved_utc": stored.saved_utc,
+        "setup": stored.data,
+        "settings": settings_to_dict(with_transducers(settings, transducers)),
+        "transducers": {ch: t.to_dict(today) for ch, t in transducers.items()},
+        "cautions": calibration_cautions(transducers, today),
+    }
 
 
 def _known(store_dir: Path, name: str) -> None:
@@ -70,14 +119,33 @@ def save_setup(
     WorkflowError naming the field when it does not check, or when the connected
     ``model`` (None: not known) cannot measure it; VersionConflict when someone saved a
     version in between (daq/workflows/setups.py ``save_setup``)."""
+    from daq.store.setups import VersionConflict
     from daq.workflows.setups import save_setup as save
 
     try:
         SetupStore(store_dir).path(name)
     except StoreError as exc:
         raise WorkflowError(f"name: {exc}") from None
-    save(store_dir, name, data, version, model)
+    try:
+        save(store_dir, name, data, version, model)
+    except VersionConflict as exc:
+        raise VersionConflict(stale_version_text(name, version, exc.current), exc.current) from None
     return setup_view(store_dir, name)
+
+
+def stale_version_text(name: str, given: int, current: int, field: str = "") -> str:
+    """What to say of a save or capture from ``given`` when setup ``name`` is at
+    ``current`` (0: it does not exist), field first (``field``: the request's, when it
+    is not ``version``)."""
+    where = f"{field}: " if field else ""
+    if current == 0 and given != 0:
+        return f"{where}version {given}: setup {name} does not exist yet (version 0 saves it new)"
+    if given == 0:
+        return (
+            f"{where}version 0: setup {name} exists already (version {current}); "
+            "load it or choose another name"
+        )
+    return f"{where}version {given} is not the current one ({current}): load the setup again"
 
 
 def _strip_where(text: str, name: str) -> str:
@@ -106,8 +174,7 @@ def setup_for_capture(store_dir: Path, name: str, version: int | None = None) ->
         from daq.store.setups import VersionConflict
 
         raise VersionConflict(
-            f"setup {name} is at version {resolved.version}, not {version} (saved meanwhile)",
-            resolved.version,
+            stale_version_text(name, version, resolved.version, "setup_version"), resolved.version
         )
     return resolved
 
