@@ -156,6 +156,9 @@ def create_app(service: Service) -> FastAPI:
         message = first.get("msg", "invalid request")
         if first.get("type") == "json_invalid":
             where, message = "body", "not valid JSON"
+        elif where == "body" and first.get("type") in ("model_attributes_type", "dict_type"):
+            # A form-encoded body (curl -d 'a=b'), a JSON list, text or number.
+            message = "must be a JSON object (Content-Type: application/json)"
         return JSONResponse({"detail": f"{where}: {message}"}, status_code=422)
 
     # ------------------------------------------------------------ pages
@@ -200,7 +203,14 @@ def create_app(service: Service) -> FastAPI:
     # ------------------------------------------------------------ capture
     @app.get("/api/capture", dependencies=reads, summary="The current or last capture")
     def capture_state() -> dict[str, Any]:
-        return plain(service.capture.snapshot())
+        snapshot = service.capture.snapshot()
+        if snapshot.get("setup") is not None:  # the last capture's; a file by its name only
+            snapshot["setup"] = {
+                **snapshot["setup"],
+                "name": _setup_file_named(snapshot["setup"]["name"], snapshot["setup"]["name"]),
+            }
+        snapshot["next_setup"] = _next_setup(service)  # what a capture naming none uses
+        return plain(snapshot)
 
     @app.post("/api/capture", dependencies=writes, status_code=202, summary="Start a capture")
     def capture_start(body: CaptureRequest) -> dict[str, Any]:
@@ -270,6 +280,8 @@ def create_app(service: Service) -> FastAPI:
         summary="One hit's time records and quality: windows, force spectrum, its FRF, the running average",
     )
     def capture_hit(index: int) -> dict[str, Any]:
+        if index < 0:
+            raise HTTPException(422, "index: must be 0 or more (hits count from 0 in the API)")
         traces = service.capture.hit_quality(index)
         if traces is None:
             raise HTTPException(404, f"the current capture has no hit of index {index} (hit {index + 1})")
@@ -290,10 +302,16 @@ def create_app(service: Service) -> FastAPI:
         return plain(_station_call(service, setups_listing, service.store.path))
 
     @app.get("/api/setups/{name}", dependencies=reads, summary="One setup: its tables, settings, cautions")
-    def setup_get(name: str) -> dict[str, Any]:
+    def setup_get(
+        name: str,
+        version: Annotated[
+            int | None,
+            Query(ge=0, description="That version, from the setup's history; default: the current."),
+        ] = None,
+    ) -> dict[str, Any]:
         from daq.workflows.station_setups import setup_view
 
-        return plain(_station_call(service, setup_view, service.store.path, name))
+        return plain(_station_call(service, setup_view, service.store.path, name, version))
 
     @app.put(
         "/api/setups/{name}",
@@ -639,9 +657,17 @@ def _capture_setup(service: Service, name: str | None, version: int | None) -> A
     """The setup a capture (or practice) uses: ``name``, else the service's (``daq serve
     --setup``), else None (the service's settings). 422 naming the field, 409 when
     ``version`` is given and the setup was saved since."""
+    from daq.store.setups import check_setup_name
     from daq.workflows.station_setups import setup_for_capture
 
-    name = name or service.config.setup
+    if name is not None:
+        # Over HTTP only the store's named setups: a path would read a server file, and
+        # its answer would tell whether that file exists.
+        try:
+            check_setup_name(name)
+        except StoreError:
+            raise HTTPException(422, "setup: give the name of a stored setup (GET /api/setups)") from None
+    name = name or service.config.setup  # the service's own: given on its command line
     if name is None:
         if version is not None:
             raise HTTPException(422, "setup_version: needs a setup")
@@ -649,11 +675,38 @@ def _capture_setup(service: Service, name: str | None, version: int | None) -> A
     try:
         return _station_call(service, setup_for_capture, service.store.path, name, version)
     except HTTPException as exc:
+        detail = _setup_file_named(str(exc.detail), name)
         if exc.status_code == 404:  # a field of the request, not an address
-            raise HTTPException(422, str(exc.detail)) from None
-        if exc.status_code == 422 and not str(exc.detail).startswith("setup"):
-            raise HTTPException(422, f"setup {name}: {exc.detail}") from None
-        raise
+            raise HTTPException(422, detail) from None
+        if exc.status_code == 422 and not detail.startswith("setup"):
+            raise HTTPException(422, f"setup {_setup_file_named(name, name)}: {detail}") from None
+        raise HTTPException(exc.status_code, detail) from None
+
+
+def _setup_file_named(text: str, name: str) -> str:
+    """``text`` with the service's setup file (``daq serve --setup FILE``, an absolute
+    path) named by its file name only: no answer names the server's folders."""
+    from daq.workflows.setups import is_setup_path
+
+    return text.replace(name, Path(name).name) if is_setup_path(name) else text
+
+
+def _next_setup(service: Service) -> dict[str, Any] | None:
+    """The setup a capture that names none uses (``daq serve --setup``): ``{"name",
+    "version"}`` (a file's name only, version 0; version None if it cannot be read
+    now); None: the service's own settings, no setup."""
+    from daq.store.setups import SetupStore
+    from daq.workflows.setups import is_setup_path
+
+    name = service.config.setup
+    if name is None:
+        return None
+    if is_setup_path(name):
+        return {"name": Path(name).name, "version": 0}
+    try:
+        return {"name": name, "version": SetupStore(service.store.path).get(name).version}
+    except StoreError:
+        return {"name": name, "version": None}
 
 
 def _test_point(service: Service, test: str | None, point: str | None) -> Any:
