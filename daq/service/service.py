@@ -34,7 +34,8 @@ class ServiceConfig:
     undo_window_s : seconds a decision is held before it goes to the analyzer, so that
         the page can undo it (default 3 s, else ``$DAQ_UNDO_WINDOW_S``; 0: none).
     setup : the named setup (or a setup file) captures use when a request names none;
-        None: the built-in "default"."""
+        None: the service's own settings, no setup recorded (the snapshot's
+        ``next_setup`` is then null). Requests may name stored setups only, never a file."""
 
     store_dir: Path
     resource: str | None
