@@ -58,6 +58,31 @@ def browser_page(tmp_path: Path):
         browser.close()
 
 
+#: Table cells (and caution lines) whose right edge lies past the visible right edge of
+#: their card or of a box that scrolls them sideways: what a reader does not see.
+CUT_CELLS = """(cards) => {
+  const cut = [];
+  for (const card of document.querySelectorAll(cards)) {
+    for (const cell of card.querySelectorAll('td, th, .caution')) {
+      const box = cell.getBoundingClientRect();
+      if (!box.width) continue;
+      let right = card.getBoundingClientRect().right;
+      for (let p = cell.parentElement; p && p !== card.parentElement; p = p.parentElement) {
+        const style = getComputedStyle(p);
+        if (style.overflowX !== 'visible') right = Math.min(right, p.getBoundingClientRect().right);
+      }
+      if (box.right > right + 0.5) cut.push(cell.textContent.trim().slice(0, 40));
+    }
+  }
+  return cut;
+}"""
+
+
+def cut_cells(page, cards: str) -> list[str]:
+    """What of the tables in ``cards`` lies beyond the visible right edge (nothing, at 1024 px)."""
+    return page.evaluate(CUT_CELLS, cards)
+
+
 def verdict(page, index: int) -> str:
     return page.locator(f'#hits-table tr[data-index="{index}"] .verdict').inner_text().strip()
 
@@ -128,6 +153,14 @@ def test_a_technician_captures_accepts_and_rejects_by_clicking(tmp_path, browser
         shown = page.locator("#fit-cautions .caution").all_inner_texts()
         assert shown == [f"caution: {c}" for c in fit["cautions"]]
 
+        # On a 1024 px screen no column of the results is cut at the card's edge (the
+        # Damping columns were): the tables go one under the other.
+        page.set_viewport_size({"width": 1024, "height": 700})
+        page.wait_for_function("() => document.querySelector('#run-card').getBoundingClientRect().width < 1000")
+        assert cut_cells(page, "#run-card") == []
+        assert page.locator("#modes-table th", has_text="Damping").is_visible()
+        page.set_viewport_size({"width": 1300, "height": 1000})
+
         # The runs page lists it with its results and report.
         page.goto(f"{served.url}/runs")
         row = page.locator(f'#runs-table tr[data-run-id="{run_id}"]')
@@ -160,6 +193,12 @@ def test_the_runs_page_shows_the_cautions_of_a_run_of_pure_noise(tmp_path, brows
         facts = notes.locator(".run-facts").inner_text()
         assert facts.startswith("band 1–800 Hz: ")
         assert "synthesis error 99" in facts
+
+        # On a 1024 px screen every column and caution line is in view, none cut at the
+        # card's edge (the Damping column and the cautions were).
+        page.set_viewport_size({"width": 1024, "height": 700})
+        page.wait_for_function("() => document.querySelector('#runs-table').getBoundingClientRect().width < 1000")
+        assert cut_cells(page, ".card") == []
 
         # The texts are text: a foreign run's caution cannot put markup on the page.
         (row,) = [r for r in served.get("/api/runs").json() if r["run_id"] == run_id]

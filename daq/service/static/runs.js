@@ -48,6 +48,13 @@
     );
   }
 
+  /* "20261124T185237.813Z-55e2164e" may break after its date and its time stamp, so that
+   * the table fits a 1024 px screen. */
+  function idParts(id) {
+    const parts = String(id).match(/^(\d{8}T)(.*?-)(.+)$/);
+    return parts ? [parts[1], el("wbr"), parts[2], el("wbr"), parts[3]] : [String(id)];
+  }
+
   function newestFirst(a, b) {
     const ta = Date.parse(a.start_time);
     const tb = Date.parse(b.start_time);
@@ -67,7 +74,7 @@
           class: "run-id",
           title: [r.operator ? "operator: " + r.operator : "", r.note ? "note: " + r.note : ""].filter(Boolean).join("\n") || null,
         },
-        id
+        ...idParts(id)
       ),
       el("td", { class: "time" }, fmt.time(r.start_time)),
       el("td", null, r.kind || "–"),
