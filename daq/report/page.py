@@ -260,6 +260,12 @@ def acquisition_section(run: Any) -> Section:
         rows.append(["setup", name + (f", version {version}" if version is not None else "")])
     elif inst is not None:
         rows.append(["setup", "no named setup recorded (options or a setup file)"])
+    ranged = (run.provenance or {}).get("auto_range")
+    if ranged is not None:
+        from daq.workflows.run_views import auto_range_text
+
+        text = auto_range_text(ranged, settings.get("trigger_source"))
+        rows.append(["auto-range", text.replace("^2", "²") if text else _compact(ranged)])
     span, lines = settings.get("span_hz"), settings.get("lines")
     if span is not None:
         rows.append(["span", _g(span, "Hz")])
@@ -342,6 +348,12 @@ def acquisition_section(run: Any) -> Section:
     return section
 
 
+#: Provenance keys the report shows in their own rows, not again as raw provenance.
+_SHOWN_ELSEWHERE = {
+    "hits_wanted", "simulator", "replayed_from", "imported_from", "setup", "cautions", "auto_range",
+}  # fmt: skip
+
+
 def _origin(run: Any) -> list[Any]:
     """What the simulator, a replay or an importer recorded about where the data came from."""
     prov = run.provenance or {}
@@ -362,7 +374,7 @@ def _origin(run: Any) -> list[Any]:
         for key, value in imported.items():
             rows.append([f"imported {key.replace('_', ' ')}", _compact(value)])
     for key, value in sorted(prov.items()):
-        if key not in {"hits_wanted", "simulator", "replayed_from", "imported_from", "setup", "cautions"}:
+        if key not in _SHOWN_ELSEWHERE:
             rows.append([key.replace("_", " "), _compact(value)])
     if not rows:
         return []

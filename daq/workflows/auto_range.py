@@ -42,7 +42,8 @@ class AutoRange:
     peaks_force_n, peaks_response_m_s2 : each practice hit's peak |force| (N) and
     |response| (m/s^2), in order. hammer_range_v, accelerometer_range_v : the ranges
     chosen, V peak. trigger_level_eu : the trigger level chosen, N (CH1) or m/s^2 (CH2).
-    settings : the setup's settings with those ranges and that level.
+    settings : the setup's settings with those ranges and that level. setup_settings :
+    the setup's own settings, None when not known.
     """
 
     peaks_force_n: list[float]
@@ -51,6 +52,28 @@ class AutoRange:
     accelerometer_range_v: float
     trigger_level_eu: float
     settings: ImpactSettings
+    setup_settings: ImpactSettings | None = None
+
+    def record(self) -> dict[str, object]:
+        """What a run captured with these ranges stores as ``provenance["auto_range"]``:
+        practice_hits, peaks_force_n, hammer_range_v, accelerometer_range_v,
+        trigger_level_eu, and ``setup`` the setup's own values of the last three (a
+        range None: "auto"), so that the run says what it changed."""
+        record: dict[str, object] = {
+            "practice_hits": len(self.peaks_force_n),
+            "peaks_force_n": list(self.peaks_force_n),
+            "hammer_range_v": self.hammer_range_v,
+            "accelerometer_range_v": self.accelerometer_range_v,
+            "trigger_level_eu": self.trigger_level_eu,
+        }
+        if self.setup_settings is not None:
+            own = self.setup_settings
+            record["setup"] = {
+                "hammer_range_v": own.hammer.range_v,
+                "accelerometer_range_v": own.accelerometer.range_v,
+                "trigger_level_eu": own.trigger_level_eu,
+            }
+        return record
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -97,7 +120,13 @@ def choose(
         trigger_level_eu=float(f"{level:.3g}"),
     )
     return AutoRange(
-        list(peaks_force_n), list(peaks_response_m_s2), hammer_v, accel_v, chosen.trigger_level_eu, chosen
+        list(peaks_force_n),
+        list(peaks_response_m_s2),
+        hammer_v,
+        accel_v,
+        chosen.trigger_level_eu,
+        chosen,
+        settings,
     )
 
 

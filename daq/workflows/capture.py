@@ -175,6 +175,9 @@ class Capture:
     setup_name, setup_version : the named setup (or setup file) the settings came from;
         stored as provenance["setup"] = {"name", "version"} when a name is given.
     cautions : sentences the run carries (a calibration past due), provenance["cautions"].
+    auto_range : when practice hits chose the ranges and trigger level
+        (daq/workflows/auto_range.py, AutoRange.record), what they chose and the setup's
+        own values; stored as provenance["auto_range"].
     """
 
     driver: SignalAnalyzer
@@ -197,6 +200,7 @@ class Capture:
     setup_name: str = ""
     setup_version: int | None = None
     cautions: list[str] = field(default_factory=list)
+    auto_range: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if not 1 <= self.hits_wanted <= 9999:
@@ -434,6 +438,8 @@ class Capture:
             provenance["setup"] = {"name": self.setup_name, "version": self.setup_version}
         if self.cautions:
             provenance["cautions"] = list(self.cautions)
+        if self.auto_range is not None:
+            provenance["auto_range"] = dict(self.auto_range)
         return provenance
 
     def _kind(self) -> str:

@@ -47,6 +47,39 @@ def accepted_against_checks(run) -> list[int]:
     return [i for i in range(int(hits.n_hits)) if hits.accepted[i] and failed_check_names(hits.checks[i])]
 
 
+def _number(value: Any, unit: str) -> str:
+    if value is None:
+        return "auto"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return "?"
+    return f"{value:.4g} {unit}"
+
+
+def auto_range_text(record: Any, trigger_source: Any = "CH1") -> str | None:
+    """One line of what practice hits chose for a run (its ``provenance["auto_range"]``,
+    daq/workflows/auto_range.py AutoRange.record), for `daq runs show` and the report:
+    "2 practice hits: hammer range 0.01995 V, accelerometer range 0.7943 V, trigger 0.473 N;
+    the setup's own values were hammer range 0.02 V, ...". None when the run records none
+    (not a dict: a foreign file's)."""
+    if not isinstance(record, dict):
+        return None
+    unit = "m/s^2" if trigger_source == "CH2" else "N"
+
+    def values(d: dict[str, Any]) -> str:
+        return (
+            f"hammer range {_number(d.get('hammer_range_v'), 'V')}, accelerometer range "
+            f"{_number(d.get('accelerometer_range_v'), 'V')}, "
+            f"trigger {_number(d.get('trigger_level_eu'), unit)}"
+        )
+
+    hits = record.get("practice_hits")
+    text = f"{hits} practice hit{'' if hits == 1 else 's'}: {values(record)}"
+    own = record.get("setup")
+    if isinstance(own, dict):
+        text += f"; the setup's own values were {values(own)}"
+    return text
+
+
 def run_dict(run, path: Path) -> dict[str, Any]:
     """The JSON of a whole ``run`` (daq.store.Run) read from ``path``: its metadata, every
     hit's verdict, and the shape of its FRFs and spectra (not the arrays). Each hit has

@@ -106,6 +106,18 @@ def test_capture_with_a_named_setup_and_auto_range_on_the_simulator(store, tmp_p
     assert run.instrument.settings["hammer"]["transducer"]["id"] == "h-12"
     assert not run.hits.overload.any()
     assert run.hits.accepted.sum() == 2
+    ranged = run.provenance["auto_range"]
+    assert ranged["practice_hits"] == 2
+    assert len(ranged["peaks_force_n"]) == 2
+    held = run.instrument.settings  # as the analyzer holds them: rounded
+    assert ranged["hammer_range_v"] == pytest.approx(held["hammer"]["range_v"], rel=1e-6)
+    assert ranged["accelerometer_range_v"] == pytest.approx(held["accelerometer"]["range_v"], rel=1e-6)
+    assert ranged["trigger_level_eu"] == pytest.approx(held["trigger_level_eu"], rel=1e-3)
+    assert ranged["setup"] == {"hammer_range_v": 0.02, "accelerometer_range_v": 1.0, "trigger_level_eu": 1.0}
+    shown = invoke_daq("runs", "show", summary.run_id, "--store", str(store))
+    line = next(line for line in shown.stdout.splitlines() if line.startswith("auto-range"))
+    assert line.startswith("auto-range    2 practice hits: hammer range ")
+    assert "; the setup's own values were hammer range 0.02 V, accelerometer range 1 V, trigger 1 N" in line
 
 
 def test_an_impossible_setup_is_refused_before_any_hit(store, tmp_path):

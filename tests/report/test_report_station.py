@@ -29,6 +29,11 @@ ACCEL = {
     "sensitivity_unit": "mV/g", "sensitivity_v_per_eu": 0.0010197, "calibration_date": "2026-06-01",
     "due_date": "2027-06-01", "overdue": False,
 }  # fmt: skip
+AUTO_RANGE = {
+    "practice_hits": 2, "peaks_force_n": [5.62, 4.73], "hammer_range_v": 0.0199526,
+    "accelerometer_range_v": 0.794328, "trigger_level_eu": 0.473,
+    "setup": {"hammer_range_v": 0.02, "accelerometer_range_v": None, "trigger_level_eu": 1.0},
+}  # fmt: skip
 CAUTION = "caution: hammer transducer h-12 calibration was due 2026-01-01"
 N_HITS = 8
 MARKED = 7  # 0-based: hit 8, accepted although its double-impact check failed
@@ -65,7 +70,12 @@ def station(tmp_path_factory):
         run,
         run_id=new_run_id(),
         instrument=replace(run.instrument, settings=settings),
-        provenance={**run.provenance, "setup": {"name": "beam-A", "version": 3}, "cautions": [CAUTION]},
+        provenance={
+            **run.provenance,
+            "setup": {"name": "beam-A", "version": 3},
+            "cautions": [CAUTION],
+            "auto_range": AUTO_RANGE,
+        },
         hits=replace(run.hits, checks=checks),
     )
     store = root / "store"
@@ -180,3 +190,14 @@ def test_the_pdf_holds_the_same(station):
     # Every quality figure is a page of its own: text pages plus one page per figure.
     pages = len(re.findall(rb"/Type\s*/Page(?!s)", station.files.pdf))
     assert pages >= 2 + len(station.files.pngs)
+
+
+def test_the_acquisition_says_what_the_practice_hits_chose(station):
+    rows = {row[0]: row[1:] for row in _rows(station.page) if row}
+    assert rows["auto-range"] == [
+        "2 practice hits: hammer range 0.01995 V, accelerometer range 0.7943 V, trigger 0.473 N; "
+        "the setup's own values were hammer range 0.02 V, accelerometer range auto, trigger 1 N"
+    ]
+    first_cells = [r[0] for r in _rows(station.page) if r]
+    assert "auto range" not in first_cells  # not again as raw provenance
+    assert "auto-range" in station.pdf_text

@@ -81,3 +81,15 @@ def test_a_setup_the_analyzer_cannot_measure_is_refused_before_any_practice_hit(
         dsa = stack.enter_context(open_analyzer(resource))
         with pytest.raises(WorkflowError, match=message):
             practice_hits(_NoHits(dsa), settings, 2, timeout_s=60.0)
+
+
+def test_the_record_a_run_keeps_says_what_was_chosen_and_what_the_setup_had():
+    found = choose(ImpactSettings(), [5.0, 4.0], [100.0, 90.0], "35660A")
+    record = found.record()
+    assert set(record) == {
+        "practice_hits", "peaks_force_n", "hammer_range_v", "accelerometer_range_v", "trigger_level_eu",
+        "setup",
+    }  # fmt: skip
+    assert record["practice_hits"] == 2
+    assert record["trigger_level_eu"] == pytest.approx(0.4)
+    assert record["setup"] == {"hammer_range_v": 0.02, "accelerometer_range_v": 1.0, "trigger_level_eu": 1.0}

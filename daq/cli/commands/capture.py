@@ -309,7 +309,7 @@ def run_capture(
             dsa = stack.enter_context(open_analyzer(resource, dialect=dialect))
         except ValueError as exc:
             raise UserError(f"--resource {resource}: {exc}") from None
-        settings = check_for_analyzer(console, dsa, settings, auto_range)
+        settings, ranged = check_for_analyzer(console, dsa, settings, auto_range)
         job = Capture(
             dsa, settings, hits_wanted, resource=resource, transport=type(dsa.transport).__name__,
             simulator=simulator, operator=operator, note=note, store_dir=store_dir,
@@ -317,6 +317,7 @@ def run_capture(
             setup_name=resolved.name if resolved is not None else "",
             setup_version=resolved.version if resolved is not None else None,
             cautions=resolved.cautions if resolved is not None else [],
+            auto_range=ranged.record() if ranged is not None else None,
         )  # fmt: skip
         try:
             run = drive(console, job, store_dir, ask=not yes)
@@ -329,11 +330,12 @@ def run_capture(
         join_test(store_dir, where, run.run_id)
 
 
-def check_for_analyzer(console, dsa, settings: ImpactSettings, auto_range: int | None) -> ImpactSettings:
-    """``settings`` checked against the analyzer that answered (lines, span, ranges, the
-    trigger level; one error line naming the field, before any hit); with ``auto_range``
-    the practice hits first, their peaks and the ranges and trigger chosen printed, and
-    the settings with those."""
+def check_for_analyzer(console, dsa, settings: ImpactSettings, auto_range: int | None):
+    """(settings, AutoRange or None): ``settings`` checked against the analyzer that
+    answered (lines, span, ranges, the trigger level; one error line naming the field,
+    before any hit); with ``auto_range`` the practice hits next, their peaks and the
+    ranges and trigger chosen printed, and the settings with those (the AutoRange says
+    what they were, for the run's provenance)."""
     from daq.workflows.auto_range import practice_hits
     from daq.workflows.setups import validate_for_model
     from drivers.dialects import model_of
@@ -341,7 +343,7 @@ def check_for_analyzer(console, dsa, settings: ImpactSettings, auto_range: int |
     model = model_of(dsa.dialect, dsa.identify())
     validate_for_model(settings, model)  # the setup as given, before any hit (practice too)
     if auto_range is None:
-        return settings
+        return settings, None
 
     def shown(index: int, force_n: float, response_m_s2: float) -> None:
         console.print(
@@ -357,4 +359,4 @@ def check_for_analyzer(console, dsa, settings: ImpactSettings, auto_range: int |
         f"{'m/s^2' if found.settings.trigger_source == 'CH2' else 'N'}"
     )
     validate_for_model(found.settings, model)
-    return found.settings
+    return found.settings, found

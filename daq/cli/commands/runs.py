@@ -212,6 +212,11 @@ def _print_run(d: dict[str, Any], store: str) -> None:
     if isinstance(setup, dict) and setup.get("name"):
         version = f" version {setup['version']}" if setup.get("version") is not None else ""
         field("setup", f"{_one_line(setup['name'])}{version}")
+    if "auto_range" in prov:
+        from daq.workflows.run_views import auto_range_text
+
+        source = ((d["instrument"] or {}).get("settings") or {}).get("trigger_source")
+        field("auto-range", auto_range_text(prov["auto_range"], source) or _one_line(prov["auto_range"]))
     cautions = prov.get("cautions")
     for text in cautions if isinstance(cautions, list) else []:
         field("caution", _one_line(text).removeprefix("caution: "))
