@@ -178,8 +178,33 @@ def test_a_setup_made_on_the_page_is_the_one_the_run_records(tmp_path, station_p
         caution = page.locator("#setup-cautions .caution")
         assert "accel-3" in caution.first.inner_text()
         assert "due 2024-05-02" in caution.first.inner_text()
+        # Saved meanwhile elsewhere (another tab, a colleague): Load shows the newer version
+        # in the header and in the list alike; coming back to the page refreshes the list.
+        with served.client() as c:
+            saved = c.get("/api/setups/bench-b").json()["setup"]
+            assert c.put("/api/setups/bench-b", json={"setup": saved, "version": 1}).status_code == 200
+            page.click("#setup-load")
+            page.wait_for_function("() => document.querySelector('#setup-version').textContent.includes('version 2')")
+            page.wait_for_function(
+                "() => document.querySelector('#setup-list').selectedOptions[0].textContent === 'bench-b (v2)'"
+            )
+            assert c.put("/api/setups/bench-b", json={"setup": saved, "version": 2}).status_code == 200
+        page.evaluate("() => window.dispatchEvent(new Event('focus'))")
+        page.wait_for_function(
+            "() => document.querySelector('#setup-list').selectedOptions[0].textContent === 'bench-b (v3)'"
+        )
+        assert "Load shows it" in page.locator("#setup-status").inner_text()
+        page.click("#setup-load")
+        page.wait_for_function("() => document.querySelector('#setup-version').textContent.includes('version 3')")
+
+        # What the next capture uses, said as such (not the last capture's setup).
+        next_line = page.locator("#capture-setup-note [data-setup-line='next']")
+        service_own = served.get("/api/capture").json().get("next_setup")
+        if service_own:
+            assert next_line.inner_text() == f"Next capture: setup {service_own['name']} v{service_own['version']}"
         page.click("#setup-use")
         assert page.locator("#capture-setup").input_value() == "bench-b"
+        assert next_line.inner_text() == "Next capture: setup bench-b v3"
         screenshot(page, "station-setup.png", element="#setup-editor")
         page.click("#setup-close")
         page.wait_for_selector("#station-cautions .caution")
@@ -189,9 +214,18 @@ def test_a_setup_made_on_the_page_is_the_one_the_run_records(tmp_path, station_p
         wait_pending(page, 1)
         page.click("#accept")
         run_id = wait_for(lambda: served.get("/api/capture").json()["last_run_id"], 60, "the run")
+        # idle again: the last capture's setup and transducers, and the next capture's setup,
+        # each said for what it is
+        page.wait_for_function("() => document.querySelector('#capture-state').textContent.trim() === 'idle'")
+        page.wait_for_selector("#capture-setup-note [data-setup-line='last']")
+        assert page.locator("#capture-setup-note [data-setup-line='last']").inner_text() == (
+            "Last capture: setup bench-b v3 · hammer hammer-7 · accelerometer accel-3"
+        )
+        assert next_line.inner_text() == "Next capture: setup bench-b v3"
+        assert "This capture" not in page.locator("#capture-setup-note").inner_text()
 
     run = Store(served.store).open(run_id)
-    assert run.provenance["setup"] == {"name": "bench-b", "version": 1}
+    assert run.provenance["setup"] == {"name": "bench-b", "version": 3}
     assert any("accel-3" in c for c in run.provenance["cautions"])
     settings = run.instrument.settings
     assert settings["span_hz"] == pytest.approx(400)

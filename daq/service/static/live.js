@@ -26,7 +26,8 @@
     last_error: null,
     ended_run_id: null, // the capture the outcome is about, when we know it
     undo_window_s: null, // how long the service holds a decision before the analyzer gets it
-    setup: null, // {name, version} of the capture's setup
+    setup: null, // {name, version} of the capture's setup (the last one's when idle)
+    next_setup: undefined, // {name, version} | null of the service's own setup; undefined: not said
     transducers: null,
     cautions: [],
   };
@@ -355,21 +356,53 @@
     box.textContent = parts.length ? "Analyzer settings: " + parts.join(" · ") : "";
   }
 
-  /* The capture's setup and transducers, and its cautions (an overdue calibration) in view. */
+  function setupText(setup) {
+    if (!setup || !setup.name) return null;
+    const v = setup.version;
+    return "setup " + setup.name + (v !== undefined && v !== null ? " v" + v : "");
+  }
+
+  /* The setup the next Start uses: the one chosen in the capture form (its version from the
+   * setup list), else the service's own (the snapshot's next_setup, where the service says),
+   * else just "the service's setup". */
+  function nextSetupText() {
+    const chosen = DAQ.station && DAQ.station.chosenSetup ? DAQ.station.chosenSetup() : null;
+    if (chosen && chosen.name) return setupText(chosen);
+    if (cap.next_setup !== undefined) {
+      return setupText(cap.next_setup) || "the service's own settings (no named setup)";
+    }
+    return "the service's setup";
+  }
+
+  /* The capture's setup and transducers, and its cautions (an overdue calibration) in view:
+   * "This capture: ..." while one runs; when idle, "Next capture: ..." (what Start uses)
+   * and "Last capture: ..." (what the last one used), each on its own line. */
   function renderSetupLine() {
     const box = $("capture-setup-note");
     const parts = [];
-    if (cap.setup && cap.setup.name) {
-      parts.push("setup " + cap.setup.name + (cap.setup.version !== undefined ? " v" + cap.setup.version : ""));
-    }
+    const used = setupText(cap.setup);
+    if (used) parts.push(used);
     const tr = cap.transducers || {};
     for (const ch of ["hammer", "accelerometer"]) {
       const t = tr[ch];
       if (t && typeof t === "object") parts.push(ch + " " + (t.id || t.model || "?"));
     }
-    box.textContent = cap.run_id && parts.length ? "This capture: " + parts.join(" · ") : "";
+    const running = cap.state === "running" || cap.state === "stopping";
+    const lines = [];
+    if (running) {
+      if (cap.run_id && parts.length) lines.push(["this", "This capture: " + parts.join(" · ")]);
+    } else {
+      if (cap.state !== null) lines.push(["next", "Next capture: " + nextSetupText()]);
+      if (cap.run_id && parts.length) lines.push(["last", "Last capture: " + parts.join(" · ")]);
+    }
+    box.replaceChildren(
+      ...lines.map(([kind, text]) => el("span", { class: "setup-line", dataset: { setupLine: kind } }, text))
+    );
     $("station-cautions").replaceChildren(...DAQ.cautionLines(cap.cautions));
   }
+
+  // the station part (station.js) says when the setup chosen for the next capture changed
+  document.addEventListener("daq:setup-choice", renderSetupLine);
 
   function renderInstrument() {
     const box = $("instrument-status");
@@ -1135,6 +1168,8 @@
     cap.ended_run_id = cap.state === "idle" && cap.last_outcome ? cap.run_id : null;
     cap.undo_window_s = typeof s.undo_window_s === "number" ? s.undo_window_s : cap.undo_window_s;
     cap.setup = s.setup && typeof s.setup === "object" ? s.setup : null;
+    // the setup a capture that names none uses (a service that does not say: undefined)
+    if ("next_setup" in s) cap.next_setup = s.next_setup && typeof s.next_setup === "object" ? s.next_setup : null;
     cap.transducers = s.transducers && typeof s.transducers === "object" ? s.transducers : null;
     cap.cautions = Array.isArray(s.cautions) ? s.cautions : [];
     snapshotUndo(s);
@@ -1268,6 +1303,9 @@
     cap.hits = new Map();
     cap.settings = null;
     cap.ended_run_id = null;
+    // the last capture's setup is not this one's (the snapshot says this one's)
+    cap.setup = ev.setup && typeof ev.setup === "object" ? ev.setup : null;
+    cap.transducers = ev.transducers && typeof ev.transducers === "object" ? ev.transducers : null;
     tracesReq++;
     frfReq++;
     clearTraces();
@@ -1279,6 +1317,7 @@
     if (!isCurrent(ev)) return;
     cap.settings = ev.settings || null;
     renderSettings();
+    if (!cap.setup && !cap.transducers) rebuild(false); // a capture started elsewhere: its setup
     if (ev.identification) {
       instrument = Object.assign({}, instrument, { identification: ev.identification, connected: true });
       instrumentReq++;
@@ -1393,6 +1432,7 @@
     renderState();
     renderPending();
     renderLastRun();
+    renderSetupLine(); // "This capture" becomes "Last capture", and the next one's is said
   });
 
   function resultsEvent(fn) {

@@ -166,6 +166,25 @@
       ...names.map((n) => el("option", { value: n }, n))
     );
     if (keepCap && names.includes(keepCap)) cap.value = keepCap;
+    const newer = st.loaded && r.setups.find((x) => x.name === st.loaded.name);
+    if (newer && Number.isFinite(newer.version) && Number.isFinite(st.loaded.version) && newer.version > st.loaded.version) {
+      $("setup-status").textContent =
+        "Version " + newer.version + " of " + newer.name + " was saved meanwhile (the editor holds version " +
+        st.loaded.version + "): Load shows it.";
+    }
+    setupChoiceChanged();
+  }
+
+  /* live.js shows what the next capture uses ("Next capture: setup X vN"). */
+  function setupChoiceChanged() {
+    document.dispatchEvent(new Event("daq:setup-choice"));
+  }
+
+  function chosenSetup() {
+    const name = st.available ? $("capture-setup").value : "";
+    if (!name) return null;
+    const listed = st.setups.find((x) => x.name === name);
+    return { name, version: listed ? listed.version : undefined };
   }
 
   async function loadTransducers() {
@@ -296,10 +315,11 @@
     }
     st.loaded = r;
     $("setup-name").value = r.name;
-    $("setup-list").value = r.name;
+    $("setup-status").textContent = "";
     fillForm(r.setup || {}, r.settings || {});
     renderLoaded();
-    $("setup-status").textContent = "";
+    await loadSetupList(); // the list's versions, as the header's (someone may have saved meanwhile)
+    $("setup-list").value = r.name;
   }
 
   async function saveSetup() {
@@ -338,6 +358,7 @@
     if (!name) return;
     $("capture-setup").value = name;
     renderCaptureSetupNote();
+    setupChoiceChanged();
     $("setup-status").textContent = "The next capture starts with setup " + name + ".";
   }
 
@@ -552,7 +573,17 @@
   $("practice-start").addEventListener("click", () => startPractice());
   $("practice-apply").addEventListener("click", () => applyPractice());
   $("capture-test").addEventListener("change", renderPoints);
-  $("capture-setup").addEventListener("change", renderCaptureSetupNote);
+  $("capture-setup").addEventListener("change", () => {
+    renderCaptureSetupNote();
+    setupChoiceChanged();
+  });
+  // back to the page (another tab or a colleague may have saved a setup): the list anew
+  window.addEventListener("focus", () => {
+    if (st.available) loadSetupList();
+  });
+  document.addEventListener("visibilitychange", () => {
+    if (document.visibilityState === "visible" && st.available) loadSetupList();
+  });
 
   // a run sealed: the test's points may have a new measured one
   for (const type of ["run_sealed", "capture_ended"]) {
@@ -577,6 +608,7 @@
       return out;
     },
     refresh,
+    chosenSetup,
     openEditor,
     loadSetup,
   };
