@@ -117,6 +117,12 @@ def wait_pending(page, number: int) -> None:
     )
 
 
+def decision_boxes(page) -> list[dict]:
+    """Where Accept, Reject and Undo are, and how large (rounded to the pixel)."""
+    boxes = [page.locator(b).bounding_box() for b in ("#accept", "#reject", "#undo")]
+    return [{k: round(v) for k, v in box.items()} for box in boxes]
+
+
 def wait_verdict(page, index: int, text: str, held: bool | None = None) -> None:
     page.wait_for_function(
         "([i, want, held]) => {"
@@ -349,6 +355,8 @@ def test_accept_reject_and_undo_from_the_keyboard_on_a_small_screen(tmp_path, st
             "() => document.querySelector('#error').textContent"
             '.includes("already in the analyzer\'s average")'
         )
+        # the message goes by itself after a few seconds (it stayed over the next hits)
+        page.wait_for_function("() => document.querySelector('#error').textContent === ''", timeout=10_000)
         page.keyboard.press("a")
         run_id = wait_for(lambda: served.get("/api/capture").json()["last_run_id"], 60, "the run")
         wait_verdict(page, 2, "accepted", held=False)
@@ -378,9 +386,18 @@ def test_the_large_display_from_the_address(tmp_path, station_page, monkeypatch)
         # the event stream is up: the hit comes as an event, with its beep
         page.wait_for_function("() => document.querySelector('#conn-status').textContent.trim() === 'live'")
         page.wait_for_function("() => document.querySelector('#capture-state').textContent.trim() === 'idle'")
+        # the whole width of the screen, and the buttons where they were before the hit
+        before = decision_boxes(page)
+        assert page.locator("#pending").bounding_box()["width"] >= SMALL_SCREEN["width"] - 60
         page.keyboard.press("s")
         wait_pending(page, 1)
         assert page.evaluate("() => document.body.dataset.lastSound") == "hit"
+        assert decision_boxes(page) == before
+        assert page.locator("#pending").bounding_box()["width"] >= SMALL_SCREEN["width"] - 60
+        # a message floats over the bottom: it moves nothing either
+        page.evaluate("() => window.DAQ.showError('a message of the moment')")
+        assert decision_boxes(page) == before
+        page.evaluate("() => window.DAQ.clearError()")
         page.keyboard.press("x")  # stop: the hit waiting is kept, rejected
         page.wait_for_function("() => document.querySelector('#capture-state').textContent.trim() === 'idle'")
     assert errors == []

@@ -547,6 +547,7 @@
       sug.textContent = waiting ? "" : "No hit is waiting for a decision.";
       sug.className = "suggested muted";
     }
+    sug.title = sug.textContent; // all of it where the large display cuts it to one line
 
     const reason = $("reject-reason");
     if (idx !== lastPendingShown) {
@@ -598,6 +599,22 @@
     renderUndo();
   }
 
+  /* A refused undo ("hit 1 is already in the analyzer's average") is news of the moment:
+   * it goes when the next hit arrives, or after a few seconds, not over the next hit. */
+  const REFUSAL_SHOWN_MS = 5000;
+  let refusal = { text: null, timer: null };
+
+  function clearRefusal() {
+    clearTimeout(refusal.timer);
+    if (refusal.text !== null && $("error").textContent === refusal.text) DAQ.clearError();
+    refusal = { text: null, timer: null };
+  }
+
+  function noteRefusal(text) {
+    clearTimeout(refusal.timer);
+    refusal = { text, timer: setTimeout(clearRefusal, REFUSAL_SHOWN_MS) };
+  }
+
   async function undoLast() {
     // With nothing held here the service is asked anyway: it says why not ("hit 2 is already in
     // the analyzer's average"), or takes back a decision made from another page.
@@ -627,6 +644,7 @@
         undo.supported = false;
         DAQ.showError("this service cannot undo a decision (it has no /api/capture/undo)");
       }
+      else if (e.status === 409) noteRefusal(e.message);
       undo.index = null;
       undo.until = 0;
     } finally {
@@ -1331,6 +1349,7 @@
     cap.hits.set(h.index, h);
     if (typeof ev.accepted_so_far === "number") cap.accepted = ev.accepted_so_far;
     if (!cap.auto) cap.pending = h.index;
+    clearRefusal();
     upsertHitRow(h);
     tracesReq++; // a fetch of older traces must not overwrite these
     if (Array.isArray(ev.force_n)) showTraces(cap.run_id, ev);
