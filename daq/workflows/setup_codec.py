@@ -12,7 +12,8 @@ the fields cannot say, all in the layout below:
 * ``preview``, a field the setup file does not take (the command line decides it).
 
 Two readings of a dict: a setup file's (``settings_from_dict(data, where)``, each
-error "<where>: ..." naming the bad key) and a stored run's (``stored=True``: the
+error "<where>: <key>: ..." naming the bad key first, "setup file x.toml: span_hz: must
+be a positive number, got -5.0") and a stored run's (``stored=True``: the
 dict ``settings_to_dict`` wrote, None where a field allows it, ``preview`` included;
 a channel's ``transducer`` record is skipped).
 """
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import copy
 import math
+import re
 import types
 import typing
 from dataclasses import dataclass, fields, is_dataclass
@@ -29,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from daq.workflows.errors import WorkflowError
-from drivers.settings import ChannelSetup, ImpactSettings
+from drivers.settings import ChannelSetup, ImpactSettings, Window
 
 __all__ = [
     "STORED",
@@ -51,6 +53,9 @@ TRANSDUCER_KEY = "transducer"
 #: The built-in transducer of each channel (daq/store/transducers.py), named in the
 #: setup file's comment.
 DEFAULT_TRANSDUCERS = {"hammer": "hammer-default", "accelerometer": "accel-default"}
+
+#: The windows a channel takes, as the setup file spells them.
+WINDOWS = tuple(str(w.value) for w in Window)
 
 #: The fields that hold a channel, and the header line of the setup file.
 CHANNELS = ("hammer", "accelerometer")
@@ -217,9 +222,9 @@ def _typed(where: str, key: str, raw: object, kinds: tuple[type, ...]) -> object
         raw = float(raw)
     if not isinstance(raw, kinds) or (isinstance(raw, bool) and bool not in kinds):
         names = " or ".join("a number" if k is float else k.__name__ for k in kinds)
-        raise WorkflowError(f"{where}: {key} must be {names}, got {raw!r}")
+        raise WorkflowError(f"{where}: {key}: must be {names}, got {raw!r}")
     if isinstance(raw, float) and not math.isfinite(raw):
-        raise WorkflowError(f"{where}: {key} must be finite")
+        raise WorkflowError(f"{where}: {key}: must be finite")
     return raw
 
 
@@ -235,7 +240,7 @@ def _value(
         if isinstance(v, str):
             if v != spelled:
                 names = " or ".join("a number" if k is float else k.__name__ for k in kinds)
-                raise WorkflowError(f'{where}: {key} must be {names} or "{spelled}", got {v!r}')
+                raise WorkflowError(f'{where}: {key}: must be {names} or "{spelled}", got {v!r}')
             v = None
         return v
     v = _typed(where, key, raw, kinds)
@@ -254,7 +259,7 @@ def settings_from_dict(data: dict[str, Any], where: str = STORED, *, stored: boo
     for key, raw in data.items():
         if key in CHANNELS:
             if not isinstance(raw, dict):
-                raise WorkflowError(f"{where}: [{key}] must be a table")
+                raise WorkflowError(f"{where}: {key}: must be a table")
             channel: dict[str, Any] = {}
             defaults = ImpactSettings.__dataclass_fields__[key].default_factory()  # type: ignore[misc]
             for ckey, craw in raw.items():
@@ -262,24 +267,40 @@ def settings_from_dict(data: dict[str, Any], where: str = STORED, *, stored: boo
                     continue  # a record of the transducer beside the settings, not a setting
                 if ckey not in channel_table:
                     known = ", ".join(channel_table)
-                    raise WorkflowError(f"{where}: unknown key {key}.{ckey}; known: {known}")
+                    raise WorkflowError(f"{where}: {key}.{ckey}: unknown key; known: {known}")
                 line = None if stored else _CHANNEL_LINES[ckey]
                 channel[ckey] = _value(where, f"{key}.{ckey}", craw, *channel_table[ckey], line)
+                if ckey == "window" and channel[ckey] not in WINDOWS:
+                    raise WorkflowError(
+                        f"{where}: {key}.window: {channel[ckey]!r} is not a window; "
+                        f"one of {', '.join(WINDOWS)}"
+                    )
             base = {name: getattr(defaults, name) for name in _CHANNEL_FIELDS}
             try:
                 kwargs[key] = ChannelSetup(**{**base, **channel})
             except ValueError as exc:
-                raise WorkflowError(f"{where}: [{key}] {exc}") from None
+                raise WorkflowError(f"{where}: {_field_first(str(exc), key)}") from None
         elif key in top:
             line = None if stored else _TOP_LINES[key]
             kwargs[key] = _value(where, key, raw, *top[key], line)
         else:
             known = ", ".join([*top, *(f"[{name}]" for name in CHANNELS)])
-            raise WorkflowError(f"{where}: unknown key {key}; known: {known}")
+            raise WorkflowError(f"{where}: {key}: unknown key; known: {known}")
     try:
         return ImpactSettings(**kwargs)
     except ValueError as exc:
-        raise WorkflowError(f"{where}: {exc}") from None
+        raise WorkflowError(f"{where}: {_field_first(str(exc))}") from None
+
+
+def _field_first(text: str, table: str = "") -> str:
+    """A settings class's ValueError ("span_hz must be a positive number, got -5.0"), the
+    field first as every error here names it: "span_hz: must be ...", in a channel's
+    ``table`` "hammer.range_v: must be ..."."""
+    prefix = f"{table}." if table else ""
+    match = re.match(r"^(\w+) (must .*)$", text)
+    if match is None:
+        return f"{table}: {text}" if table else text
+    return f"{prefix}{match.group(1)}: {match.group(2)}"
 
 
 def settings_from_stored(data: dict[str, Any]) -> ImpactSettings:

@@ -18,7 +18,6 @@ the command line do for every caution).
 from __future__ import annotations
 
 import math
-import re
 import tomllib
 from dataclasses import dataclass, field, replace
 from datetime import date
@@ -101,8 +100,7 @@ def resolve_setup(
         except tomllib.TOMLDecodeError as exc:
             raise WorkflowError(f"{where}: not valid TOML ({exc})") from None
         name, version, data = str(path), 0, strip_saved(doc)
-        # A file's errors keep the codec's wording, as `daq capture --setup FILE` always gave them.
-        settings = check_setup_data(data, where)
+        settings = check_setup_data(data, where)  # "setup file x.toml: span_hz: must be ..."
     else:
         try:
             stored = SetupStore(store_dir).get(str(name_or_path))
@@ -175,25 +173,23 @@ def calibration_cautions(transducers: dict[str, Transducer], today: date | None 
     ]
 
 
-#: Errors of the codec, reworded so that the field comes first.
-_REWORDS = (
-    (re.compile(r"^unknown key ([\w.]+); (.*)$"), r"\1: unknown key; \2"),
-    (re.compile(r"^\[(\w+)\] (\w+) (must .*)$"), r"\1.\2: \3"),
-    (re.compile(r"^\[(\w+)\] (must .*)$"), r"\1: \2"),
-    (re.compile(r"^([\w.]+) (must .*)$"), r"\1: \2"),
-)
 _WHERE = "\x00setup"
 
 
 def check_setup_data(data: dict[str, Any], where: str | None = None) -> ImpactSettings:
     """The settings of setup ``data`` (a setup file's dict; channels may name a
     ``transducer``, a ``[saved]`` table is ignored); WorkflowError naming the field
-    first, e.g. "span_hz: must be a positive number, got -5.0". Transducer sensitivities
-    are not applied here (resolve_setup does, knowing the store). With ``where`` the
-    errors are the codec's, "<where>: span_hz must be ..." (a setup file's)."""
+    first, e.g. "span_hz: must be a positive number, got -5.0", after "<where>: " when
+    ``where`` is given (a setup file's: the same words). Transducer sensitivities are
+    not applied here (resolve_setup does, knowing the store)."""
     if not isinstance(data, dict):
-        raise WorkflowError("setup: must be a table of settings")
-    named_transducer_ids(data)
+        raise WorkflowError(
+            f"{where}: must be a table of settings" if where else "setup: must be a table of settings"
+        )
+    try:
+        named_transducer_ids(data)
+    except WorkflowError as exc:
+        raise WorkflowError(f"{where}: {exc}" if where else str(exc)) from None
     plain = {
         k: (
             {ck: cv for ck, cv in v.items() if ck != "transducer"}
@@ -208,12 +204,7 @@ def check_setup_data(data: dict[str, Any], where: str | None = None) -> ImpactSe
         return settings_from_dict(plain, _WHERE)
     except WorkflowError as exc:
         text = str(exc)
-        text = text[len(_WHERE) + 2 :] if text.startswith(_WHERE + ": ") else text
-        for pattern, repl in _REWORDS:
-            if pattern.match(text):
-                text = pattern.sub(repl, text)
-                break
-        raise WorkflowError(text) from None
+        raise WorkflowError(text[len(_WHERE) + 2 :] if text.startswith(_WHERE + ": ") else text) from None
 
 
 def model_name(model: str) -> str:

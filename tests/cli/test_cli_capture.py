@@ -103,11 +103,11 @@ def test_print_setup_round_trips_through_setup(tmp_path, env):
 @pytest.mark.parametrize(
     ("text", "fragment"),
     [
-        ("span = 200\n", "unknown key span"),
-        ('span_hz = "wide"\n', "span_hz must be a number"),
-        ("span_hz = -5.0\n", "span_hz must be a positive number"),
-        ('[hammer]\nrange_v = "big"\n', 'hammer.range_v must be a number or "auto"'),
-        ('[hammer]\nwindow = "BOX"\n', "[hammer]"),
+        ("span = 200\n", "span: unknown key"),
+        ('span_hz = "wide"\n', "span_hz: must be a number"),
+        ("span_hz = -5.0\n", "span_hz: must be a positive number"),
+        ('[hammer]\nrange_v = "big"\n', 'hammer.range_v: must be a number or "auto"'),
+        ('[hammer]\nwindow = "BOX"\n', "hammer.window: 'BOX' is not a window; one of UNIF, HANN"),
         ("span_hz = \n", "not valid TOML"),
     ],
 )

@@ -148,7 +148,7 @@ def test_serve_refuses_a_setup_that_does_not_resolve_before_it_starts(store, tmp
     bad = tmp_path / "bad.toml"
     bad.write_text("span_hz = -1.0\n")
     result = invoke_daq("serve", "--sim", "--port", "0", "--setup", str(bad), "--store", str(store), env=env)
-    assert_one_line_error(result, "span_hz must be a positive number")
+    assert_one_line_error(result, "span_hz: must be a positive number")
 
 
 def test_serve_passes_the_setup_to_the_service(store, tmp_path, monkeypatch):
@@ -199,3 +199,19 @@ def test_auto_range_checks_the_setup_before_the_practice_hits(store, tmp_path, t
     assert_one_line_error(result, fragment)
     assert "Auto-range" not in result.stdout
     assert "practice hit" not in result.stdout
+
+
+def test_setup_save_and_capture_word_a_bad_file_alike(store, tmp_path):
+    for text, words in (
+        ("span_hz = -5.0\n", "span_hz: must be a positive number, got -5.0"),
+        (
+            '[hammer]\nwindow = "BOX"\n',
+            "hammer.window: 'BOX' is not a window; one of UNIF, HANN, FLAT, FORC, EXPO",
+        ),
+    ):
+        path = tmp_path / "bad.toml"
+        path.write_text(text)
+        saved = invoke_daq("setup", "save", "beam", "--from", str(path), "--store", str(store))
+        captured = invoke_daq("capture", "--sim", "--yes", "--setup", str(path), "--store", str(store))
+        for result in (saved, captured):
+            assert_one_line_error(result, f"{path}: {words}")

@@ -96,35 +96,36 @@ def test_toml_spells_none_and_comments_the_record_sized():
 
 @pytest.mark.parametrize("key", list(top_keys()))
 def test_an_ill_typed_top_key_is_refused_by_name(key):
-    with pytest.raises(WorkflowError, match=rf"^setup file x: {key} must be "):
+    with pytest.raises(WorkflowError, match=rf"^setup file x: {key}: must be "):
         settings_from_dict({key: [1]}, "setup file x")
 
 
 @pytest.mark.parametrize("channel", CHANNELS)
 @pytest.mark.parametrize("key", list(channel_keys()))
 def test_an_ill_typed_channel_key_is_refused_by_name(channel, key):
-    with pytest.raises(WorkflowError, match=rf"^setup file x: {channel}\.{key} must be "):
+    with pytest.raises(WorkflowError, match=rf"^setup file x: {channel}\.{key}: must be "):
         settings_from_dict({channel: {key: [1]}}, "setup file x")
 
 
 @pytest.mark.parametrize(
     ("data", "message"),
     [
-        ({"span": 1}, "w: unknown key span; known: span_hz, center_hz, averages, trigger_source, "
+        ({"span": 1}, "w: span: unknown key; known: span_hz, center_hz, averages, trigger_source, "
          "trigger_level_eu, trigger_slope, pre_trigger_s, lines, [hammer], [accelerometer]"),
-        ({"preview": False}, "w: unknown key preview; known: "),
-        ({"hammer": {"foo": 1}}, "w: unknown key hammer.foo; known: window, sensitivity_v_per_eu, "
+        ({"preview": False}, "w: preview: unknown key; known: "),
+        ({"hammer": {"foo": 1}}, "w: hammer.foo: unknown key; known: window, sensitivity_v_per_eu, "
          "range_v, force_width_s, exp_decay_s, ac_coupled"),
-        ({"accelerometer": 3}, "w: [accelerometer] must be a table"),
-        ({"span_hz": "wide"}, "w: span_hz must be a number, got 'wide'"),
-        ({"span_hz": float("inf")}, "w: span_hz must be finite"),
-        ({"span_hz": -5.0}, "w: span_hz must be a positive number, got -5.0"),
-        ({"averages": 5.0}, "w: averages must be int, got 5.0"),
-        ({"averages": True}, "w: averages must be int, got True"),
-        ({"hammer": {"range_v": "big"}}, 'w: hammer.range_v must be a number or "auto", got \'big\''),
-        ({"hammer": {"range_v": True}}, "w: hammer.range_v must be a number or str, got True"),
-        ({"hammer": {"window": "BOX"}}, "w: [hammer] 'BOX' is not a valid Window"),
-        ({"hammer": {"ac_coupled": 1}}, "w: hammer.ac_coupled must be bool, got 1"),
+        ({"accelerometer": 3}, "w: accelerometer: must be a table"),
+        ({"span_hz": "wide"}, "w: span_hz: must be a number, got 'wide'"),
+        ({"span_hz": float("inf")}, "w: span_hz: must be finite"),
+        ({"span_hz": -5.0}, "w: span_hz: must be a positive number, got -5.0"),
+        ({"averages": 5.0}, "w: averages: must be int, got 5.0"),
+        ({"averages": True}, "w: averages: must be int, got True"),
+        ({"hammer": {"range_v": "big"}}, 'w: hammer.range_v: must be a number or "auto", got \'big\''),
+        ({"hammer": {"range_v": True}}, "w: hammer.range_v: must be a number or str, got True"),
+        ({"hammer": {"window": "BOX"}},
+         "w: hammer.window: 'BOX' is not a window; one of UNIF, HANN, FLAT, FORC, EXPO"),
+        ({"hammer": {"ac_coupled": 1}}, "w: hammer.ac_coupled: must be bool, got 1"),
     ],
 )  # fmt: skip
 def test_setup_errors_keep_their_words(data, message):

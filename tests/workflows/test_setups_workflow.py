@@ -68,6 +68,10 @@ def test_a_toml_path_is_read_as_a_file(tmp_path):
         ({"span_hz": -5.0}, "span_hz: must be a positive number, got -5.0"),
         ({"span_hz": "wide"}, "span_hz: must be a number, got 'wide'"),
         ({"span": 1}, "span: unknown key; known: span_hz"),
+        (
+            {"hammer": {"window": "BOX"}},
+            "hammer.window: 'BOX' is not a window; one of UNIF, HANN, FLAT, FORC, EXPO",
+        ),
         ({"hammer": {"range_v": "big"}}, 'hammer.range_v: must be a number or "auto"'),
         ({"hammer": 3}, "hammer: must be a table"),
         ({"hammer": {"sensitivity_v_per_eu": 0.0}}, "hammer.sensitivity_v_per_eu: must be a positive"),
