@@ -156,7 +156,9 @@ def test_a_technician_captures_accepts_and_rejects_by_clicking(tmp_path, browser
         # On a 1024 px screen no column of the results is cut at the card's edge (the
         # Damping columns were): the tables go one under the other.
         page.set_viewport_size({"width": 1024, "height": 700})
-        page.wait_for_function("() => document.querySelector('#run-card').getBoundingClientRect().width < 1000")
+        page.wait_for_function(
+            "() => document.querySelector('#run-card').getBoundingClientRect().width < 1000"
+        )
         assert cut_cells(page, "#run-card") == []
         assert page.locator("#modes-table th", has_text="Damping").is_visible()
         page.set_viewport_size({"width": 1300, "height": 1000})
@@ -197,7 +199,9 @@ def test_the_runs_page_shows_the_cautions_of_a_run_of_pure_noise(tmp_path, brows
         # On a 1024 px screen every column and caution line is in view, none cut at the
         # card's edge (the Damping column and the cautions were).
         page.set_viewport_size({"width": 1024, "height": 700})
-        page.wait_for_function("() => document.querySelector('#runs-table').getBoundingClientRect().width < 1000")
+        page.wait_for_function(
+            "() => document.querySelector('#runs-table').getBoundingClientRect().width < 1000"
+        )
         assert cut_cells(page, ".card") == []
 
         # The texts are text: a foreign run's caution cannot put markup on the page.

@@ -142,8 +142,51 @@ def test_a_setup_made_on_the_page_is_the_one_the_run_records(tmp_path, station_p
         open_live_page(page, served)
         open_setup_editor(page)
 
-        # Two transducers of the lab: a hammer, and an accelerometer past its calibration.
+        # A transducer the service refuses: its one line shown once, under the form, and the
+        # fields of the form stay where they were (the line in the grid reflowed them).
         form = page.locator("#transducer-form")
+        fields = form.locator(".field")
+
+        def field_boxes():  # within the form (focus on the field named may scroll the page)
+            top = form.bounding_box()
+            boxes = [fields.nth(i).bounding_box() for i in range(fields.count())]
+            return [
+                (round(b["x"] - top["x"]), round(b["y"] - top["y"]), round(b["width"]), round(b["height"]))
+                for b in boxes
+            ]
+
+        form.locator('[name="id"]').fill("h-30")
+        form.locator('[name="sensitivity"]').fill("0.23")
+        before = field_boxes()
+        for name, value, want in [
+            ("sensitivity_unit", "mV/g", "sensitivity_unit: "),
+            ("calibrated", "2026-03-01", "due: "),
+        ]:
+            if name == "calibrated":
+                form.locator('[name="sensitivity_unit"]').select_option("mV/N")
+                form.locator('[name="calibrated"]').fill(value)
+                form.locator('[name="due"]').fill("2026-02-01")
+            else:
+                form.locator(f'[name="{name}"]').select_option(value)
+            page.click("#transducer-save")
+            page.wait_for_function(
+                "(w) => document.querySelector('#transducer-error').textContent.startsWith(w)", arg=want
+            )
+            message = page.locator("#transducer-error").inner_text()
+            key = want.rstrip(": ")
+            assert page.locator("#transducer-error").get_attribute("data-for") == key
+            assert form.locator(f'[data-key="{key}"]').get_attribute("class").split().count("invalid") == 1
+            shown_in_editor = page.evaluate(
+                "(m) => [...document.querySelectorAll('#setup-editor *')]"
+                ".filter(e => e.children.length === 0 && e.textContent.includes(m)).length",
+                message,
+            )
+            assert shown_in_editor == 1, message
+            assert field_boxes() == before
+        form.locator('[name="calibrated"]').fill("")
+        form.locator('[name="due"]').fill("")
+
+        # Two transducers of the lab: a hammer, and an accelerometer past its calibration.
         for ident, kind, model, serial, sens, unit, cal, due in [
             ("hammer-7", "hammer", "PCB 086C01", "H7-2231", "11.2", "mV/N", "2026-01-12", "2027-01-12"),
             ("accel-3", "accelerometer", "PCB 352C33", "LW-118", "101.4", "mV/g", "2023-05-02", "2024-05-02"),
@@ -190,9 +233,12 @@ def test_a_setup_made_on_the_page_is_the_one_the_run_records(tmp_path, station_p
             saved = c.get("/api/setups/bench-b").json()["setup"]
             assert c.put("/api/setups/bench-b", json={"setup": saved, "version": 1}).status_code == 200
             page.click("#setup-load")
-            page.wait_for_function("() => document.querySelector('#setup-version').textContent.includes('version 2')")
             page.wait_for_function(
-                "() => document.querySelector('#setup-list').selectedOptions[0].textContent === 'bench-b (v2)'"
+                "() => document.querySelector('#setup-version').textContent.includes('version 2')"
+            )
+            page.wait_for_function(
+                "() => document.querySelector('#setup-list').selectedOptions[0].textContent"
+                " === 'bench-b (v2)'"
             )
             assert c.put("/api/setups/bench-b", json={"setup": saved, "version": 2}).status_code == 200
         page.evaluate("() => window.dispatchEvent(new Event('focus'))")
@@ -201,13 +247,18 @@ def test_a_setup_made_on_the_page_is_the_one_the_run_records(tmp_path, station_p
         )
         assert "Load shows it" in page.locator("#setup-status").inner_text()
         page.click("#setup-load")
-        page.wait_for_function("() => document.querySelector('#setup-version').textContent.includes('version 3')")
+        page.wait_for_function(
+            "() => document.querySelector('#setup-version').textContent.includes('version 3')"
+        )
 
         # What the next capture uses, said as such (not the last capture's setup).
         next_line = page.locator("#capture-setup-note [data-setup-line='next']")
         service_own = served.get("/api/capture").json().get("next_setup")
         if service_own:
-            assert next_line.inner_text() == f"Next capture: setup {service_own['name']} v{service_own['version']}"
+            assert (
+                next_line.inner_text()
+                == f"Next capture: setup {service_own['name']} v{service_own['version']}"
+            )
         page.click("#setup-use")
         assert page.locator("#capture-setup").input_value() == "bench-b"
         assert next_line.inner_text() == "Next capture: setup bench-b v3"

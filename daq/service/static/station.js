@@ -82,25 +82,31 @@
       const err = f.querySelector(".field-error");
       if (err) err.remove();
       const c = f.querySelector("input, select");
-      if (c) c.removeAttribute("aria-invalid");
+      if (c) {
+        c.removeAttribute("aria-invalid");
+        c.removeAttribute("aria-errormessage");
+      }
     }
   }
 
-  /* The service's one line, next to the field it names (and in the editor's error line). */
-  function showFieldError(root, keys, detail, lineId) {
+  /* The service's one line, shown once. The setup form (columns of fields) shows it under
+   * the field it names; the transducer form (a grid whose rows an extra line would
+   * reflow) marks the field and shows the line under the form. The error line's data-for
+   * names the field either way. */
+  function showFieldError(root, keys, detail, lineId, inline) {
     clearFieldErrors(root);
     const key = keyOfDetail(detail, keys);
     const line = $(lineId);
-    line.textContent = detail;
-    line.dataset.for = key || "";
-    if (!key) return null;
-    const field = root.querySelector('[data-key="' + key + '"]');
+    const field = key ? root.querySelector('[data-key="' + key + '"]') : null;
+    line.dataset.for = field ? key : "";
+    line.textContent = field && inline ? "" : detail;
     if (!field) return null;
     field.classList.add("invalid");
-    field.append(el("span", { class: "field-error", role: "alert" }, detail));
+    if (inline) field.append(el("span", { class: "field-error", role: "alert", id: lineId + "-at-field" }, detail));
     const c = field.querySelector("input, select");
     if (c) {
       c.setAttribute("aria-invalid", "true");
+      c.setAttribute("aria-errormessage", inline ? lineId + "-at-field" : lineId);
       c.focus();
     }
     return key;
@@ -339,7 +345,7 @@
     try {
       r = await api("PUT", "/api/setups/" + encodeURIComponent(name), { setup: readForm(), version }, { silent: true });
     } catch (e) {
-      if (e.status === 422) showFieldError(form(), ALL_KEYS, e.message, "setup-error");
+      if (e.status === 422) showFieldError(form(), ALL_KEYS, e.message, "setup-error", true);
       else if (e.status === 409) {
         $("setup-error").textContent = e.message + " — someone saved this setup meanwhile: load it again, then make your changes.";
       } else $("setup-error").textContent = e.message;
@@ -405,13 +411,13 @@
       body[k] = k === "sensitivity" ? (Number.isFinite(Number(v)) && v !== "" ? Number(v) : v) : v;
     }
     if (!body.id) {
-      showFieldError(f, TRANSDUCER_KEYS, "id: give the transducer a name", "transducer-error");
+      showFieldError(f, TRANSDUCER_KEYS, "id: give the transducer a name", "transducer-error", false);
       return;
     }
     try {
       await api("PUT", "/api/transducers/" + encodeURIComponent(body.id), body, { silent: true });
     } catch (err) {
-      if (err.status === 422) showFieldError(f, TRANSDUCER_KEYS, err.message, "transducer-error");
+      if (err.status === 422) showFieldError(f, TRANSDUCER_KEYS, err.message, "transducer-error", false);
       else $("transducer-error").textContent = err.message;
       return;
     }
@@ -430,8 +436,14 @@
     st.practiceWanted = hits;
     try {
       if (!(await hasRoute("/api/capture/practice"))) throw new DAQ.ApiError("no route", 404, null);
-      await api("POST", "/api/capture/practice", name ? { setup: name, hits } : { hits });
+      await api("POST", "/api/capture/practice", name ? { setup: name, hits } : { hits }, { silent: true });
     } catch (e) {
+      if (e.status === 422 && name && keyOfDetail(e.message, ALL_KEYS)) {
+        // the setup asks what the analyzer cannot do: said beside the field, as on save
+        showFieldError(form(), ALL_KEYS, e.message, "setup-error", true);
+        $("practice-result").textContent = "Practice hits: the setup needs a change first (" + e.message + ").";
+        return;
+      }
       $("practice-result").textContent =
         e.status === 404 || e.status === 405 ? "This service cannot take practice hits yet." : "Practice hits: " + e.message;
       return;
