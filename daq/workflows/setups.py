@@ -8,7 +8,8 @@ and whether the analyzer at hand can measure it (docs/setups.md).
 * :func:`check_setup_data` checks a setup's dict (what the service receives), each
   error naming the field first ("span_hz: must be a positive number, got -5.0").
 * :func:`validate_for_model` refuses settings the analyzer cannot measure, before any
-  hit: lines, span, input ranges, a trigger level above the hammer's range.
+  hit: lines, span, input ranges, a trigger level above the hammer's range;
+  :func:`validate_for_family` those no model could (a setup being saved).
 * :func:`transducer_record` is what a run stores of its transducers.
 
 Cautions are plain sentences; whoever shows them adds "caution: " (as the report and
@@ -264,20 +265,69 @@ def validate_for_model(settings: ImpactSettings, model: str) -> None:
                 f"{channel}.range_v: {range_v:g} V is above the analyzer's largest range "
                 f"({largest:.3g} V on the {model})"
             )
+    check_trigger_level(settings)
+
+
+def check_trigger_level(settings: ImpactSettings) -> None:
+    """WorkflowError "trigger_level_eu: ..." when the trigger level is beyond what the
+    trigger channel's range reaches (a fixed range only; either sign, the message keeps
+    it): no hit could ever trigger."""
     trigger_channel = {"CH1": "hammer", "CH2": "accelerometer"}.get(settings.trigger_source)
-    if trigger_channel is not None:
-        setup = getattr(settings, trigger_channel)
-        if setup.range_v is not None:
-            reach = setup.range_v / setup.sensitivity_v_per_eu
-            level = abs(settings.trigger_level_eu)
-            if level > reach * (1 + 1e-9):
-                unit = EU[trigger_channel]
-                sens = setup.sensitivity_v_per_eu * 1e3
-                per = f"mV/{'N' if unit == 'N' else '(m/s^2)'}"
-                raise WorkflowError(
-                    f"trigger_level_eu: {level:g} {unit} is above the {trigger_channel}'s range "
-                    f"({reach:.3g} {unit} = {setup.range_v:g} V / {sens:g} {per})"
-                )
+    if trigger_channel is None:
+        return
+    setup = getattr(settings, trigger_channel)
+    if setup.range_v is None:
+        return
+    reach = setup.range_v / setup.sensitivity_v_per_eu
+    level = settings.trigger_level_eu
+    if abs(level) > reach * (1 + 1e-9):
+        unit = EU[trigger_channel]
+        sens = setup.sensitivity_v_per_eu * 1e3
+        per = f"mV/{'N' if unit == 'N' else '(m/s^2)'}"
+        where = "above" if level > 0 else "beyond"
+        sign = "" if level > 0 else "±"
+        raise WorkflowError(
+            f"trigger_level_eu: {level:g} {unit} is {where} the {trigger_channel}'s range "
+            f"({sign}{reach:.3g} {unit} = {setup.range_v:g} V / {sens:g} {per})"
+        )
+
+
+#: What some model of the family offers: every resolution, the widest span, the
+#: largest input range (a setup no model can measure is refused when it is saved).
+FAMILY_LINES = tuple(sorted({n for model in ANALYZER_RANGES_V for n in _lines_offered(model)}))
+
+
+def validate_for_family(settings: ImpactSettings) -> None:
+    """WorkflowError naming the field when no model of the family (35660A, 3562A,
+    35665A, 35670A) could measure ``settings``: what needs no analyzer at hand. A
+    resolution none offers, a span or zoom band above the widest model's, an input
+    range above the largest, a trigger level the trigger channel's fixed range cannot
+    reach (validate_for_model checks the rest against the model connected)."""
+    if settings.lines is not None and settings.lines not in FAMILY_LINES:
+        choices = ", ".join(str(n) for n in FAMILY_LINES)
+        raise WorkflowError(f"lines: no analyzer offers {settings.lines} lines; one of {choices}")
+    widest = max(ANALYZER_RANGES_V, key=max_span_hz)
+    top = max_span_hz(widest)
+    if settings.span_hz > top * (1 + 1e-9):
+        raise WorkflowError(
+            f"span_hz: {settings.span_hz:g} Hz is above the widest span of any analyzer "
+            f"({_hz(top)} on the {widest})"
+        )
+    if settings.center_hz and settings.center_hz + settings.span_hz / 2 > top * (1 + 1e-9):
+        raise WorkflowError(
+            f"center_hz: a {settings.span_hz:g} Hz band around {settings.center_hz:g} Hz reaches above "
+            f"the widest span of any analyzer ({_hz(top)} on the {widest})"
+        )
+    biggest = max(ANALYZER_RANGES_V, key=lambda m: ANALYZER_RANGES_V[m][-1])
+    largest = ANALYZER_RANGES_V[biggest][-1]
+    for channel in CHANNELS:
+        range_v = getattr(settings, channel).range_v
+        if range_v is not None and range_v > largest * (1 + 1e-9):
+            raise WorkflowError(
+                f"{channel}.range_v: {range_v:g} V is above the largest range of any analyzer "
+                f"({largest:.3g} V on the {biggest})"
+            )
+    check_trigger_level(settings)
 
 
 def transducer_record(transducers: dict[str, Transducer], today: date | None = None) -> dict[str, dict]:
@@ -299,15 +349,17 @@ def save_setup(
     expected_version: int | None = None,
     model: str | None = None,
 ) -> ResolvedSetup:
-    """Check setup ``data`` (its settings, the transducers it names, and, with ``model``,
-    that this analyzer can measure it) and save it as the next version of setup ``name``;
-    the setup as resolved after the save. WorkflowError naming the field (nothing is
-    written); VersionConflict (a StoreError) when ``expected_version`` is not the current
-    one (0: the setup must be new)."""
+    """Check setup ``data`` (its settings, the transducers it names, that some model of
+    the family can measure it, and, with ``model``, that this analyzer can) and save it
+    as the next version of setup ``name``; the setup as resolved after the save.
+    WorkflowError naming the field (nothing is written); VersionConflict (a StoreError)
+    when ``expected_version`` is not the current one (0: the setup must be new)."""
     settings = check_setup_data(data)
     transducers = _named_transducers(store_dir, data, "")
+    settings = with_transducers(settings, transducers)
+    validate_for_family(settings)
     if model is not None:
-        validate_for_model(with_transducers(settings, transducers), model)
+        validate_for_model(settings, model)
     try:
         SetupStore(store_dir).put(name, data, expected_version)
     except StoreError as exc:

@@ -215,3 +215,15 @@ def test_setup_save_and_capture_word_a_bad_file_alike(store, tmp_path):
         captured = invoke_daq("capture", "--sim", "--yes", "--setup", str(path), "--store", str(store))
         for result in (saved, captured):
             assert_one_line_error(result, f"{path}: {words}")
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ("lines = 3\n", "lines: no analyzer offers 3 lines; one of 100, 200, 400, 800, 1600"),
+        ("trigger_level_eu = 1000.0\n", "trigger_level_eu: 1000 N is above the hammer's range (8.89 N"),
+        ("trigger_level_eu = -1000.0\n", "trigger_level_eu: -1000 N is beyond the hammer's range"),
+    ],
+)
+def test_setup_save_refuses_a_setup_no_analyzer_could_run(store, tmp_path, text, fragment):
+    assert_one_line_error(_save(store, tmp_path, text), fragment)

@@ -19,6 +19,7 @@ from daq.workflows.setup_codec import settings_from_stored
 from daq.workflows.setups import (
     check_setup_data,
     resolve_setup,
+    save_setup,
     transducer_record,
     validate_for_model,
 )
@@ -203,3 +204,35 @@ def test_the_service_save_refuses_a_kind_change_that_would_break_a_setup(tmp_pat
     with pytest.raises(WorkflowError, match=r"^kind: a-7 is the accelerometer of setup beam; "):
         save_transducer(tmp_path, "a-7", fields)
     assert resolve_setup(tmp_path, "beam").transducers["accelerometer"].id == "a-7"
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        ({"lines": 3}, "lines: no analyzer offers 3 lines; one of 100, 200, 400, 800, 1600"),
+        (
+            {"trigger_level_eu": 1000.0},
+            "trigger_level_eu: 1000 N is above the hammer's range (8.89 N = 0.02 V / 2.25 mV/N)",
+        ),
+        (
+            {"trigger_level_eu": -1000.0},
+            "trigger_level_eu: -1000 N is beyond the hammer's range (±8.89 N = 0.02 V / 2.25 mV/N)",
+        ),
+        ({"span_hz": 250_000.0}, "span_hz: 250000 Hz is above the widest span of any analyzer (102.4 kHz"),
+        ({"hammer": {"range_v": 50.0}}, "hammer.range_v: 50 V is above the largest range of any analyzer"),
+    ],
+)
+def test_save_setup_refuses_what_no_model_could_measure_without_an_analyzer(tmp_path, data, message):
+    with pytest.raises(WorkflowError) as info:
+        save_setup(tmp_path, "beam", data)
+    assert str(info.value).startswith(message)
+    assert SetupStore(tmp_path).names() == ["default"]  # nothing written
+
+
+def test_save_setup_takes_what_some_model_measures(tmp_path):
+    for data in (
+        {"lines": 1600},
+        {"trigger_level_eu": -5.0},
+        {"hammer": {"range_v": "auto"}, "trigger_level_eu": 1e3},
+    ):
+        save_setup(tmp_path, "beam", data)
