@@ -86,7 +86,7 @@ def check_setup_name(name: object) -> str:
     """``name`` if it is a plain setup name ([A-Za-z0-9._-]{1,64}, not starting with a
     dot), else StoreError."""
     if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or name.startswith("."):
-        raise StoreError(f"setup name {name!r} is not a plain name (letters, digits, . _ -, 1 to 64)")
+        raise StoreError(f"setup name {name!r}: not a plain name (letters, digits, . _ -, 1 to 64)")
     if name.endswith(SETUP_SUFFIX):
         raise StoreError(f"setup name {name!r}: give the name without {SETUP_SUFFIX}")
     return name

@@ -8,8 +8,8 @@ due. ``sensitivity_v_per_eu`` turns the sensitivity into what the analyzer is se
 V/N for a hammer, V/(m/s^2) for an accelerometer.
 
 Two built-ins are always there and not stored unless overwritten: ``hammer-default``
-(2.25 mV/N) and ``accel-default`` (10 mV/g), without dates: the sensitivities the
-capture's defaults were made from.
+(2.25 mV/N) and ``accel-default`` (1.02 mV/(m/s^2), a nominal 10 mV/g part), without
+dates: exactly the capture's default sensitivities (2.25e-3 V/N, 1.02e-3 V/(m/s^2)).
 
 Writing follows the store's protocol (writer.write_atomically: temporary, fsync,
 rename, folder fsync) under ``<store>/.transducers.lock`` (flock), so two processes
@@ -181,8 +181,11 @@ class Transducer:
 #: The built-ins, always present (a stored transducer of the same id replaces one).
 BUILTINS: dict[str, Transducer] = {
     "hammer-default": Transducer("hammer-default", "hammer", "PCB 086C03 (default)", "", 2.25, "mV/N"),
+    # A nominal 10 mV/g part, declared as the capture's default sensitivity is made
+    # (drivers/settings.py: 1.02 mV/(m/s^2) = 10.003 mV/g), so that a capture with the
+    # built-in setup and one without any setup measure the same number.
     "accel-default": Transducer(
-        "accel-default", "accelerometer", "10 mV/g accelerometer (default)", "", 10.0, "mV/g"
+        "accel-default", "accelerometer", "nominal 10 mV/g accelerometer (default)", "", 1.02, "mV/(m/s^2)"
     ),
 }
 

@@ -227,3 +227,35 @@ def test_setup_save_and_capture_word_a_bad_file_alike(store, tmp_path):
 )
 def test_setup_save_refuses_a_setup_no_analyzer_could_run(store, tmp_path, text, fragment):
     assert_one_line_error(_save(store, tmp_path, text), fragment)
+
+
+def test_transducer_list_keeps_its_columns_without_a_model(store):
+    added = invoke_daq(
+        "transducer", "add", "h-x", "--kind", "hammer", "--sensitivity", "2 mV/N", "--store", str(store)
+    )
+    assert added.returncode == 0, added.stderr
+    lines = invoke_daq("transducer", "list", "--store", str(store)).stdout.splitlines()
+    due_column = {line.index("  (due ") if "(due " in line else line.index("  (no due") for line in lines}
+    assert len(due_column) == 1, lines  # the due dates line up
+    assert next(line for line in lines if line.startswith("h-x")).split()[4] == "-"
+
+
+def test_setup_save_blames_a_bad_name_not_the_file(store, tmp_path):
+    path = tmp_path / "f.toml"
+    path.write_text("span_hz = 200.0\n")
+    result = invoke_daq("setup", "save", "bad name", "--from", str(path), "--store", str(store))
+    assert_one_line_error(result, "setup name 'bad name': not a plain name")
+    assert str(path) not in result.stderr
+
+
+def test_expect_version_0_does_not_save_over_the_built_in_default(store, tmp_path):
+    path = tmp_path / "f.toml"
+    path.write_text("span_hz = 400.0\n")
+    args = ("setup", "save", "default", "--from", str(path), "--store", str(store))
+    assert_one_line_error(
+        invoke_daq(*args, "--expect-version", "0"), "setup default exists (version 0, built in)"
+    )
+    assert invoke_daq(*args).returncode == 0  # without it, the built-in is replaced
+    assert_one_line_error(
+        invoke_daq(*args, "--expect-version", "0"), "setup default exists already (version 1)"
+    )

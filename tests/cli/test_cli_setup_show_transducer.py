@@ -30,3 +30,16 @@ def test_show_names_the_transducer_sensitivity_that_counts(tmp_path):
     assert shown.returncode == 0, shown.stderr
     assert "# hammer: transducer h-7 sets the sensitivity to 4.1 mV/N (0.0041 V per EU)" in shown.stdout
     assert "# accelerometer:" not in shown.stdout
+    assert "sensitivity_v_per_eu above is not used" in shown.stdout
+
+
+def test_show_says_nothing_of_a_sensitivity_the_file_does_not_hold(tmp_path):
+    setup = tmp_path / "s.toml"
+    setup.write_text('[accelerometer]\ntransducer = "accel-default"\n')
+    assert _daq(tmp_path, "setup", "save", "w", "--from", str(setup)).returncode == 0
+    shown = _daq(tmp_path, "setup", "show", "w")
+    assert shown.returncode == 0, shown.stderr
+    line = next(line for line in shown.stdout.splitlines() if line.startswith("# accelerometer:"))
+    assert line == (
+        "# accelerometer: transducer accel-default sets the sensitivity to 1.02 mV/(m/s^2) (0.00102 V per EU)"
+    )

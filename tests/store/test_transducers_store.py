@@ -16,7 +16,7 @@ def test_the_built_ins_are_there_without_a_file(tmp_path):
     assert [t.id for t in table.all()] == ["accel-default", "hammer-default"]
     hammer = table.get("hammer-default")
     assert hammer.sensitivity_v_per_eu == pytest.approx(2.25e-3)
-    assert table.get("accel-default").sensitivity_v_per_eu == pytest.approx(10e-3 / 9.80665)
+    assert table.get("accel-default").sensitivity_v_per_eu == pytest.approx(1.02e-3)
     assert not (tmp_path / "transducers.toml").exists()
 
 
@@ -136,3 +136,12 @@ def test_a_unit_of_the_other_kind_reads_as_english():
         Transducer("a", "accelerometer", "", "", 2.25, "mV/N")
     with pytest.raises(StoreError, match="mV/g is not a unit of a hammer"):
         Transducer("h", "hammer", "", "", 10.0, "mV/g")
+
+
+def test_the_built_ins_are_exactly_the_capture_defaults(tmp_path):
+    from drivers.settings import ImpactSettings
+
+    defaults = ImpactSettings()
+    table = TransducerTable(tmp_path)
+    assert table.get("hammer-default").sensitivity_v_per_eu == defaults.hammer.sensitivity_v_per_eu
+    assert table.get("accel-default").sensitivity_v_per_eu == defaults.accelerometer.sensitivity_v_per_eu

@@ -236,3 +236,7 @@ def test_save_setup_takes_what_some_model_measures(tmp_path):
         {"hammer": {"range_v": "auto"}, "trigger_level_eu": 1e3},
     ):
         save_setup(tmp_path, "beam", data)
+
+
+def test_the_built_in_default_setup_is_exactly_the_capture_without_a_setup(tmp_path):
+    assert resolve_setup(tmp_path, "default").settings == ImpactSettings()

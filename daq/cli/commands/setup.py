@@ -97,21 +97,18 @@ def setup_show(
 
     resolved = resolve_setup(store_dir, name)
     # The file may still hold a sensitivity the named transducer overrides: say which counts.
-    named = _named_channels(setups, name, version)
-    for channel, transducer in sorted(resolved.transducers.items()):
-        if transducer is not None and channel in named:
-            print(
-                f"# {channel}: transducer {transducer.id} sets the sensitivity to "
-                f"{transducer.sensitivity:g} {transducer.sensitivity_unit} "
-                f"({transducer.sensitivity_v_per_eu:.6g} V per EU); sensitivity_v_per_eu above is not used"
-            )
-    print_cautions(resolved.cautions)
-
-
-def _named_channels(setups, name: str, version: int | None) -> set[str]:
-    """The channels whose table in the setup names a transducer."""
     data = setups.get(name, version).data
-    return {ch for ch, table in data.items() if isinstance(table, dict) and table.get("transducer")}
+    for channel, transducer in sorted(resolved.transducers.items()):
+        table = data.get(channel)
+        if transducer is None or not isinstance(table, dict) or not table.get("transducer"):
+            continue
+        unused = "; sensitivity_v_per_eu above is not used" if "sensitivity_v_per_eu" in table else ""
+        print(
+            f"# {channel}: transducer {transducer.id} sets the sensitivity to "
+            f"{transducer.sensitivity:g} {transducer.sensitivity_unit} "
+            f"({transducer.sensitivity_v_per_eu:.6g} V per EU){unused}"
+        )
+    print_cautions(resolved.cautions)
 
 
 @setup_app.command("history")
@@ -150,8 +147,21 @@ def setup_save(
     """Save a setup file under NAME as its next version (the previous one is kept)."""
     import tomllib
 
-    from daq.store.setups import strip_saved
+    from daq.store.errors import StoreError
+    from daq.store.setups import DEFAULT_NAME, SetupStore, check_setup_name, strip_saved
     from daq.workflows.setups import save_setup
+
+    try:
+        check_setup_name(name)  # the name's fault, before the file is read
+    except StoreError as exc:
+        raise UserError(str(exc), exit_code=2) from None
+    store_dir = _store_dir(store)
+    if expect_version == 0 and name == DEFAULT_NAME and not SetupStore(store_dir).path(name).is_file():
+        # The built-in is version 0 too, but --expect-version 0 means "a new setup".
+        raise UserError(
+            f"setup {name} exists (version 0, built in); --expect-version 0 saves only a new setup: "
+            "leave --expect-version out to replace the built-in",
+        )
 
     try:
         data = tomllib.loads(from_file.read_text(encoding="utf-8"))
@@ -164,7 +174,7 @@ def setup_save(
     from daq.workflows.errors import WorkflowError
 
     try:
-        resolved = save_setup(_store_dir(store), name, strip_saved(data), expect_version)
+        resolved = save_setup(store_dir, name, strip_saved(data), expect_version)
     except WorkflowError as exc:
         raise UserError(f"{from_file}: {exc}") from None
     print(f"Saved setup {resolved.name} version {resolved.version}")
@@ -181,14 +191,13 @@ def transducer_list(store: StoreOption = None, as_json: JsonOption = False) -> N
         print(json.dumps({"transducers": items}, indent=2, ensure_ascii=False))
         return
     width = max(len(t["id"]) for t in items)
-    for t in items:
+    labels = [f"{t['model']} {t['serial']}".strip() or "-" for t in items]  # "-": none given
+    label_width = max(len(label) for label in labels)
+    for t, label in zip(items, labels, strict=True):
         due = f"due {t['due']}" if t["due"] else "no due date"
         mark = "  OVERDUE" if t["overdue"] else ""
         sens = f"{t['sensitivity']:g} {t['sensitivity_unit']}"
-        print(
-            f"{t['id']:<{width}}  {t['kind']:<13}  {sens:<16}  {t['model']} {t['serial']}".rstrip()
-            + f"  ({due}){mark}"
-        )
+        print(f"{t['id']:<{width}}  {t['kind']:<13}  {sens:<16}  {label:<{label_width}}  ({due}){mark}")
 
 
 _SENSITIVITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z]\S*)\s*$")
