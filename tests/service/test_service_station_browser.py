@@ -20,7 +20,7 @@ import pytest
 from daq.store import Store
 from tests.conftest import NO_BROWSER
 from tests.service.service_helpers import DAQ, service_env, serving, wait_for
-from tests.service.test_service_browser import CHROMIUM, CHROMIUM_ARGS
+from tests.service.test_service_browser import CHROMIUM, CHROMIUM_ARGS, cut_cells
 
 pytestmark = [
     pytest.mark.slow,
@@ -203,6 +203,7 @@ def test_a_setup_made_on_the_page_is_the_one_the_run_records(tmp_path, station_p
             page.wait_for_selector(f'#transducers-table tr[data-transducer="{ident}"]')
         overdue = page.locator('#transducers-table tr[data-transducer="accel-3"] td.overdue')
         assert "overdue" in overdue.inner_text()
+        assert cut_cells(page, "#setup-editor") == []  # the table whole on a 1024 px screen
 
         # Another span, line count and transducers than the default setup.
         setup = page.locator("#setup-form")

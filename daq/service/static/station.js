@@ -216,11 +216,12 @@
           el("td", null, t.model || ""),
           el("td", null, t.serial || ""),
           el("td", { class: "num" }, fmt.sig(Number(t.sensitivity), 4) + " " + (t.sensitivity_unit || "")),
-          el("td", null, t.calibrated || "–"),
+          el("td", null, el("span", { class: "date" }, t.calibrated || "–")),
           el(
             "td",
             { class: overdue(t) ? "overdue" : null, title: overdue(t) ? "calibration overdue" : null },
-            (t.due || "–") + (overdue(t) ? " overdue" : "")
+            el("span", { class: "date" }, t.due || "–"),
+            overdue(t) ? " overdue" : null
           ),
           el("td", null, el("button", { type: "button", class: "btn btn-small", dataset: { edit: t.id } }, "Edit"))
         )
