@@ -168,9 +168,11 @@ def _pdf_lines(data: bytes) -> list[str]:
     """The text lines drawn in a PDF matplotlib wrote: each text object's strings joined
     (enough for ASCII; matplotlib's fonts turn fi/fl into ligature codes)."""
     lines = []
-    for stream in re.findall(rb"stream\r?\n(.*?)\r?\nendstream", data, re.S):
+    # Each stream is inflated from its start to the end of its own zlib data: cutting it at
+    # the next "endstream" fails when the compressed bytes end in CR or hold that word.
+    for start in re.finditer(rb"stream\r?\n", data):
         try:
-            content = zlib.decompress(stream)
+            content = zlib.decompressobj().decompress(memoryview(data)[start.end() :])
         except zlib.error:
             continue
         for block in re.findall(rb"BT(.*?)ET", content, re.S):
