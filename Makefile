@@ -49,7 +49,9 @@ demo: $(VENV)/.installed-run
 	$(BIN)/daq test report demo-beam -o $(VENV)/demo-test-report --force --store $(DEMO_TEST_STORE)
 
 test: lint
-	$(BIN)/python -m pytest -n auto
+	# worksteal: an idle worker takes queued tests from a busy one, so the slow
+	# process-killing tests at the end do not leave one core waiting on the other.
+	$(BIN)/python -m pytest -n auto --dist worksteal
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .

@@ -1,7 +1,7 @@
 """The report of a run captured at the test station (issue 24): the named setup and
 its version, the transducers (model, serial, sensitivity, calibration, overdue), the
 cautions the capture stored, a hit accepted against a failed check marked in the hits
-table and the cautions, and a quality figure per hit (the first 6 and every marked
+table and the cautions, and a quality figure per hit (the first 3 and every marked
 hit), in the HTML page and in the PDF alike."""
 
 from __future__ import annotations
@@ -121,14 +121,14 @@ def test_the_cautions_hold_the_capture_caution_and_the_marked_hit(station):
     )  # the marked row of the hits table
 
 
-def test_a_quality_figure_for_the_first_six_hits_and_every_marked_one(station):
-    assert figures.quality_indices(station.run) == [0, 1, 2, 3, 4, 5, MARKED]
+def test_a_quality_figure_for_the_first_three_hits_and_every_marked_one(station):
+    assert figures.quality_indices(station.run) == [0, 1, 2, MARKED]
     names = sorted(name for name in station.files.pngs if name.startswith("hit_quality_"))
-    assert names == sorted(f"hit_quality_{k}" for k in (1, 2, 3, 4, 5, 6, MARKED + 1))
+    assert names == sorted(f"hit_quality_{k}" for k in (1, 2, 3, MARKED + 1))
     page = station.page
     assert "<h2>Hit quality</h2>" in page
-    assert "Drawn: hits 1-6, 8 (the first 6 and every hit accepted against a failed check, " in page
-    assert "not drawn: hits 7, listed in the Hits table." in page
+    assert "Drawn: hits 1-3, 8 (the first 3 and every hit accepted against a failed check, " in page
+    assert "not drawn: hits 4-7, listed in the Hits table." in page
     assert f'alt="hit {MARKED + 1}: accepted against failed check: double impact"' in page
 
 
@@ -184,7 +184,7 @@ def test_the_pdf_holds_the_same(station):
         r"caution: hammer transducer h-12 calibration was due 2026-01-01",
         rf"caution: hit {MARKED + 1} was accepted although its check failed \(double impact",
         rf"\n *{MARKED + 1}\s+\S+\s+[0-9.]+\s+accepted against failed check: double impact",
-        r"Drawn: hits 1-6, 8",
+        r"Drawn: hits 1-3, 8",
     ):
         assert re.search(pattern, text), pattern
     # Every quality figure is a page of its own: text pages plus one page per figure.
