@@ -17,15 +17,10 @@ capture inside the service must still be able to join its run.
 from __future__ import annotations
 
 import contextlib
-import errno
-import fcntl
 import math
 import os
-import time
 import tomllib
-from collections.abc import Iterator
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -40,6 +35,7 @@ from daq.store.model import (
     check_point_on_article,
     check_test_name,
 )
+from daq.store.text_files import file_lock, now_utc, toml_string
 from daq.store.writer import run_path, write_atomically
 
 TESTS_FOLDER = "tests"
@@ -47,8 +43,6 @@ TEST_SUFFIX = ".toml"
 TEST_SCHEMA_NAME = "cantilever-daq.test"
 TEST_SCHEMA_VERSION = 1
 ROVING = ("hammer", "sensor")
-#: How long a change waits for another process's change to the same test, s.
-LOCK_TIMEOUT_S = 30.0
 #: A test file larger than this is refused unread (a real one is a few kB).
 MAX_TEST_FILE_BYTES = 4 * 2**20
 #: Points in one test; runs joined to one test.
@@ -249,7 +243,7 @@ def join_run(store_dir: Path | str, name: str, point: str, run_id: str, accepted
         _check_run_fits(store_dir, test, point, run_id)
         if len(test.runs) >= MAX_RUNS:
             raise StoreError(f"test {name} already holds {MAX_RUNS} runs; refused")
-        entry = JoinedRun(point, run_id, accepted, _now_utc())
+        entry = JoinedRun(point, run_id, accepted, now_utc())
         runs = [r for r in test.runs if r.run_id != run_id] + [entry]
         test = ModalTest(
             test.name, test.created, test.article, test.roving, test.fixed_point, test.points, tuple(runs)
@@ -416,7 +410,7 @@ def _build_test(
                 )
     except ValueError as exc:
         raise StoreError(str(exc)) from None
-    return ModalTest(name, _now_utc(), article, roving, fixed_point, tuple(points))
+    return ModalTest(name, now_utc(), article, roving, fixed_point, tuple(points))
 
 
 def _check_run_fits(store_dir: Path, test: ModalTest, point: str, run_id: str) -> None:
@@ -484,37 +478,9 @@ def _valid_name(name: object) -> str:
         raise StoreError(str(exc)) from None
 
 
-def _now_utc() -> str:
-    now = datetime.now(UTC)
-    return f"{now:%Y-%m-%dT%H:%M:%S}.{now.microsecond // 1000:03d}Z"
-
-
-@contextlib.contextmanager
-def _test_lock(store_dir: Path | str, name: str, timeout_s: float = LOCK_TIMEOUT_S) -> Iterator[None]:
-    """Hold ``<store>/tests/.<name>.lock`` (flock, exclusive); wait up to ``timeout_s``
-    for another process's change. The kernel frees it when its holder dies."""
-    folder = modal_tests_dir(store_dir)
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd = os.open(folder / f".{name}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
-    except OSError as exc:
-        reason = "it is a symlink" if exc.errno == errno.ELOOP else os.strerror(exc.errno or 0)
-        raise StoreError(f"cannot lock test {name} in {folder}: {reason}") from None
-    try:
-        deadline = time.monotonic() + timeout_s
-        while True:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                break
-            except BlockingIOError:
-                if time.monotonic() > deadline:
-                    raise StoreError(
-                        f"test {name} is being changed by another process for over {timeout_s:g} s; try again"
-                    ) from None
-                time.sleep(0.01)
-        yield
-    finally:
-        os.close(fd)  # closing the descriptor releases the lock
+def _test_lock(store_dir: Path | str, name: str) -> contextlib.AbstractContextManager[None]:
+    """Hold ``<store>/tests/.<name>.lock`` for a change of test ``name``."""
+    return file_lock(modal_tests_dir(store_dir), f".{name}.lock", f"test {name}")
 
 
 # --- a TOML writer for the test file's few types ----------------------------------------------------
@@ -550,22 +516,5 @@ def _toml_value(value: Any) -> str:
             raise StoreError(f"internal: {value} cannot go into a test file")
         return repr(value)  # repr round-trips every float; TOML reads "1e-05" and "7.1e+10"
     if isinstance(value, str):
-        return _toml_string(value)
+        return toml_string(value)
     raise StoreError(f"internal: a {type(value).__name__} cannot go into a test file")
-
-
-def _toml_string(text: str) -> str:
-    """A TOML basic string: quote, backslash and the control characters escaped."""
-    out = ['"']
-    for char in text:
-        code = ord(char)
-        if char == '"':
-            out.append('\\"')
-        elif char == "\\":
-            out.append("\\\\")
-        elif code < 0x20 or code == 0x7F:
-            out.append({"\n": "\\n", "\t": "\\t", "\r": "\\r"}.get(char, f"\\u{code:04X}"))
-        else:
-            out.append(char)
-    out.append('"')
-    return "".join(out)

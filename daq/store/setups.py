@@ -23,20 +23,17 @@ named ``default`` stores it like any other (version 1).
 from __future__ import annotations
 
 import contextlib
-import errno
-import fcntl
 import math
 import os
 import re
-import time
 import tomllib
-from collections.abc import Iterator
 from dataclasses import dataclass, field
-from datetime import UTC, date, datetime
+from datetime import date, datetime
 from pathlib import Path
 from typing import Any
 
 from daq.store.errors import StoreError
+from daq.store.text_files import file_lock, now_utc, toml_string
 from daq.store.writer import write_atomically
 
 SETUPS_FOLDER = "setups"
@@ -51,7 +48,6 @@ DEFAULT_DATA: dict[str, Any] = {
     "accelerometer": {"transducer": "accel-default"},
 }
 NAME_PATTERN = re.compile(r"[A-Za-z0-9._-]{1,64}")
-LOCK_TIMEOUT_S = 30.0
 #: A setup file larger than this is refused unread (a real one is under 1 kB).
 MAX_FILE_BYTES = 2**20
 
@@ -187,7 +183,7 @@ class SetupStore:
                         f"{current} now (someone saved it meanwhile)"
                     )
                 raise VersionConflict(text, current)
-            saved = StoredSetup(name, current + 1, _now_utc(), _copy(data))
+            saved = StoredSetup(name, current + 1, now_utc(), _copy(data))
             text = body + _saved_table(saved)
             if old_text is not None:
                 write_atomically(
@@ -303,58 +299,5 @@ def _value(value: object, what: str, key: str) -> str:
     raise StoreError(f"{what}: {key}: must be a number, text or true/false, got {type(value).__name__}")
 
 
-def toml_string(text: str) -> str:
-    """A TOML basic string: quote, backslash and the control characters escaped."""
-    out = ['"']
-    for char in text:
-        code = ord(char)
-        if char == '"':
-            out.append('\\"')
-        elif char == "\\":
-            out.append("\\\\")
-        elif code < 0x20 or code == 0x7F:
-            out.append({"\n": "\\n", "\t": "\\t", "\r": "\\r"}.get(char, f"\\u{code:04X}"))
-        elif 0xD800 <= code <= 0xDFFF:
-            raise StoreError("text that is not valid Unicode (a lone surrogate) cannot be stored")
-        else:
-            out.append(char)
-    out.append('"')
-    return "".join(out)
-
-
 def _copy(data: dict[str, Any]) -> dict[str, Any]:
     return {k: dict(v) if isinstance(v, dict) else v for k, v in data.items()}
-
-
-def _now_utc() -> str:
-    now = datetime.now(UTC)
-    return f"{now:%Y-%m-%dT%H:%M:%S}.{now.microsecond // 1000:03d}Z"
-
-
-@contextlib.contextmanager
-def file_lock(folder: Path, lock_name: str, what: str, timeout_s: float = LOCK_TIMEOUT_S) -> Iterator[None]:
-    """Hold ``folder/lock_name`` (flock, exclusive) for a read-modify-write of ``what``;
-    wait up to ``timeout_s`` for another process's. The kernel frees it when its holder
-    dies. (The same lock as a modal test's, daq/store/modal_tests.py; not the store's
-    lock, which ``daq serve`` holds for its whole life.)"""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd = os.open(folder / lock_name, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
-    except OSError as exc:
-        reason = "it is a symlink" if exc.errno == errno.ELOOP else os.strerror(exc.errno or 0)
-        raise StoreError(f"cannot lock {what} in {folder}: {reason}") from None
-    try:
-        deadline = time.monotonic() + timeout_s
-        while True:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                break
-            except BlockingIOError:
-                if time.monotonic() > deadline:
-                    raise StoreError(
-                        f"{what} is being changed by another process for over {timeout_s:g} s; try again"
-                    ) from None
-                time.sleep(0.01)
-        yield
-    finally:
-        os.close(fd)

@@ -28,7 +28,8 @@ from pathlib import Path
 from typing import Any
 
 from daq.store.errors import StoreError
-from daq.store.setups import SetupStore, file_lock, toml_string
+from daq.store.setups import SetupStore
+from daq.store.text_files import file_lock, toml_string
 from daq.store.writer import write_atomically
 
 TRANSDUCERS_FILE = "transducers.toml"
