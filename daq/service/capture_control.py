@@ -134,26 +134,7 @@ class CaptureController:
             settings, no setup recorded."""
         if not 1 <= hits_wanted <= MAX_HITS_WANTED:
             raise ValueError(f"hits must be 1..{MAX_HITS_WANTED}")
-        with self._cond:
-            self._refuse_unless_idle()
-            self.state = "starting"
-        try:
-            dsa = self.link.open_driver()
-        except DriverError:
-            with self._cond:
-                self.state = "idle"
-            raise
-        try:
-            self._check_setup(dsa, setup)
-            simulator = self.link.simulator_for_capture()
-            if simulator is not None:
-                simulator.update(self._place_simulator(dsa, where))
-        except (DriverError, ValueError):
-            with contextlib.suppress(Exception):
-                dsa.close()
-            with self._cond:
-                self.state = "idle"
-            raise
+        dsa, simulator = self._open_for(setup, where)
         options: dict[str, Any] = {}
         if setup is not None:
             options = {
@@ -185,13 +166,11 @@ class CaptureController:
         self._thread.start()
         return job.run_id
 
-    def start_practice(self, setup: ResolvedSetup | None, n_hits: int) -> None:
-        """Take ``n_hits`` practice hits (none kept) and choose the ranges and trigger
-        level for ``setup`` (daq/workflows/auto_range.py); the answer lands in the
-        snapshot's ``practice``. Conflict while a capture runs; DriverError when the
-        analyzer cannot be reached."""
-        if not 1 <= n_hits <= 100:
-            raise ValueError("hits: must be 1..100")
+    def _open_for(self, setup: ResolvedSetup | None, where: Any) -> tuple[Any, dict[str, Any] | None]:
+        """(the driver, the simulator's provenance or None) for a capture or practice:
+        idle checked, the analyzer opened, ``setup`` checked against it, the simulated
+        hammer and sensor at ``where`` (None: their own places). Conflict, DriverError or
+        ValueError (naming the field) leave the controller idle and the driver closed."""
         with self._cond:
             self._refuse_unless_idle()
             self.state = "starting"
@@ -202,17 +181,27 @@ class CaptureController:
                 self.state = "idle"
             raise
         try:
-            # As a capture's: a setup this analyzer cannot take is refused before any hit.
             self._check_setup(dsa, setup)
-            if self.link.sim is not None:
-                self.link.simulator_for_capture()
-                self._place_simulator(dsa, None)
+            simulator = self.link.simulator_for_capture()
+            if simulator is not None:
+                simulator.update(self._place_simulator(dsa, where))
         except (DriverError, ValueError):
             with contextlib.suppress(Exception):
                 dsa.close()
             with self._cond:
                 self.state = "idle"
             raise
+        return dsa, simulator
+
+    def start_practice(self, setup: ResolvedSetup | None, n_hits: int) -> None:
+        """Take ``n_hits`` practice hits (none kept) and choose the ranges and trigger
+        level for ``setup`` (daq/workflows/auto_range.py); the answer lands in the
+        snapshot's ``practice``. Conflict while a capture runs; DriverError when the
+        analyzer cannot be reached."""
+        if not 1 <= n_hits <= 100:
+            raise ValueError("hits: must be 1..100")
+        # As a capture's: a setup this analyzer cannot take is refused before any hit.
+        dsa, _ = self._open_for(setup, None)
         settings = setup.settings if setup is not None else self.settings
         name = setup.name if setup is not None else None
         with self._cond:
