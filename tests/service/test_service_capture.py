@@ -97,7 +97,8 @@ def test_a_capture_decided_through_the_api_lands_with_the_right_flags_and_gets_i
         path = tmp_path / "run.uff"
         path.write_bytes(uff.content)
         assert {s["type"] for s in pyuff.UFF(str(path)).read_sets()} == {58}
-        report = served.get(f"/api/runs/{run_id}/report")
+        # A report draws a dozen figures (seconds each on a loaded machine): wait for it.
+        report = served.get(f"/api/runs/{run_id}/report", timeout=120)
         assert report.headers["content-type"].startswith("text/html")
         assert run_id in report.text
         assert "data:image/png;base64," in report.text
