@@ -239,6 +239,7 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band) -> Run
                     "accepted": bool(mode.quality.accepted),
                     "frequency_spread_top_hz": float(mode.quality.frequency_spread_top_hz),
                     "damping_spread_top": float(mode.quality.damping_spread_top),
+                    "normalisation": mode.normalisation,
                 },
             )
         )
@@ -325,13 +326,14 @@ def _tolerances(result: RunAnalysis) -> np.ndarray:
     return np.maximum(np.minimum(HIT_MATCH_TOLERANCE * wanted, 0.5 * gap), line)
 
 
-def _zone_fits(result: RunAnalysis, frf: np.ndarray, weights: np.ndarray | None = None):
-    """Per zone holding a mode: the LSCF poles of ``frf`` (n_lines_used,) or (n_frf,
-    n_lines_used), all FRFs sharing one denominator, at the top SCATTER_ORDERS orders of
-    the zone."""
+def _zone_fits(
+    result: RunAnalysis, frf: np.ndarray, weights: np.ndarray | None, normalisation: str, wanted: np.ndarray
+):
+    """Per zone holding one of the ``wanted`` modes (Hz): the LSCF poles of ``frf``
+    (n_lines_used,) or (n_frf, n_lines_used), all FRFs sharing one denominator
+    normalised as ``normalisation``, at the top SCATTER_ORDERS orders of the zone."""
     f = result.modal.frequency_hz
     h = np.atleast_2d(frf)
-    wanted = np.array([m.frequency_hz for m in result.modes])
     for zone in result.modal.zones:
         if not np.any((wanted >= zone.low_hz) & (wanted <= zone.high_hz)):
             continue
@@ -340,7 +342,8 @@ def _zone_fits(result: RunAnalysis, frf: np.ndarray, weights: np.ndarray | None 
         orders = tuple(range(max(1, top - SCATTER_ORDERS + 1), top + 1))
         w = None if weights is None else weights[use]
         try:
-            fit = lscf_poles(f[use], h[:, use], top, orders=orders, basis=zone.basis, weights=w)
+            fit = lscf_poles(f[use], h[:, use], top, orders=orders, basis=zone.basis, weights=w,
+                             normalisation=normalisation)  # fmt: skip
         except (ValueError, np.linalg.LinAlgError):
             continue  # a hit too poor to fit alone adds nothing to the scatter
         yield [fit.poles[o - 1] for o in orders]
@@ -352,9 +355,16 @@ def _estimates(result: RunAnalysis, frf: np.ndarray, decay: float, weights=None)
     it (NaN: not found)."""
     wanted = np.array([m.frequency_hz for m in result.modes])
     tol = _tolerances(result)
+    # Each mode is found again with the normalisation it was read with.
+    normalisation = np.array([m.quality.get("normalisation", "highest") for m in result.modes])
     found = []
-    for per_order in _zone_fits(result, frf, weights):
-        found += [_match(p, wanted, tol, decay) for p in per_order]
+    for norm in dict.fromkeys(normalisation):
+        mine = normalisation == norm
+        for per_order in _zone_fits(result, frf, weights, norm, wanted[mine]):
+            for p in per_order:
+                row = np.full((wanted.size, 2), np.nan)
+                row[mine] = _match(p, wanted[mine], tol[mine], decay)
+                found.append(row)
     if not found:
         return np.full((wanted.size, 2), np.nan)
     with np.errstate(all="ignore"), warnings.catch_warnings():
