@@ -363,6 +363,8 @@ def detect_format(path: Path) -> tuple[str, str]:
     header = text_header(head)
     if header and is_frequency_header(header[0]):
         return "frf-text", f"the header's first column {header[0]!r} is a frequency"
+    if not header and (why := headerless_frf_table(head)):
+        return "frf-text", why
     if suffix in TEXT_SUFFIXES:
         why = f"the name ends in {suffix}"
         return "csv", f"{why}, and the header's first column {header[0]!r} is no frequency" if header else why
@@ -440,6 +442,61 @@ def text_header(head: bytes) -> list[str]:
                 pass
         return cells if numeric < len(cells) else []
     return []
+
+
+#: A first column stepping by at least this many units is no time axis a vibration record
+#: has (1/step samples per second, 10 or fewer): it is a frequency axis.
+MIN_FREQUENCY_STEP = 0.1
+#: ... and by at least this one, when its first line holds 0 Hz with zero imaginary parts.
+MIN_FREQUENCY_STEP_AT_DC = 0.01
+
+
+def headerless_frf_table(head: bytes) -> str:
+    """Why the table in ``head`` (a text file's first bytes, no header row) is an FRF
+    table rather than time records, or "" when nothing says so.
+
+    Its rows hold an odd number (3 or more) of numbers, the first column rising by a
+    steady step: a frequency and Re/Im pairs. As time that step would be a sampling rate
+    of 10 samples/s or less (MIN_FREQUENCY_STEP); or the first line is 0 with every
+    imaginary part exactly 0 (an FRF is real at 0 Hz) and the step is 0.01 or more.
+    A frequency table exported without a header (frequency, Re, Im, as MATLAB's
+    ``writematrix`` does) otherwise reads as one hit sampled at 1 Hz."""
+    import numpy as np
+
+    from daq.formats.csv_text import COMMENT_MARKS
+    from daq.formats.frf_text import decode_line, split_cells
+
+    if b"\0" in head:
+        return ""
+    rows: list[list[float]] = []
+    for k, raw in enumerate(head.splitlines()[:-1]):  # the last line may be cut by the read
+        line = decode_line(raw, k == 0).strip()
+        if not line or line.startswith(COMMENT_MARKS):
+            continue
+        cells, delimiter = split_cells(line)
+        try:
+            values = [float(c.replace(",", ".") if delimiter != "," else c) for c in cells]
+        except ValueError:
+            return ""
+        rows.append(values)
+    widths = {len(r) for r in rows}
+    if len(rows) < 3 or len(widths) != 1 or (n := widths.pop()) < 3 or n % 2 == 0:
+        return ""
+    table = np.array(rows)
+    steps = np.diff(table[:, 0])
+    step = float(np.median(steps))
+    if not step > 0 or np.any(np.abs(steps - step) > 0.01 * step):
+        return ""
+    as_rate = f"no header, and its first column steps by {step:g}: as time, sampled at {1 / step:.3g} Hz"
+    step_at_least = step * (1 + 1e-9)  # 0.1 read back from print is 0.09999999999999998
+    if step_at_least >= MIN_FREQUENCY_STEP:
+        return f"{as_rate}, which records no vibration; a frequency axis (--format csv if it is time)"
+    if step_at_least >= MIN_FREQUENCY_STEP_AT_DC and table[0, 0] == 0 and np.all(table[0, 2::2] == 0):
+        return (
+            f"{as_rate}, and at 0 every second value is exactly 0, as an FRF's imaginary part is "
+            "at 0 Hz; a frequency axis (--format csv if it is time)"
+        )
+    return ""
 
 
 def is_frequency_header(cell: str) -> bool:
