@@ -28,6 +28,17 @@ modelab-beam   alxhslm/ModeLAB @4a27c98 Example/SignalCalc/ASCII0000{1..9}/Hxysv
                one accelerometer at z = 0.5 m (= hammer point 4), direction -x (hammer +x).
                -> modelab_beam.uff (UFF 58b binary, function type 4, ref nodes 1..9 +x,
                response node 4 -x; x stored as doubles so the 1000/51200 Hz step is exact).
+tool-holder    leekunhwee/Vibration-Signal-Processing @d9edffe ExperimentalModalAnalysis/
+               Point_{1..5}_Channel_1_CH1.txt: five roving-hammer receptances of a milling tool
+               in its holder (m/N, the source's README), no header, three columns
+               frequency, Re, Im, 0..5000 Hz step 1 Hz; hammer at points 1..5 (0, 55, 90, 130,
+               165 mm from the tool tip), accelerometer at point 1 (the tip).
+               -> tool_holder.uff (UFF 58 ASCII, function type 4, ordinate data type 8:
+               displacement over force, receptance; ref nodes 1..5, response node 1).
+tool-holder-impact  the same repository, ImpactTesting/Point1_Channel1_CH1.txt: one hit,
+               time [s], force [N], acceleration [m/s^2] (ImpactSignalProcessing.m), tab
+               separated, no header, 51,200 rows at 51.2 kHz, time printed to 7 significant
+               digits. Not converted: `daq import` reads the original.
 """
 
 from __future__ import annotations
@@ -173,12 +184,48 @@ def convert_modelab(root: Path) -> None:
         uff.write_sets(data, mode="add")
 
 
+def convert_tool_holder(root: Path) -> None:
+    d = root / "tool-holder"
+    out = d / "tool_holder.uff"
+    if out.exists():
+        out.unlink()
+    uff = pyuff.UFF(str(out))
+    freq = None
+    for i in range(1, 6):
+        a = np.loadtxt(d / "original" / f"Point_{i}_Channel_1_CH1.txt")
+        assert a.shape == (5001, 3), a.shape
+        if freq is None:
+            freq = a[:, 0]
+            assert np.array_equal(freq, np.arange(5001, dtype=float))
+        data = pyuff.prepare_58(
+            func_type=4,
+            rsp_node=1,
+            rsp_dir=1,
+            ref_node=i,
+            ref_dir=1,
+            id1=f"tool holder H1{i} receptance",
+            id2="leekunhwee/Vibration-Signal-Processing ExperimentalModalAnalysis",
+            rsp_ent_name="tool",
+            ref_ent_name="tool",
+            data=a[:, 1] + 1j * a[:, 2],
+            x=freq,
+            abscissa_spacing=1,
+            abscissa_spec_data_type=18,
+            abscissa_axis_units_lab="Hz",
+            ordinate_spec_data_type=8,
+            ordinate_axis_units_lab="m",
+            orddenom_spec_data_type=13,
+            orddenom_axis_units_lab="N",
+        )
+        uff.write_sets(data, mode="add")
+
+
 def main() -> None:
     if len(sys.argv) != 2:
         raise SystemExit("usage: python bench/corpus_convert.py CORPUS_DIR")
     root = Path(sys.argv[1])
     sets = {"pyfrf-impact": convert_pyfrf, "pyuff-3frf": convert_pyuff, "lvm-2ch": convert_lvm,
-            "modelab-beam": convert_modelab}  # fmt: skip
+            "modelab-beam": convert_modelab, "tool-holder": convert_tool_holder}  # fmt: skip
     for name, convert in sets.items():
         if not (root / name / "original").is_dir():
             print(f"{name}: no {root / name / 'original'}; skipped", file=sys.stderr)

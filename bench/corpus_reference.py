@@ -79,7 +79,7 @@ class SetSpec:
 
     name: str
     path: str  # relative to the corpus directory
-    kind: str  # "csv-hits" or "uff-frf"
+    kind: str  # "csv-hits" (daq CSV layout), "text-hit" (time, force, response; no header) or "uff-frf"
     band: tuple[float, float]
     published: dict | None = None
 
@@ -108,7 +108,41 @@ SETS: tuple[SetSpec, ...] = (
             "damping": "not published",
         },
     ),
+    SetSpec(
+        "tool-holder",
+        "tool-holder/tool_holder.uff",
+        "uff-frf",
+        (100.0, 3500.0),  # the source's own plots, Proj_3.m rows 101:3500 of each file
+        published={
+            "source": "github.com/leekunhwee/Vibration-Signal-Processing "
+            "@d9edffe54f69bf34368cd47f9389b78fc3d360cf",
+            "where": "ExperimentalModalAnalysis/README.md, the table of H11..H15 at R(1031), R(1104), "
+            "I(1074), R(1914), R(2092), I(1961), R(2546), R(2783), I(2617)",
+            "method": "by hand on the receptances: natural frequency at the peak of the imaginary part, "
+            "damping (w2 - w1) / (2 wn) from the frequencies of the extrema of the real part",
+            "modes": [
+                {"frequency_hz": 1074.0, "real_extrema_hz": [1031, 1104]},
+                {"frequency_hz": 1961.0, "real_extrema_hz": [1914, 2092]},
+                {"frequency_hz": 2617.0, "real_extrema_hz": [2546, 2783]},
+            ],
+            "damping": "derived from the extrema: (1104-1031)/(2*1074) = 3.40 %, (2092-1914)/(2*1961) = "
+            "4.54 %, (2783-2546)/(2*2617) = 4.53 %",
+        },
+    ),
+    SetSpec(
+        "tool-holder-impact",
+        "tool-holder-impact/original/Point1_Channel1_CH1.txt",
+        "text-hit",
+        # From 50 Hz (ImpactSignalProcessing.m plots the FRF from 50 Hz) to where the hit's
+        # force autospectrum has fallen 20 dB below its level up to 500 Hz (the hammer guidance
+        # of analysis/band_choice.py; -22 dB at 1.4 kHz, -31 dB at 2 kHz, computed from the record).
+        (50.0, 1400.0),
+    ),
 )
+
+#: UFF 58 ordinate data types of the response, and the factor of (j omega)^k that turns
+#: that FRF into accelerance: 8 displacement (receptance), 11 velocity, 12 acceleration.
+UFF_FORMS = {8: 2, 11: 1, 12: 0}
 
 
 def read_hits_csv(path: Path) -> tuple[float, np.ndarray, np.ndarray]:
@@ -172,10 +206,20 @@ def read_uff_frf(path: Path) -> tuple[np.ndarray, np.ndarray]:
     sets = sets if isinstance(sets, list) else [sets]
     frfs = [s for s in sets if s["func_type"] == 4]
     forms = {s.get("ordinate_spec_data_type") for s in frfs}
-    if forms != {12}:  # 12: acceleration (over force): accelerance, the form fitted (FRF_FORM)
-        raise ValueError(f"{path}: ordinate data types {sorted(forms)}, not accelerance (12)")
+    if len(forms) != 1 or not forms <= set(UFF_FORMS):
+        raise ValueError(f"{path}: ordinate data types {sorted(forms)}, not one of {sorted(UFF_FORMS)}")
     f = np.asarray(frfs[0]["x"], dtype=float)
-    return f, np.array([np.asarray(s["data"], dtype=complex) for s in frfs])
+    h = np.array([np.asarray(s["data"], dtype=complex) for s in frfs])
+    # To accelerance, the form fitted (FRF_FORM): times (j omega)^k.
+    return f, h * (2j * np.pi * f) ** UFF_FORMS[forms.pop()]
+
+
+def read_text_hit(path: Path) -> tuple[float, np.ndarray, np.ndarray]:
+    """One hit in a headerless text table of time [s], force, response: fs and (1, n) arrays.
+    The rate comes from the time column's mean step (printed to 7 significant digits)."""
+    table = np.loadtxt(path, ndmin=2)
+    fs = (table.shape[0] - 1) / (table[-1, 0] - table[0, 0])
+    return float(fs), table[None, :, 1], table[None, :, 2]
 
 
 def lscf_poles(
@@ -316,8 +360,8 @@ def reference(corpus: Path, spec: SetSpec) -> dict:
     """Peer reference of one set."""
     path = corpus / spec.path
     entry: dict = {"file": spec.path, "band_hz": list(spec.band)}
-    if spec.kind == "csv-hits":
-        fs, force, resp = read_hits_csv(path)
+    if spec.kind in ("csv-hits", "text-hit"):
+        fs, force, resp = read_hits_csv(path) if spec.kind == "csv-hits" else read_text_hit(path)
         f, h, coh = h1_from_hits(fs, force, resp)
         sel = (f >= spec.band[0]) & (f <= spec.band[1])
         entry.update(
@@ -339,11 +383,12 @@ def reference(corpus: Path, spec: SetSpec) -> dict:
             {
                 "frfs": int(h.shape[0]),
                 "lines": int(h.shape[1]),
-                "frf_method": "as stored (UFF 58, function type 4, ordinate type 12: accelerance)",
+                "frf_method": "as stored (UFF 58, function type 4), times (j omega)^k to accelerance "
+                "from its ordinate type (8 receptance, 11 mobility, 12 accelerance)",
             }
         )
     entry["frequency_step_hz"] = round(float(f[1] - f[0]), 6)
-    peaks = resonance_peaks(f, h, spec.band, coh if spec.kind == "csv-hits" else None)
+    peaks = resonance_peaks(f, h, spec.band, coh if spec.kind != "uff-frf" else None)
     orders = lscf_poles(f, h, spec.band)
     modes = stable_modes(orders)
     entry["frf_form"] = FRF_FORM
@@ -382,6 +427,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--only", nargs="*", help="set names to compute (default: all)")
     args = parser.parse_args(argv)
     result = {"generator": "bench/corpus_reference.py", "sets": {}}
+    if args.only and args.output.exists():  # the other sets' entries stay as they were
+        result = json.loads(args.output.read_text())
     for spec in SETS:
         if args.only and spec.name not in args.only:
             continue

@@ -7,7 +7,8 @@ tests/data/corpus/, and are skipped, loudly (tests/conftest.py), where they are 
 
 What must hold on every set (the issue's figures):
   * at least 90 % of the peer's stable modes found, each within 0.2 % in frequency (or one
-    line, on a grid coarser than that);
+    line, on a grid coarser than that; or, for a heavily damped mode, a quarter of its
+    half-power half-width, HALF_WIDTH_SHARE);
   * damping within the peer's spread over its orders, widened by our own 2 u;
   * at most one spurious mode per ten found: a mode of ours inside the peer's band that
     neither the peer's stability diagram (chains stable over 5 orders) nor the peak picking
@@ -41,8 +42,18 @@ def daq(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "daq", *args], capture_output=True, text=True, timeout=300)
 
 
-def near(f_ours: float, f_ref: float, line_hz: float) -> bool:
-    return abs(f_ours - f_ref) <= max(FREQUENCY_TOLERANCE * f_ref, line_hz)
+#: A heavily damped mode's frequency is defined to a fraction of its half-power half-width
+#: zeta f, not to 0.2 %: on tool-holder the peer's own LSCF puts mode 1 at 1064.8-1068.3 Hz
+#: as its band moves (0.1 zeta f) and the source's peak of the imaginary part at 1074 Hz
+#: (0.2 zeta f from the peer). Above zeta = 0.8 % this share of zeta f is the tolerance.
+HALF_WIDTH_SHARE = 0.25
+
+
+def near(f_ours: float, f_ref: float, line_hz: float, zeta_ref: float = 0.0) -> bool:
+    """Within 0.2 % of the reference, one line, or HALF_WIDTH_SHARE of its half-width."""
+    return abs(f_ours - f_ref) <= max(
+        FREQUENCY_TOLERANCE * f_ref, line_hz, HALF_WIDTH_SHARE * zeta_ref * f_ref
+    )
 
 
 #: Where the defaults fall short today, said and kept visible (strict: a fix makes them pass
@@ -59,6 +70,16 @@ KNOWN_SHORT = {
     "the peer's 0.141-0.244 %",
     ("spurious", "lvm-2ch-m1"): "8.05 Hz (poor coherence at low frequency, band-edge caution) and "
     "40.03 Hz (on a notch of the force spectrum; a peak m2 confirms, the peer a mode on m2 only)",
+    ("found", "tool-holder"): "3 of 11: the peer's LSCF keeps 11 chains in 100-3500 Hz (792 Hz at 9.9 %, "
+    "1227, 1503, 1813, 2313, 2771, 3002, 3405 Hz at 1-4 %, 1-4 % of |H|); the source publishes 3 modes "
+    "and half-power peak picking finds 3 peaks, all 3 found (test_defaults_reproduce_published_frequencies)",
+    ("found", "tool-holder-impact"): "2 of 7: one hit; the peer's LSCF keeps 685, 807 (11 %), 904, 998 and "
+    "1209 Hz (7 %) beside 297 and 1074 Hz; ours 1231.5 +- 8.7 Hz for 1209 Hz, 22 Hz away, 1 Hz beyond a "
+    "quarter of its half-width; peak picking finds one peak (1058 Hz)",
+    ("spurious", "tool-holder"): "2724 Hz (2.1 +- 0.7 %) between the peer's chains at 2679 and 2771 Hz: "
+    "the shoulder above the 2610 Hz mode, one mode in ours, two in the peer's",
+    ("spurious", "tool-holder-impact"): "1231.5 Hz (7.6 +- 2.3 %): the peer's 1209 Hz (7.1 %) and 1219 Hz "
+    "chains, 12-22 Hz away",
 }
 
 
@@ -96,7 +117,9 @@ def test_defaults_find_the_peers_modes(name, analysed):
     ours = info["modes"]
     found = 0
     for peer in ref["peer_modes"]:
-        match = [m for m in ours if near(m["frequency_hz"], peer["frequency_hz"], line)]
+        match = [
+            m for m in ours if near(m["frequency_hz"], peer["frequency_hz"], line, peer["damping_ratio"])
+        ]
         if not match:
             continue
         found += 1
@@ -113,10 +136,12 @@ def test_defaults_add_no_spurious_modes(name, analysed):
     line = ref["frequency_step_hz"]
     low, high = ref["band_hz"]
     support = (
-        [m["frequency_hz"] for m in ref["peer_modes"]] + ref["peer_supported_hz"] + ref["resonance_peaks_hz"]
+        [(m["frequency_hz"], m["damping_ratio"]) for m in ref["peer_modes"]]
+        + [(f, 0.0) for f in ref["peer_supported_hz"] + ref["resonance_peaks_hz"]]
+        + [(m["frequency_hz"], _published_damping(m)) for m in (ref.get("published") or {}).get("modes", [])]
     )
     inside = [m["frequency_hz"] for m in info["modes"] if low <= m["frequency_hz"] <= high]
-    spurious = [f for f in inside if not any(near(f, s, line) for s in support)]
+    spurious = [f for f in inside if not any(near(f, s, line, z) for s, z in support)]
     assert len(spurious) <= MAX_SPURIOUS * len(inside), spurious
 
 
@@ -126,5 +151,39 @@ def test_defaults_reproduce_published_frequencies(name, analysed):
     published = SETS[name]["published"]
     line = SETS[name]["frequency_step_hz"]
     ours = [m["frequency_hz"] for m in analysed(name)["modes"]]
-    for f in (m["frequency_hz"] for m in published["modes"]):
-        assert any(near(x, f, line) for x in ours), (f, ours)
+    for mode in published["modes"]:
+        f = mode["frequency_hz"]
+        assert any(near(x, f, line, _published_damping(mode)) for x in ours), (f, ours)
+
+
+def _published_damping(mode: dict) -> float:
+    """The damping a source's mode was published with, or read from the frequencies of the
+    extrema of its real part ((w2 - w1) / (2 wn)); 0 when it publishes none."""
+    if "damping_ratio" in mode:
+        return mode["damping_ratio"]
+    if "real_extrema_hz" in mode:
+        low, high = mode["real_extrema_hz"]
+        return (high - low) / (2 * mode["frequency_hz"])
+    return 0.0
+
+
+@pytest.mark.slow
+def test_one_hit_of_a_51_2_khz_text_export_reads_at_its_rate_and_gives_the_peers_first_mode(
+    analysed, tmp_path
+):
+    """tool-holder-impact: a headerless, tab-separated record whose time column is printed to 7
+    significant digits (1.953125e-05, ..., 9.999805e-01) reads as 51.2 kHz, and its dominant
+    mode (79 % of the synthesis) lies within a quarter half-width of the peer's LSCF mode,
+    with its damping inside the peer's spread. (The peak of |H|, 1058 Hz, is no reading of
+    a 3.7 % mode's frequency: the neighbours' skirts move it by half a half-width.)"""
+    name = "tool-holder-impact"
+    ref, info = SETS[name], analysed(name)
+    imported = daq("import", str(corpus_dir() / ref["file"]), "--store", str(tmp_path))
+    assert "(csv: 1 hit of 51200 samples at 51200 Hz)" in imported.stdout, imported.stdout
+    (peer,) = [m for m in ref["peer_modes"] if abs(m["frequency_hz"] - 1074) < 20]
+    zeta = peer["damping_ratio"]
+    (ours,) = [m for m in info["modes"] if near(m["frequency_hz"], peer["frequency_hz"], 1.0, zeta)]
+    u = ours["damping_u"]
+    assert peer["damping_min"] - 2 * u <= ours["damping_ratio"] <= peer["damping_max"] + 2 * u, (peer, ours)
+    assert info["n_averages"] == 1
+    assert any("one hit" in c for c in info["cautions"]), info["cautions"]
