@@ -19,7 +19,6 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,7 +34,7 @@ from daq.store.model import (
     check_point_on_article,
     check_test_name,
 )
-from daq.store.text_files import file_lock, now_utc, toml_string
+from daq.store.text_files import file_lock, now_utc, parse_toml, read_bounded, toml_string
 from daq.store.writer import run_path, write_atomically
 
 TESTS_FOLDER = "tests"
@@ -179,16 +178,11 @@ def load_test(store_dir: Path | str, name: str) -> ModalTest:
     not exist or cannot be read."""
     path = modal_test_path(store_dir, name)
     try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_TEST_FILE_BYTES + 1)
+        data = read_bounded(path, MAX_TEST_FILE_BYTES, str(path))
     except FileNotFoundError:
         known = list_tests(store_dir)
         hint = f"; tests: {', '.join(known)}" if known else "; there are no tests in this store"
         raise StoreError(f"no test {name} in {Path(store_dir)}{hint}") from None
-    except OSError as exc:
-        raise StoreError(f"cannot read {path}: {os.strerror(exc.errno or 0)}") from None
-    if len(data) > MAX_TEST_FILE_BYTES:
-        raise StoreError(f"{path}: larger than {MAX_TEST_FILE_BYTES} bytes; refused as not a test file")
     test = parse_test(data, str(path))
     if test.name != name:
         raise StoreError(f"{path}: names test {test.name!r}, not {name!r} (renamed by hand?)")
@@ -285,12 +279,7 @@ def dump_test(test: ModalTest) -> str:
 def parse_test(data: bytes, where: str) -> ModalTest:
     """The test in TOML ``data`` (the bytes of a test file, ``where`` names it in
     messages); StoreError (one line) for anything that does not check."""
-    try:
-        doc = tomllib.loads(data.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise StoreError(f"{where}: not UTF-8 text; refused as not a test file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise StoreError(f"{where}: not valid TOML ({exc})") from None
+    doc = parse_toml(data, where)
     try:
         return _test_from_doc(doc)
     except ValueError as exc:

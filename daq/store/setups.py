@@ -23,17 +23,17 @@ named ``default`` stores it like any other (version 1).
 from __future__ import annotations
 
 import contextlib
+import errno
 import math
 import os
 import re
-import tomllib
 from dataclasses import dataclass, field
 from datetime import date, datetime
 from pathlib import Path
 from typing import Any
 
 from daq.store.errors import StoreError
-from daq.store.text_files import file_lock, now_utc, toml_string
+from daq.store.text_files import file_lock, now_utc, parse_toml, read_bounded, toml_string
 from daq.store.writer import write_atomically
 
 SETUPS_FOLDER = "setups"
@@ -213,18 +213,9 @@ def strip_saved(doc: dict[str, Any]) -> dict[str, Any]:
 
 def _read(path: Path, name: str) -> StoredSetup:
     try:
-        with open(path, "rb") as fh:
-            raw = fh.read(MAX_FILE_BYTES + 1)
-    except OSError as exc:
-        raise StoreError(f"cannot read {path}: {os.strerror(exc.errno or 0)}") from None
-    if len(raw) > MAX_FILE_BYTES:
-        raise StoreError(f"{path}: larger than {MAX_FILE_BYTES} bytes; refused as not a setup")
-    try:
-        doc = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise StoreError(f"{path}: not UTF-8 text") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise StoreError(f"{path}: not valid TOML ({exc})") from None
+        doc = parse_toml(read_bounded(path, MAX_FILE_BYTES, str(path)), str(path))
+    except FileNotFoundError:
+        raise StoreError(f"cannot read {path}: {os.strerror(errno.ENOENT)}") from None
     saved = doc.get(SAVED_TABLE)
     if not isinstance(saved, dict):
         raise StoreError(f"{path}: [{SAVED_TABLE}]: missing (the store's name, version, saved_utc)")

@@ -1,5 +1,6 @@
 """Small text files of the store beside its runs (tests, setups, transducers): the lock
-held while one is read, changed and written again, and the TOML their writers share.
+held while one is read, changed and written again, the bounded TOML read their readers
+share, and the TOML their writers share.
 
 The store's own lock (daq/store/lock.py) is held by `daq serve` for its whole life, so
 each of these files has a lock of its own: an flock on a file beside it, which the
@@ -13,6 +14,7 @@ import errno
 import fcntl
 import os
 import time
+import tomllib
 from collections.abc import Iterator
 from datetime import UTC, datetime
 from pathlib import Path
@@ -50,6 +52,34 @@ def file_lock(folder: Path, lock_name: str, what: str, timeout_s: float = LOCK_T
         yield
     finally:
         os.close(fd)
+
+
+def read_bounded(path: Path, max_bytes: int, what: str) -> bytes:
+    """The bytes of the file at ``path`` (``what`` names it in messages); StoreError (one
+    line) when it cannot be read or holds more than ``max_bytes``: a TOML file that large
+    is no file of ours, and reading it whole could exhaust the memory. FileNotFoundError
+    passes through, for the caller to say what is missing."""
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise
+    except OSError as exc:
+        raise StoreError(f"cannot read {what}: {os.strerror(exc.errno or 0)}") from None
+    if len(data) > max_bytes:
+        raise StoreError(f"{what}: larger than {max_bytes} bytes; refused")
+    return data
+
+
+def parse_toml(data: bytes, what: str) -> dict:
+    """The TOML document in ``data`` as a dict; StoreError (one line naming ``what``) when
+    it is not UTF-8 text or not valid TOML."""
+    try:
+        return tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise StoreError(f"{what}: not UTF-8 text") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise StoreError(f"{what}: not valid TOML ({exc})") from None
 
 
 def toml_string(text: str) -> str:

@@ -19,9 +19,7 @@ with a StoreError naming the file and the field.
 
 from __future__ import annotations
 
-import os
 import re
-import tomllib
 from dataclasses import dataclass
 from datetime import date
 from pathlib import Path
@@ -29,7 +27,7 @@ from typing import Any
 
 from daq.store.errors import StoreError
 from daq.store.setups import SetupStore
-from daq.store.text_files import file_lock, toml_string
+from daq.store.text_files import file_lock, parse_toml, read_bounded, toml_string
 from daq.store.writer import write_atomically
 
 TRANSDUCERS_FILE = "transducers.toml"
@@ -200,20 +198,9 @@ class TransducerTable:
 
     def _stored(self) -> dict[str, Transducer]:
         try:
-            with open(self.path, "rb") as fh:
-                data = fh.read(MAX_FILE_BYTES + 1)
+            doc = parse_toml(read_bounded(self.path, MAX_FILE_BYTES, str(self.path)), str(self.path))
         except FileNotFoundError:
             return {}
-        except OSError as exc:
-            raise StoreError(f"cannot read {self.path}: {os.strerror(exc.errno or 0)}") from None
-        if len(data) > MAX_FILE_BYTES:
-            raise StoreError(f"{self.path}: larger than {MAX_FILE_BYTES} bytes; refused")
-        try:
-            doc = tomllib.loads(data.decode("utf-8"))
-        except UnicodeDecodeError:
-            raise StoreError(f"{self.path}: not UTF-8 text") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise StoreError(f"{self.path}: not valid TOML ({exc})") from None
         unknown = sorted(set(doc) - {"transducer"})
         if unknown:
             raise StoreError(f"{self.path}: {unknown[0]}: unknown key; the file holds [[transducer]] tables")

@@ -9,13 +9,15 @@ docs/modal-tests.md describes the article file.
 
 from __future__ import annotations
 
+import errno
 import math
-import tomllib
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from analysis.beam import TABLE_1, BeamProperties
+from daq.store.errors import StoreError
 from daq.store.model import (
     DIRECTIONS,
     Point,
@@ -26,6 +28,7 @@ from daq.store.model import (
     check_article,
     check_point_on_article,
 )
+from daq.store.text_files import parse_toml, read_bounded
 from daq.workflows.errors import WorkflowError
 
 #: The built-in articles, by the name ``--article`` takes.
@@ -64,19 +67,13 @@ def read_article(spec: str | Path | None = None) -> dict[str, Any]:
             "or an article file (.toml)",
             exit_code=2,
         )
+    what = f"article file {path}"
     try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_ARTICLE_FILE_BYTES + 1)
-    except OSError as exc:
-        raise WorkflowError(f"cannot read article file {path}: {exc.strerror or exc}") from None
-    if len(data) > MAX_ARTICLE_FILE_BYTES:
-        raise WorkflowError(f"article file {path} is larger than {MAX_ARTICLE_FILE_BYTES} bytes; refused")
-    try:
-        doc = tomllib.loads(data.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise WorkflowError(f"article file {path} is not UTF-8 text") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise WorkflowError(f"article file {path} is not valid TOML ({exc})") from None
+        doc = parse_toml(read_bounded(path, MAX_ARTICLE_FILE_BYTES, what), what)
+    except FileNotFoundError:
+        raise WorkflowError(f"cannot read {what}: {os.strerror(errno.ENOENT)}") from None
+    except StoreError as exc:
+        raise WorkflowError(str(exc)) from None
     return parse_article(doc, str(path))
 
 
