@@ -531,7 +531,8 @@ def sections(
             str(k), f"{m['frequency_hz']:.4f} ± {_num(m.get('frequency_u_hz'), '.2g')}",
             f"{_num(None if zeta is None else 100 * zeta, '.3g')} ± "
             f"{_num(None if m.get('damping_u') is None else 100 * m['damping_u'], '.2g')}",
-            str(q["n_stable_orders"]), f"{100 * q['synthesis_share']:.2g} %",
+            str(q["n_stable_orders"]) + (" (alpha_0 = 1)" if q.get("normalisation") == "lowest" else ""),
+            f"{100 * q['synthesis_share']:.2g} %",
         ])  # fmt: skip
     modes = Section("Modes", [Para(note, "note")])
     modes.blocks += [Para(c, "caution") for c in [*_window_cautions(s), *s.get("cautions", [])]]

@@ -245,8 +245,10 @@ def _mode_text(mode: dict) -> str:
     zeta_text = f"{100 * zeta:.3g} %{zspread}" if zeta is not None else "n/a (window decay larger)"
     q = mode["quality"]
     flag = "" if q.get("accepted", True) else " (asked for; fails a selection rule)"
+    # The second LSCF normalisation (analysis/modal_id/identify.py) is said: its poles differ.
+    read_with = " with alpha_0 = 1" if q.get("normalisation") == "lowest" else ""
     return (
         f"{mode['frequency_hz']:.4f} Hz{spread}, damping {zeta_text}; "
-        f"stable over {q['n_stable_orders']} orders{flag}, "
+        f"stable over {q['n_stable_orders']} orders{read_with}{flag}, "
         f"{100 * q['synthesis_share']:.2g} % of the synthesis"
     )
