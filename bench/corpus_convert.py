@@ -64,6 +64,33 @@ def write_hits_csv(
     path.write_text("\n".join(lines) + "\n")
 
 
+#: UFF 58 ordinate data type and unit label of each FRF form (the response over force).
+ORDINATE = {"receptance": (8, "m"), "accelerance": (12, "m/s^2")}
+
+
+def frf_record(
+    frf: np.ndarray,
+    freq: np.ndarray,
+    ids: tuple[str, str],
+    nodes: tuple[int, int, int, int],
+    form: str,
+    entity: str,
+    binary: bool = False,
+) -> dict:
+    """A dataset-58 FRF record (function type 4) for pyuff: ``nodes`` = (response node,
+    its direction, reference node, its direction); abscissa in Hz, evenly spaced unless
+    ``binary`` (then the x values are stored as they are)."""
+    ordinate, unit = ORDINATE[form]
+    rsp_node, rsp_dir, ref_node, ref_dir = nodes
+    return pyuff.prepare_58(
+        binary=int(binary), func_type=4, rsp_node=rsp_node, rsp_dir=rsp_dir, ref_node=ref_node,
+        ref_dir=ref_dir, id1=ids[0], id2=ids[1], rsp_ent_name=entity, ref_ent_name=entity, data=frf,
+        x=freq, abscissa_spacing=0 if binary else 1, abscissa_spec_data_type=18,
+        abscissa_axis_units_lab="Hz", ordinate_spec_data_type=ordinate, ordinate_axis_units_lab=unit,
+        orddenom_spec_data_type=13, orddenom_axis_units_lab="N",
+    )  # fmt: skip
+
+
 def convert_pyfrf(root: Path) -> None:
     d = root / "pyfrf-impact"
     m = np.array([np.load(d / "original" / f"measurements_{i}.npy") for i in range(1, 6)])
@@ -94,26 +121,8 @@ def convert_pyuff(root: Path) -> None:
     for i in range(3):
         frf = np.genfromtxt(d / "original" / f"meas_point_{i + 1}.txt", dtype=complex)
         assert frf.shape == freq.shape
-        data = pyuff.prepare_58(
-            func_type=4,
-            rsp_node=1,
-            rsp_dir=1,
-            ref_node=i + 1,
-            ref_dir=1,
-            id1=f"pyuff meas_point_{i + 1} accelerance",
-            id2="ladisk/pyuff data/meas_point_N.txt",
-            rsp_ent_name="TestCase",
-            ref_ent_name="TestCase",
-            data=frf,
-            x=freq,
-            abscissa_spacing=1,
-            abscissa_spec_data_type=18,
-            abscissa_axis_units_lab="Hz",
-            ordinate_spec_data_type=12,
-            ordinate_axis_units_lab="m/s^2",
-            orddenom_spec_data_type=13,
-            orddenom_axis_units_lab="N",
-        )
+        ids = (f"pyuff meas_point_{i + 1} accelerance", "ladisk/pyuff data/meas_point_N.txt")
+        data = frf_record(frf, freq, ids, (1, 1, i + 1, 1), "accelerance", "TestCase")
         uff.write_sets(data, mode="add")
 
 
@@ -160,27 +169,9 @@ def convert_modelab(root: Path) -> None:
             freq = a[:, 0]
             assert np.allclose(freq, np.arange(51201) * (1000.0 / 51200), rtol=0, atol=1e-9)
             freq = np.arange(51201) * (1000.0 / 51200)  # the exported axis, exact
-        data = pyuff.prepare_58(
-            binary=1,
-            func_type=4,
-            rsp_node=4,
-            rsp_dir=-1,
-            ref_node=i,
-            ref_dir=1,
-            id1=f"ModeLAB Hxysv{i:05d} accelerance",
-            id2="alxhslm/ModeLAB Example/SignalCalc",
-            rsp_ent_name="beam",
-            ref_ent_name="beam",
-            data=a[:, 1] + 1j * a[:, 2],
-            x=freq,
-            abscissa_spacing=0,
-            abscissa_spec_data_type=18,
-            abscissa_axis_units_lab="Hz",
-            ordinate_spec_data_type=12,
-            ordinate_axis_units_lab="m/s^2",
-            orddenom_spec_data_type=13,
-            orddenom_axis_units_lab="N",
-        )
+        data = frf_record(a[:, 1] + 1j * a[:, 2], freq, (f"ModeLAB Hxysv{i:05d} accelerance",
+                          "alxhslm/ModeLAB Example/SignalCalc"), (4, -1, i, 1), "accelerance", "beam",
+                          binary=True)  # fmt: skip
         uff.write_sets(data, mode="add")
 
 
@@ -197,26 +188,9 @@ def convert_tool_holder(root: Path) -> None:
         if freq is None:
             freq = a[:, 0]
             assert np.array_equal(freq, np.arange(5001, dtype=float))
-        data = pyuff.prepare_58(
-            func_type=4,
-            rsp_node=1,
-            rsp_dir=1,
-            ref_node=i,
-            ref_dir=1,
-            id1=f"tool holder H1{i} receptance",
-            id2="leekunhwee/Vibration-Signal-Processing ExperimentalModalAnalysis",
-            rsp_ent_name="tool",
-            ref_ent_name="tool",
-            data=a[:, 1] + 1j * a[:, 2],
-            x=freq,
-            abscissa_spacing=1,
-            abscissa_spec_data_type=18,
-            abscissa_axis_units_lab="Hz",
-            ordinate_spec_data_type=8,
-            ordinate_axis_units_lab="m",
-            orddenom_spec_data_type=13,
-            orddenom_axis_units_lab="N",
-        )
+        data = frf_record(a[:, 1] + 1j * a[:, 2], freq, (f"tool holder H1{i} receptance",
+                          "leekunhwee/Vibration-Signal-Processing ExperimentalModalAnalysis"),
+                          (1, 1, i, 1), "receptance", "tool")  # fmt: skip
         uff.write_sets(data, mode="add")
 
 
