@@ -90,14 +90,29 @@ def tool_holder_like(seed: int, noise: float = 0.4) -> tuple[np.ndarray, np.ndar
     return f, h + noise * rms * (f / 2000.0) ** 2 * scatter
 
 
+@pytest.fixture(scope="module")
+def analysed():
+    """seed -> (f, h, analyze_frfs with the defaults), each draw analysed once."""
+    cache: dict[int, tuple] = {}
+
+    def get(seed: int) -> tuple:
+        if seed not in cache:
+            f, h = tool_holder_like(seed)
+            cache[seed] = (f, h, analyze_frfs(f, h, None, "file"))
+        return cache[seed]
+
+    return get
+
+
 def _found(result, f_true, zeta_true):
     return [m for m in result.modes if abs(m.frequency_hz - f_true) <= 0.25 * zeta_true * f_true]
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_both_normalisations_find_what_alpha_p_alone_misses_with_honest_uncertainties(seed, monkeypatch):
-    f, h = tool_holder_like(seed)
-    both = analyze_frfs(f, h, None, "file")
+def test_both_normalisations_find_what_alpha_p_alone_misses_with_honest_uncertainties(
+    seed, analysed, monkeypatch
+):
+    f, h, both = analysed(seed)
     for f_true, zeta_true in zip(MAIN_HZ, MAIN_ZETA, strict=True):
         (mode,) = _found(both, f_true, zeta_true)
         assert abs(mode.frequency_hz - f_true) <= 3 * mode.frequency_u_hz, (f_true, mode)
@@ -111,9 +126,9 @@ def test_both_normalisations_find_what_alpha_p_alone_misses_with_honest_uncertai
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_a_broad_mode_the_fit_cannot_do_without_is_kept(seed, monkeypatch):
-    f, h = tool_holder_like(seed)
-    (mode,) = _found(analyze_frfs(f, h, None, "file"), 300.0, 0.04)
+def test_a_broad_mode_the_fit_cannot_do_without_is_kept(seed, analysed, monkeypatch):
+    f, h, result = analysed(seed)
+    (mode,) = _found(result, 300.0, 0.04)
     assert abs(mode.frequency_hz - 300.0) <= 3 * mode.frequency_u_hz, mode
     assert abs(mode.damping_ratio - 0.04) <= 3 * mode.damping_u, mode
     monkeypatch.setattr(identify, "STRONG_ERROR_RATIO", np.inf)
