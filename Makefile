@@ -49,9 +49,10 @@ demo: $(VENV)/.installed-run
 	$(BIN)/daq test report demo-beam -o $(VENV)/demo-test-report --force --store $(DEMO_TEST_STORE)
 
 test: lint
-	# worksteal: an idle worker takes queued tests from a busy one, so the slow
-	# process-killing tests at the end do not leave one core waiting on the other.
-	$(BIN)/python -m pytest -n auto --dist worksteal
+	# One worker more than the cores: the service, browser and kill tests spend much of
+	# their time waiting on real time. worksteal: an idle worker takes queued tests from
+	# a busy one, so the slow tests at the end do not leave a core waiting.
+	$(BIN)/python -m pytest -n $$($(BIN)/python -c 'import os; print((os.cpu_count() or 1) + 1)') --dist worksteal
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check .
