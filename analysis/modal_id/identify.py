@@ -242,7 +242,8 @@ def identify_modes(
         residuals={"lower": est.lower, "upper": est.upper},
         synthesis_error=est.relative_error,
         stability=diagram,
-        method=f"LSCF in {len(zones)} zone(s) ({orders_text}) + stability clustering + LSFD ({form})",
+        method=f"LSCF ({', then '.join(DENOMINATOR[n] for n in NORMALISATIONS)}) in {len(zones)} zone(s) "
+        f"({orders_text}) + stability clustering + LSFD ({form})",
         zones=list(zones),
     )
 
@@ -263,7 +264,7 @@ def _drop_second_opinions(clusters: list[Cluster], normalisation: list[str], fre
             if gap <= max(freq_tol * d.frequency_hz, width):
                 c.accepted, c.reason = (
                     False,
-                    (f"the mode at {d.frequency_hz:.6g} Hz, read with {DENOMINATOR[m]}"),
+                    f"the mode at {d.frequency_hz:.6g} Hz, read with {DENOMINATOR[m]}",
                 )
                 break
 
