@@ -343,6 +343,9 @@ def acquisition_section(run: Any) -> Section:
         ],
         ["force point", _point_text(points.force_point)],
     ] + [[f"response point {i}", _point_text(p)] for i, p in enumerate(points.response_points, 1)]
+    if run.points is None and run.kind == "imported":
+        # An imported file says nothing of the structure: the seed's beam is no fact of it.
+        point_rows = [["article and points", "not recorded: the imported file says nothing of the structure"]]
     blocks += [Para("Points:", "note"), Table(None, point_rows, row_header=True)]
     blocks += _origin(run)
     return section
@@ -383,7 +386,11 @@ def _origin(run: Any) -> list[Any]:
 
 def _window_cautions(summary: dict[str, Any]) -> list[str]:
     windows_from = summary.get("windows", {}).get("from", "")
-    return [f"windows {windows_from}"] if str(windows_from).startswith("unknown") else []
+    said = f"windows {windows_from}"
+    # Analyses stored before it was one of their cautions do not hold it.
+    return (
+        [said] if str(windows_from).startswith("unknown") and said not in summary.get("cautions", []) else []
+    )
 
 
 def hit_verdict(run: Any, i: int) -> tuple[str, str]:
@@ -513,9 +520,14 @@ def sections(
     band = s.get("band")
     band_text = f" Band {band['low_hz']:.6g}-{band['high_hz']:.6g} Hz: {band['reason']}." if band else ""
     u_from = sorted({m.get("uncertainty_from") for m in s["modes"]} - {None})
+    decay = s.get("added_decay_1_s") or 0.0
+    removed = (
+        f"; the exponential window's decay ({decay:.4g} 1/s) is removed from every damping ratio. "
+        if decay > 0
+        else ". "
+    )
     note = (
-        f"From {source}.{band_text} Windows: {windows}; the exponential window's decay "
-        f"({s['added_decay_1_s']:.4g} 1/s) is removed from every damping ratio. "
+        f"From {source}.{band_text} Windows: {windows}{removed}"
         + (f"± is the standard uncertainty of the value, from {', '.join(u_from)}. " if u_from else "")
         + (
             f"Synthesis error {100 * s['synthesis_error']:.3g} %."

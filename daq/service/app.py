@@ -835,8 +835,8 @@ def analysis_cautions(summary: dict[str, Any]) -> list[str]:
     out = _texts(summary.get("cautions"))
     windows = summary.get("windows")
     source = windows.get("from") if isinstance(windows, dict) else None
-    if isinstance(source, str) and source.startswith("unknown"):
-        out.insert(0, f"windows {source}")
+    if isinstance(source, str) and source.startswith("unknown") and f"windows {source}" not in out:
+        out.insert(0, f"windows {source}")  # an analysis stored before it was a caution
     return out
 
 

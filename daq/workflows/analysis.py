@@ -26,8 +26,9 @@ from daq.store.model import SOFTWARE
 from daq.workflows.outcome import RunOutcome, failure_reason
 
 RESULT_NAME = "analysis"
-#: Bumped when the analysis changes what it computes from the same run and options.
-ANALYSIS_VERSION = 2
+#: Bumped when the analysis changes what it computes from the same run and options
+#: (3: both LSCF normalisations, the spurious test's second way in, input cautions).
+ANALYSIS_VERSION = 3
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
@@ -125,6 +126,25 @@ def _frf_window_decay(run: Run, source: str) -> tuple[float, str]:
     return 0.0, "unknown: the damping includes any window the source applied"
 
 
+def input_cautions(run: Run, notes: dict[str, Any]) -> list[str]:
+    """Cautions about what the run's file did not say: the windows its FRFs went through,
+    and the FRFs' form (a text table without units is read as accelerance; read as the
+    wrong form, its modes are wrong and its synthesis poor)."""
+    out = []
+    windows = notes.get("windows", {}).get("from", "")
+    if isinstance(windows, str) and windows.startswith("unknown"):
+        out.append(f"windows {windows}")
+    imported = run.provenance.get("imported_from", {})
+    said = imported.get("form_from", "") if isinstance(imported, dict) else ""
+    if isinstance(said, str) and said.startswith("default"):
+        out.append(
+            "FRF form assumed: the file does not say what its FRFs are, so they were read as "
+            "accelerance, (m/s^2)/N; if they are receptance (m/N) or mobility ((m/s)/N), import the "
+            "file again with --frf-form"
+        )
+    return out
+
+
 def cache_key(path: Path, options: AnalysisOptions) -> str:
     stat = path.stat()
     identity = {
@@ -165,7 +185,7 @@ def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: Analy
             }
             for m in result.modes
         ],
-        "cautions": list(result.cautions),
+        "cautions": input_cautions(run, notes) + list(result.cautions),
         "table2": _table2(run, result),
         "options": asdict(options),
         **notes,

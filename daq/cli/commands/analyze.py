@@ -207,8 +207,8 @@ def _print(info: dict) -> None:
         typer.echo(f"  {len(zones)} frequency zones, LSCF orders {min(z['max_order'] for z in zones)}-"
                    f"{max(z['max_order'] for z in zones)}")  # fmt: skip
     windows = str(info.get("windows", {}).get("from", ""))
-    if windows.startswith("unknown"):
-        typer.echo(f"  caution: windows {windows}")
+    if windows.startswith("unknown") and f"windows {windows}" not in info.get("cautions", []):
+        typer.echo(f"  caution: windows {windows}")  # an analysis stored before it was a caution
     for k, mode in enumerate(info["modes"], 1):
         typer.echo(f"  mode {k}: {_mode_text(mode)}")
     if n_modes:

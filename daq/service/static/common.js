@@ -411,7 +411,10 @@
     if (!summary || typeof summary !== "object") return [];
     const out = texts(summary.cautions);
     const from = summary.windows && typeof summary.windows === "object" ? summary.windows.from : null;
-    if (typeof from === "string" && from.startsWith("unknown")) out.unshift("windows " + from);
+    // An analysis stored before it was one of the summary's cautions.
+    if (typeof from === "string" && from.startsWith("unknown") && !out.includes("windows " + from)) {
+      out.unshift("windows " + from);
+    }
     return out;
   }
 
