@@ -203,6 +203,11 @@ def _lines(frequency_hz: np.ndarray, band: BandChoice) -> np.ndarray:
 
 def _identify(frequency_hz, frf, coherence, source, options, decay, band) -> RunAnalysis:
     keep = _lines(frequency_hz, band) & np.all(np.isfinite(frf), axis=0)
+    if keep.sum() < 8:
+        raise ValueError(
+            f"only {int(keep.sum())} lines of the band hold a finite FRF (where the force's spectrum is "
+            "zero the FRF is not defined): the record is too short or holds no force"
+        )
     if options.frequencies_hz is not None:
         low, high = float(frequency_hz[keep].min()), float(frequency_hz[keep].max())
         outside = [f for f in options.frequencies_hz if not low <= f <= high]

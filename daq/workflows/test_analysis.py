@@ -73,15 +73,18 @@ def gather(store_dir: Path, name: str) -> TestData:
     store = Store(store_dir)
     counted = test.counted_runs()
     points, run_ids, frfs = [], [], []
+    forms: dict[str, tuple[str, bool]] = {}
     missing = [p for p, run_id in counted.items() if run_id is None]
     for point in test.points:
         run_id = counted[point.name]
         if run_id is None:
             continue
         try:
-            measured = point_frf(store.open(run_id))
+            run = store.open(run_id)
+            measured = point_frf(run)
         except (StoreError, ValueError, OSError) as exc:
             raise WorkflowError(f"test {name}, point {point.name}: run {run_id}: {exc}") from None
+        forms[point.name] = _stored_form(run)
         frfs.append(_along_axes(measured, test.run_points(point.name)))
         points.append(point)
         run_ids.append(run_id)
@@ -94,7 +97,7 @@ def gather(store_dir: Path, name: str) -> TestData:
         f, frf, coherence = stack_points([p.name for p in points], frfs)
     except ValueError as exc:
         raise WorkflowError(f"test {name}: {exc}") from None
-    cautions = []
+    cautions = _form_cautions(forms)
     if missing:
         cautions.append(
             f"{len(missing)} of {len(test.points)} points not measured ({', '.join(missing)}): the shapes "
@@ -113,6 +116,35 @@ def gather(store_dir: Path, name: str) -> TestData:
         test, points, run_ids, frfs, positions, f, frf, coherence,
         driving[0] if driving else None, float(np.median(decays)), cautions,
     )  # fmt: skip
+
+
+def _stored_form(run: Any) -> tuple[str, bool]:
+    """(the form of the run's FRFs as stored, whether that form was assumed at import
+    because the file did not say); time records are measured as accelerance."""
+    frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
+    if (run.hits is not None and run.hits.accepted.any()) or frfs is None:
+        return "accelerance", False
+    imported = run.provenance.get("imported_from", {})
+    said = imported.get("form_from", "") if isinstance(imported, dict) else ""
+    return str(getattr(frfs, "form", "accelerance")), isinstance(said, str) and said.startswith("default")
+
+
+def _form_cautions(forms: dict[str, tuple[str, bool]]) -> list[str]:
+    """A caution when some points' FRF form was assumed at import: read as the wrong form,
+    a point's FRF is off by omega^2 and its shape values with it."""
+    assumed = [p for p, (_, guessed) in forms.items() if guessed]
+    if not assumed:
+        return []
+    kinds = sorted({form for form, _ in forms.values()})
+    mixed = (
+        f"; the points hold {' and '.join(kinds)}, so their shapes cannot be compared"
+        if len(kinds) > 1
+        else ""
+    )
+    return [
+        f"FRF form assumed at {', '.join(assumed)}: their files do not say what their FRFs are and "
+        f"they were read as accelerance{mixed}; import them again with --frf-form if they are not"
+    ]
 
 
 def _along_axes(measured: PointFrf, points: Any) -> PointFrf:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +18,7 @@ from analysis.beam_shapes import exact_shapes, ritz_shapes
 from daq.formats.errors import FormatError
 from daq.formats.uff_multipoint import Dof, ModeShapes, MultiPointExchange, Node, write_multipoint_uff
 from daq.report.modal_test_report import ModalTestReport
-from daq.workflows.article import article_beam
+from daq.workflows.article import article_beam, article_nodes
 from daq.workflows.errors import WorkflowError
 from daq.workflows.test_analysis import EXACT_MODES, TestAnalysis, aligned_shapes, pairs
 from daq.workflows.test_fit import TestFit
@@ -35,17 +36,22 @@ def export_test(analysis: TestAnalysis, path: Path) -> tuple[int, int]:
     Mode shapes are written only when the fixed point is one of the points (a shape
     needs a value at every node). WorkflowError (one line) when the file cannot be written."""
     data, result = analysis.data, analysis.result
-    nodes = []
-    for k, point in enumerate(data.points, start=1):
-        x = point.position_m if point.position_m is not None else np.nan
-        nodes.append(Node(k, point.name, float(x), 0.0, 0.0))
+    # A free structure's points sit on its nodes, whose coordinates the article holds; a
+    # beam's lie along x.
+    at_node = {n.name: (n.x_m, n.y_m, n.z_m) for n in article_nodes(data.test.article)}
+
+    def place(point: Any) -> tuple[float, float, float]:
+        if point.node is not None:
+            return at_node.get(point.node, (np.nan, np.nan, np.nan))
+        return (float(point.position_m), 0.0, 0.0) if point.position_m is not None else (np.nan,) * 3
+
+    nodes = [Node(k, point.name, *place(point)) for k, point in enumerate(data.points, start=1)]
     if data.driving_index is not None:
         fixed_node = data.driving_index + 1
     else:
         fixed = data.test.fixed_point
         fixed_node = len(nodes) + 1
-        x = fixed.position_m if fixed.position_m is not None else np.nan
-        nodes.append(Node(fixed_node, fixed.name, float(x), 0.0, 0.0))
+        nodes.append(Node(fixed_node, fixed.name, *place(fixed)))
     fixed_dof = Dof(fixed_node, _direction(data.test.fixed_point.direction))
     roving = [Dof(k, _direction(p.direction)) for k, p in enumerate(data.points, start=1)]
     if data.test.roving == "hammer":
@@ -76,8 +82,10 @@ def export_test(analysis: TestAnalysis, path: Path) -> tuple[int, int]:
     )  # fmt: skip
     try:
         write_multipoint_uff(path, exchange)
-    except (FormatError, OSError) as exc:
-        raise WorkflowError(f"cannot write {path}: {exc}") from None
+    except FormatError as exc:
+        raise WorkflowError(str(exc)) from None  # it names the file already
+    except OSError as exc:
+        raise WorkflowError(f"cannot write {path}: {exc.strerror or exc}") from None
     return frf.shape[0], 0 if modes is None else modes.n_modes
 
 

@@ -365,6 +365,8 @@ def detect_format(path: Path) -> tuple[str, str]:
         return "frf-text", f"the header's first column {header[0]!r} is a frequency"
     if not header and (why := headerless_frf_table(head)):
         return "frf-text", why
+    if not header:
+        check_not_slow_time(path, head)
     if suffix in TEXT_SUFFIXES:
         why = f"the name ends in {suffix}"
         return "csv", f"{why}, and the header's first column {header[0]!r} is no frequency" if header else why
@@ -463,11 +465,52 @@ def headerless_frf_table(head: bytes) -> str:
     ``writematrix`` does) otherwise reads as one hit sampled at 1 Hz."""
     import numpy as np
 
+    found = _steady_first_column(head)
+    if found is None:
+        return ""
+    table, step = found
+    if table.shape[1] < 3 or table.shape[1] % 2 == 0:
+        return ""
+    as_rate = f"no header, and its first column steps by {step:g}: as time, sampled at {1 / step:.3g} Hz"
+    if step >= MIN_FREQUENCY_STEP:
+        return f"{as_rate}, which records no vibration; a frequency axis (--format csv if it is time)"
+    if step >= MIN_FREQUENCY_STEP_AT_DC and table[0, 0] == 0 and np.all(table[0, 2::2] == 0):
+        return (
+            f"{as_rate}, and at 0 every second value is exactly 0, as an FRF's imaginary part is "
+            "at 0 Hz; a frequency axis (--format csv if it is time)"
+        )
+    return ""
+
+
+def check_not_slow_time(path: Path, head: bytes) -> None:
+    """A headerless table whose first column steps by MIN_FREQUENCY_STEP or more but which
+    is no FRF table (an even number of columns) is neither: UserError, not a time record
+    sampled at 10 Hz or less stored without a word."""
+    from daq.formats.imported import show_path
+
+    found = _steady_first_column(head)
+    if found is not None and found[1] >= MIN_FREQUENCY_STEP:
+        table, step = found
+        raise UserError(
+            f"{show_path(path)}: cannot tell its format: its first column steps by {step:g}, as time a "
+            f"sampling rate of {1 / step:.3g} Hz, which records no vibration, and as a frequency axis it "
+            f"needs an odd number of columns (frequency, then Re/Im pairs), not {table.shape[1]}; "
+            "give --format csv or frf-text"
+        )
+
+
+def _steady_first_column(head: bytes) -> tuple[Any, float] | None:
+    """(the numbers of the headerless table in ``head``, (rows, columns), and its first
+    column's steady step) or None: not all numbers, ragged, fewer than 3 rows, or a first
+    column that does not rise by one step within 1 %. A step read back from print as
+    0.09999999999999998 counts as 0.1."""
+    import numpy as np
+
     from daq.formats.csv_text import COMMENT_MARKS
     from daq.formats.frf_text import decode_line, split_cells
 
     if b"\0" in head:
-        return ""
+        return None
     rows: list[list[float]] = []
     for k, raw in enumerate(head.splitlines()[:-1]):  # the last line may be cut by the read
         line = decode_line(raw, k == 0).strip()
@@ -475,28 +518,17 @@ def headerless_frf_table(head: bytes) -> str:
             continue
         cells, delimiter = split_cells(line)
         try:
-            values = [float(c.replace(",", ".") if delimiter != "," else c) for c in cells]
+            rows.append([float(c.replace(",", ".") if delimiter != "," else c) for c in cells])
         except ValueError:
-            return ""
-        rows.append(values)
-    widths = {len(r) for r in rows}
-    if len(rows) < 3 or len(widths) != 1 or (n := widths.pop()) < 3 or n % 2 == 0:
-        return ""
+            return None
+    if len(rows) < 3 or len({len(r) for r in rows}) != 1:
+        return None
     table = np.array(rows)
     steps = np.diff(table[:, 0])
     step = float(np.median(steps))
     if not step > 0 or np.any(np.abs(steps - step) > 0.01 * step):
-        return ""
-    as_rate = f"no header, and its first column steps by {step:g}: as time, sampled at {1 / step:.3g} Hz"
-    step_at_least = step * (1 + 1e-9)  # 0.1 read back from print is 0.09999999999999998
-    if step_at_least >= MIN_FREQUENCY_STEP:
-        return f"{as_rate}, which records no vibration; a frequency axis (--format csv if it is time)"
-    if step_at_least >= MIN_FREQUENCY_STEP_AT_DC and table[0, 0] == 0 and np.all(table[0, 2::2] == 0):
-        return (
-            f"{as_rate}, and at 0 every second value is exactly 0, as an FRF's imaginary part is "
-            "at 0 Hz; a frequency axis (--format csv if it is time)"
-        )
-    return ""
+        return None
+    return table, step * (1 + 1e-9)
 
 
 def is_frequency_header(cell: str) -> bool:

@@ -246,7 +246,10 @@ def _print_run(d: dict[str, Any], store: str) -> None:
         test = f"test {points['test']}, " if points.get("test") else ""
         said = "" if points.get("recorded") else " (not recorded: the seed's beam at the tip assumed)"
         responses = ", ".join(where(p) for p in points["response_points"])
-        field("points", f"{test}force at {where(points['force_point'])}, response at {responses}{said}")
+        if not points.get("recorded") and d.get("kind") == "imported":
+            field("points", "not recorded (the imported file says nothing of the structure)")
+        else:
+            field("points", f"{test}force at {where(points['force_point'])}, response at {responses}{said}")
     hits = d["hits"]
     if hits is None:
         field("hits", "none")
