@@ -37,7 +37,11 @@ class Served:
     env: dict[str, str]
     stderr_lines: list[str] = field(default_factory=list)
 
-    def client(self, token: bool = True, timeout: float = 30.0) -> httpx.Client:
+    #: Seconds a request may wait for its answer: a report draws a dozen figures, which
+    #: took over 30 s with one more pytest worker than cores and the browser tests beside it.
+    TIMEOUT_S = 120.0
+
+    def client(self, token: bool = True, timeout: float = TIMEOUT_S) -> httpx.Client:
         headers = {"Authorization": f"Bearer {self.token}"} if token else {}
         return httpx.Client(base_url=self.url, headers=headers, timeout=timeout)
 
