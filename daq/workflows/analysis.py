@@ -126,6 +126,14 @@ def _frf_window_decay(run: Run, source: str) -> tuple[float, str]:
     return 0.0, "unknown: the damping includes any window the source applied"
 
 
+def form_assumed(run: Run) -> bool:
+    """True when the run's FRFs were imported from a file that does not say their form
+    (receptance, mobility, accelerance) and were read as the default, accelerance."""
+    imported = run.provenance.get("imported_from", {})
+    said = imported.get("form_from", "") if isinstance(imported, dict) else ""
+    return isinstance(said, str) and said.startswith("default")
+
+
 def input_cautions(run: Run, notes: dict[str, Any]) -> list[str]:
     """Cautions about what the run's file did not say: the windows its FRFs went through,
     and the FRFs' form (a text table without units is read as accelerance; read as the
@@ -134,9 +142,7 @@ def input_cautions(run: Run, notes: dict[str, Any]) -> list[str]:
     windows = notes.get("windows", {}).get("from", "")
     if isinstance(windows, str) and windows.startswith("unknown"):
         out.append(f"windows {windows}")
-    imported = run.provenance.get("imported_from", {})
-    said = imported.get("form_from", "") if isinstance(imported, dict) else ""
-    if isinstance(said, str) and said.startswith("default"):
+    if form_assumed(run):
         out.append(
             "FRF form assumed: the file does not say what its FRFs are, so they were read as "
             "accelerance, (m/s^2)/N; if they are receptance (m/N) or mobility ((m/s)/N), import the "

@@ -24,6 +24,7 @@ from analysis.modal_id.shapes import ModeShapes, mode_shapes
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs
 from analysis.table2 import ModalTestTable2, modal_test_table2
 from daq.store import ModalTest, Point, Store, StoreError
+from daq.workflows.analysis import form_assumed
 from daq.workflows.article import article_beam
 from daq.workflows.errors import WorkflowError
 from daq.workflows.point_frf import PointFrf, point_frf, stack_points
@@ -124,9 +125,7 @@ def _stored_form(run: Any) -> tuple[str, bool]:
     frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
     if (run.hits is not None and run.hits.accepted.any()) or frfs is None:
         return "accelerance", False
-    imported = run.provenance.get("imported_from", {})
-    said = imported.get("form_from", "") if isinstance(imported, dict) else ""
-    return str(getattr(frfs, "form", "accelerance")), isinstance(said, str) and said.startswith("default")
+    return str(getattr(frfs, "form", "accelerance")), form_assumed(run)
 
 
 def _form_cautions(forms: dict[str, tuple[str, bool]]) -> list[str]:
