@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from daq.report.numbers import plain
+
 #: Hits drawn at most (the rest are listed in the page's table).
 MAX_HITS_DRAWN = 12
 STATUS_STYLE = {  # stability code -> (label, marker, colour)
@@ -333,7 +335,7 @@ def draw_synthesis(result: dict[str, Any]) -> Any:
     for ax in axes:
         ax.grid(alpha=0.3, which="both")
     error = result["summary"].get("synthesis_error")
-    shown = f", error {100 * error:.2g} %" if error is not None else ""
+    shown = f", error {plain(100 * error, '.2g')} %" if error is not None else ""
     fig.suptitle(f"Run {result['summary']['run_id']}: synthesis from the identified modes{shown}")
     return fig
 
@@ -414,8 +416,9 @@ def draw_response_fit(run: Any, fit: dict[str, Any]) -> Any:
     axes[0, 0].legend(fontsize=8, loc="upper right")
     s = fit["summary"]
     fig.suptitle(
-        f"Run {run.run_id}, hit {d['hit']}: measured and model response ({s['method']}, Psi {s['psi']:.3g} "
-        f"{psi_unit(s)}); residual RMS {rms:.3g} m/s² ({100 * rms / rms_measured:.2g} % of the measured)"
+        f"Run {run.run_id}, hit {d['hit']}: measured and model response ({s['method']}, Psi "
+        f"{plain(s['psi'], '.3g')} {psi_unit(s)}); residual RMS {plain(rms, '.3g')} m/s² "
+        f"({plain(100 * rms / rms_measured, '.2g')} % of the measured)"
         if rms_measured > 0
         else f"Run {run.run_id}, hit {d['hit']}: measured and model response ({s['method']})",
         fontsize=10,
@@ -461,7 +464,8 @@ def draw_convergence(fits: dict[str, dict[str, Any]]) -> Any:
         ax.set_ylabel(f"Psi ({psi_unit(s)})")
         ax.grid(alpha=0.3, which="both")
         ax.set_title(
-            f"{name}: {method}, {s.get('domain', 'time')} domain, final Psi {s['psi']:.4g} {psi_unit(s)}",
+            f"{name}: {method}, {s.get('domain', 'time')} domain, final Psi "
+            f"{plain(s['psi'], '.4g')} {psi_unit(s)}",
             fontsize=9, loc="left",
         )  # fmt: skip
     fig.suptitle("Convergence of the fits: Psi of eq 17 along each search")

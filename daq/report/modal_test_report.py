@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from daq.report.figures import STATUS_STYLE, _png, _pyplot
+from daq.report.numbers import plain
 from daq.report.page import STYLE, _cautions, _e, _img, _num, _table
 
 #: Stability status of a pole -> the code of figures.STATUS_STYLE whose marker and colour
@@ -271,7 +272,7 @@ def mode_shapes_figure(r: ModalTestReport) -> bytes:
         ax.set_ylabel(f"mode {k + 1}", fontsize=9)
         ax.grid(alpha=0.3)
         ax.set_title(
-            f"mode {k + 1}: {r.mode_frequency_hz[k]:.4g} Hz, MPC {r.mpc[k]:.3f}"
+            f"mode {k + 1}: {plain(r.mode_frequency_hz[k], '.4g')} Hz, MPC {r.mpc[k]:.3f}"
             + ("" if sign > 0 else " (measured sign flipped to match the exact shape)"),
             fontsize=9,
             loc="left",
@@ -374,7 +375,7 @@ def _td(text: str) -> str:
 def render_page(r: ModalTestReport, figures: dict[str, bytes]) -> str:
     """The page of ``r`` with its ``figures`` (name -> PNG) embedded."""
     info = [
-        ("test", r.test_name), ("article", r.article), ("beam length", f"{r.beam_length_m:.4g} m"),
+        ("test", r.test_name), ("article", r.article), ("beam length", f"{plain(r.beam_length_m, '.4g')} m"),
         ("fixed point", r.fixed_point), ("points", len(r.point_names)), ("FRFs", len(r.frf_labels)),
         ("shape scaling", r.shape_scaling),
     ]  # fmt: skip
@@ -390,7 +391,7 @@ def render_page(r: ModalTestReport, figures: dict[str, bytes]) -> str:
 
     parts.append("<h2>Points</h2>")
     point_rows = [
-        [f"<td>{_e(name)}</td>", _td(f"{float(x):.4g}"),
+        [f"<td>{_e(name)}</td>", _td(plain(float(x), ".4g")),
          "<td>fixed</td>" if str(name) == str(r.fixed_point) else "<td></td>"]
         for name, x in zip(r.point_names, r.point_positions_m, strict=True)
     ]  # fmt: skip
@@ -407,8 +408,8 @@ def render_page(r: ModalTestReport, figures: dict[str, bytes]) -> str:
             mac = float(r.mac_exact[k][k]) if k < n_exact else None
         mode_rows.append([
             _td(str(k + 1)),
-            _td(f"{r.mode_frequency_hz[k]:.4f} ± {r.mode_frequency_std_hz[k]:.2g}"),
-            _td(f"{100 * r.damping_ratio[k]:.3g} ± {100 * r.damping_std[k]:.2g}"),
+            _td(f"{r.mode_frequency_hz[k]:.4f} ± {plain(r.mode_frequency_std_hz[k], '.2g')}"),
+            _td(f"{plain(100 * r.damping_ratio[k], '.3g')} ± {plain(100 * r.damping_std[k], '.2g')}"),
             _td(f"{r.mpc[k]:.3f}"), _td(_num(mac, ".3f")),
         ])  # fmt: skip
     header = [
@@ -459,8 +460,8 @@ def _fit_section(r: ModalTestReport) -> list[str]:
     for i in range(big_r.shape[0]):
         cells = [f"<th>{i + 1}</th>"]
         for j in range(big_r.shape[1]):
-            spread = "–" if std is None else f"{std[i, j]:.2g}"
-            cells.append(_td(f"{big_r[i, j]:.4g} ± {spread}"))
+            spread = "–" if std is None else plain(std[i, j], ".2g")
+            cells.append(_td(f"{plain(big_r[i, j], '.4g')} ± {spread}"))
         rows.append(cells)
     header = ["R (N s/m) ± std. uncertainty", *[str(j + 1) for j in range(big_r.shape[1])]]
     parts.append(_table(header, rows))

@@ -20,6 +20,7 @@ from typing import Any
 
 from analysis.hit_checks import BAND_FRACTION, MAX_DROP_DB
 from daq.report.figures import QUALITY_HITS, psi_unit
+from daq.report.numbers import plain, span
 from daq.workflows.run_views import accepted_against_checks as _against
 from daq.workflows.run_views import failed_check_names
 
@@ -48,7 +49,7 @@ def _e(value: Any) -> str:
 
 
 def _num(value: float | None, fmt: str) -> str:
-    return "–" if value is None else format(value, fmt)
+    return "–" if value is None else plain(value, fmt)
 
 
 def _table(header: list[str], rows: list[list[str]], classes: list[str] | None = None) -> str:
@@ -126,7 +127,7 @@ NOT_RECORDED = "not recorded"
 
 
 def _g(value: float, unit: str, fmt: str = ".4g") -> str:
-    return f"{format(value, fmt)} {unit}"
+    return f"{plain(value, fmt)} {unit}"
 
 
 def _time(seconds: float) -> str:
@@ -160,16 +161,17 @@ def _channel_rows(settings: dict[str, Any]) -> tuple[list[list[str]], list[list[
             continue
         sens = setup.get("sensitivity_v_per_eu")
         if isinstance(sens, (int, float)) and sens > 0:
-            sens_text = f"{1e3 * sens:.4g} mV/{'N' if eu == 'N' else '(m/s²)'}"
+            sens_text = f"{plain(1e3 * sens, '.4g')} mV/{'N' if eu == 'N' else '(m/s²)'}"
             if eu != "N":
-                sens_text += f" (= {1e3 * sens * STANDARD_GRAVITY:.4g} mV/g)"
+                sens_text += f" (= {plain(1e3 * sens * STANDARD_GRAVITY, '.4g')} mV/g)"
         else:
             sens, sens_text = None, NOT_RECORDED
         range_v = setup.get("range_v")
         if range_v is None:
             range_text = "auto" if "range_v" in setup else NOT_RECORDED
         else:
-            range_text = _g(range_v, "V") + (f" (= {range_v / sens:.4g} {eu} full scale)" if sens else "")
+            full_scale = f" (= {plain(range_v / sens, '.4g')} {eu} full scale)" if sens else ""
+            range_text = _g(range_v, "V") + full_scale
         coupling = {True: "AC", False: "DC"}.get(setup.get("ac_coupled"), NOT_RECORDED)
         mnemonic = setup.get("window")
         window = f"{WINDOW_NAMES.get(mnemonic, mnemonic)} ({mnemonic})" if mnemonic else NOT_RECORDED
@@ -177,7 +179,7 @@ def _channel_rows(settings: dict[str, Any]) -> tuple[list[list[str]], list[list[
             window += f", width {_time(setup['force_width_s'])} from the record's start"
         if mnemonic == "EXPO" and setup.get("exp_decay_s"):
             tau = float(setup["exp_decay_s"])
-            window += f", time constant {_time(tau)} (decay {1 / tau:.4g} 1/s)"
+            window += f", time constant {_time(tau)} (decay {plain(1 / tau, '.4g')} 1/s)"
         channels.append([f"{inp} {role}", sens_text, range_text, coupling, window])
         transducer = setup.get("transducer") if isinstance(setup.get("transducer"), dict) else {}
         due = str(transducer.get("due_date") or transducer.get("due") or NOT_RECORDED)
@@ -200,7 +202,7 @@ def _transducer_sensitivity(transducer: dict[str, Any], sens_text: str) -> str:
     value, unit = transducer.get("sensitivity"), transducer.get("sensitivity_unit")
     if not isinstance(value, (int, float)) or isinstance(value, bool) or not unit:
         return sens_text
-    own = f"{value:.4g} {unit}"
+    own = f"{plain(value, '.4g')} {unit}"
     if sens_text == NOT_RECORDED:
         return own
     return sens_text if own in sens_text else f"{own} (channel: {sens_text})"
@@ -226,7 +228,9 @@ def stored_cautions(run: Any) -> list[str]:
 
 def _point_text(point: Any) -> str:
     where = (
-        f"{point.position_m:.4g} m from the clamp" if point.position_m is not None else f"node {point.node}"
+        f"{plain(point.position_m, '.4g')} m from the clamp"
+        if point.position_m is not None
+        else f"node {point.node}"
     )
     return f"{point.name}: {where}, {point.direction}"
 
@@ -495,7 +499,7 @@ def sections(
         for i in range(run.hits.n_hits):
             verdict, cls = hit_verdict(run, i)
             rows.append(
-                [str(i + 1), str(run.hits.timestamp_utc[i]), f"{run.hits.peak_force_n[i]:.3g}", verdict]
+                [str(i + 1), str(run.hits.timestamp_utc[i]), plain(run.hits.peak_force_n[i], ".3g"), verdict]
             )
             classes.append(cls)
         hits = Section(
@@ -515,14 +519,16 @@ def sections(
         quality = hit_quality_section(run, figures)
         if quality is not None:
             out.append(quality)
-    source = {"hits": f"{s['n_averages']} accepted hits, {s.get('estimator')}"}.get(s["source"], s["source"])
+    n_hits = s["n_averages"]
+    hits_text = f"{n_hits} accepted hit{'s' * (n_hits != 1)}"  # "1 accepted hit", never "1 ... hits"
+    source = {"hits": f"{hits_text}, {s.get('estimator')}"}.get(s["source"], s["source"])
     windows = s.get("windows", {}).get("from", "")
     band = s.get("band")
-    band_text = f" Band {band['low_hz']:.6g}-{band['high_hz']:.6g} Hz: {band['reason']}." if band else ""
+    band_text = f" Band {span(band['low_hz'], band['high_hz'])}: {band['reason']}." if band else ""
     u_from = sorted({m.get("uncertainty_from") for m in s["modes"]} - {None})
     decay = s.get("added_decay_1_s") or 0.0
     removed = (
-        f"; the exponential window's decay ({decay:.4g} 1/s) is removed from every damping ratio. "
+        f"; the exponential window's decay ({plain(decay, '.4g')} 1/s) is removed from every damping ratio. "
         if decay > 0
         else ". "
     )
@@ -530,7 +536,7 @@ def sections(
         f"From {source}.{band_text} Windows: {windows}{removed}"
         + (f"± is the standard uncertainty of the value, from {', '.join(u_from)}. " if u_from else "")
         + (
-            f"Synthesis error {100 * s['synthesis_error']:.3g} %."
+            f"Synthesis error {plain(100 * s['synthesis_error'], '.3g')} %."
             if s.get("synthesis_error") is not None
             else ""
         )
@@ -544,7 +550,7 @@ def sections(
             f"{_num(None if zeta is None else 100 * zeta, '.3g')} ± "
             f"{_num(None if m.get('damping_u') is None else 100 * m['damping_u'], '.2g')}",
             str(q["n_stable_orders"]) + (" (alpha_0 = 1)" if q.get("normalisation") == "lowest" else ""),
-            f"{100 * q['synthesis_share']:.2g} %",
+            f"{plain(100 * q['synthesis_share'], '.2g')} %",
         ])  # fmt: skip
     modes = Section("Modes", [Para(note, "note")])
     modes.blocks += [Para(c, "caution") for c in [*_window_cautions(s), *s.get("cautions", [])]]
@@ -605,12 +611,12 @@ def _fit_sections(fits: dict[str, dict], figures: Any) -> list[Section]:
         s = fit["summary"]
         unit = psi_unit(s)
         floor = s.get("psi_noise_floor")
-        floor_text = f"; noise floor {floor:.3g} {unit}" if floor is not None else ""
+        floor_text = f"; noise floor {plain(floor, '.3g')} {unit}" if floor is not None else ""
         scale = s["stiffness"].get("scale")
         stiffness = s["stiffness"].get("update", "") + ("" if scale is None else f" x {scale:.5f}")
         section.blocks.append(Para(
-            f"Fit {name}: Psi (eq 17) = {s['psi']:.4g} {unit}{floor_text}, {s['n_evaluations']} model "
-            f"evaluations, stiffness: {stiffness}."
+            f"Fit {name}: Psi (eq 17) = {plain(s['psi'], '.4g')} {unit}{floor_text}, "
+            f"{s['n_evaluations']} model evaluations, stiffness: {stiffness}."
         ))  # fmt: skip
         unc = s["uncertainty"]
         by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))
@@ -620,7 +626,7 @@ def _fit_sections(fits: dict[str, dict], figures: Any) -> list[Section]:
             cells = [str(i + 1)]
             for j in range(len(r)):
                 std, determined = by_name.get(f"R{min(i, j) + 1}{max(i, j) + 1}", (None, True))
-                spread = f" ± {std:.2g}" if std is not None else ""
+                spread = f" ± {plain(std, '.2g')}" if std is not None else ""
                 cells.append(f"{r[i][j]:.4f}{spread}{'' if determined else ' ?'}")
             rows.append(cells)
         section.blocks.append(Table(["R (N s/m)", *[str(j + 1) for j in range(len(r))]], rows,

@@ -10,6 +10,7 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
+from daq.report.numbers import plain
 
 #: FitOptions' field names as the options a user types.
 OPTION_NAMES = (
@@ -125,12 +126,14 @@ def fit(
 def print_fit(info: dict) -> None:
     cached = " (cached)" if info.get("cached") else ""
     floor = info.get("psi_noise_floor")
-    floor_text = f" (noise floor {floor:.3g}, {info['psi'] / floor:.3g}x)" if floor else ""
+    floor_text = (
+        f" (noise floor {plain(floor, '.3g')}, {plain(info['psi'] / floor, '.3g')}x)" if floor else ""
+    )
     domain = "time records" if info.get("domain") == "time" else "FRF"
     constraint = info.get("constraint") or ("R = L L^T" if info["psd"] else "unconstrained")
     typer.echo(
         f"Run {info['run_id']}: {info['method']} on the {domain} ({constraint}){cached}, "
-        f"Psi = {info['psi']:.4g}{floor_text}, {info['n_evaluations']} evaluations"
+        f"Psi = {plain(info['psi'], '.4g')}{floor_text}, {info['n_evaluations']} evaluations"
     )
     for caution in info.get("cautions", []):
         typer.echo(f"caution: {caution}")
@@ -168,7 +171,7 @@ def print_fit(info: dict) -> None:
         for j in range(n):
             name = f"R{min(i, j) + 1}{max(i, j) + 1}"
             std, determined = by_name.get(name, (None, True))
-            spread = f" ± {std:.2g}" if std is not None else ""
+            spread = f" ± {plain(std, '.2g')}" if std is not None else ""
             cells.append(f"{r[i][j]:9.4f}{spread:<10}{'' if determined else ' ?'}")
         typer.echo("    " + "  ".join(cells))
     check = info.get("multi_start")
@@ -176,13 +179,13 @@ def print_fit(info: dict) -> None:
         verdict = "a better optimum exists" if check["better_psi_found"] else "no better optimum found"
         typer.echo(
             f"  {check['starts']} random starts: {check['reached_same_psi']} reach the same Psi, {verdict} "
-            f"(best {check['best_psi']:.4g})"
+            f"(best {plain(check['best_psi'], '.4g')})"
         )
     per_hit = unc.get("std_from_hits")
     if per_hit:
         fisher = unc.get("std_fisher") or unc["std"]
         ratios = [
-            f"{name} {h / f:.2g}" if h is not None and f else f"{name} -"
+            f"{name} {plain(h / f, '.2g')}" if h is not None and f else f"{name} -"
             for name, h, f in zip(unc["names"], per_hit, fisher, strict=True)
         ]
         typer.echo("  spread of per-hit refits / sqrt(n) over the Fisher std: " + ", ".join(ratios))
@@ -190,7 +193,8 @@ def print_fit(info: dict) -> None:
         if mode["frequency_hz"] is None or mode["damping_ratio"] is None:
             typer.echo(f"  mode {k}: overdamped or unstable with this R (no oscillating pole)")
             continue
-        typer.echo(f"  mode {k}: {mode['frequency_hz']:.4f} Hz, damping {100 * mode['damping_ratio']:.3g} %")
+        zeta = plain(100 * mode["damping_ratio"], ".3g")
+        typer.echo(f"  mode {k}: {mode['frequency_hz']:.4f} Hz, damping {zeta} %")
     for direction in unc["null_directions"]:
         combo = " ".join(f"{w:+.2f} {name}" for name, w in direction["combination"].items() if abs(w) >= 0.05)
         typer.echo(f"  not determined by the data: {combo}")

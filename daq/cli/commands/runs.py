@@ -17,6 +17,7 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import JsonOption, StoreOption
+from daq.report.numbers import span
 from daq.workflows.run_views import run_dict, summary_dict
 
 runs_app = typer.Typer(
@@ -285,7 +286,8 @@ def _print_run(d: dict[str, Any], store: str) -> None:
         coherence = "with coherence" if frf["coherence"] else "no coherence"
         field(
             name,
-            f"{frf['n_frf']} FRF(s) x {frf['n_lines']} points, {frf['f_min_hz']:g}-{frf['f_max_hz']:g} Hz, "
+            f"{frf['n_frf']} FRF(s) x {frf['n_lines']} points, "
+            f"{span(frf['f_min_hz'], frf['f_max_hz'], 'g')}, "
             f"{frf['form']} ({FRF_FORM_UNITS[frf['form']]}), {coherence}; "
             f"labels: {', '.join(_one_line(x) for x in frf['labels'])}",
         )
@@ -300,7 +302,7 @@ def _print_run(d: dict[str, Any], store: str) -> None:
     field(
         "spectra",
         f"{spectra['n_traces']} x {spectra['n_lines']} points, "
-        f"{spectra['f_min_hz']:g}-{spectra['f_max_hz']:g} Hz: {', '.join(traces)}",
+        f"{span(spectra['f_min_hz'], spectra['f_max_hz'], 'g')}: {', '.join(traces)}",
     )
 
 
