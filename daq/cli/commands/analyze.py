@@ -27,6 +27,7 @@ from daq.cli.options import (
     SchedulerOption,
     StoreOption,
 )
+from daq.report.numbers import plain, span
 
 if TYPE_CHECKING:
     from daq.batch.executor import Backend, BatchReport
@@ -117,8 +118,18 @@ def analyze(
         raise UserError(text.replace("band ", "--band "), exit_code=2) from None
     run_batch(
         runs, all_runs, store, jobs, scheduler, json_output, _print, "analyse",
-        lambda store_dir, run_id: AnalyseTask(store_dir, run_id, options, recompute),
+        lambda store_dir, run_id: AnalyseTask(store_dir, run_id, options, recompute), _json_summary,
     )  # fmt: skip
+
+
+def _json_summary(info: dict) -> dict:
+    """A run's summary as --json prints it: an FRF read as it was measured was made by no
+    estimator, so ``options.estimator`` (asked for, and kept in the stored result, whose
+    cache key it is part of) is null there too, as the top-level ``estimator`` is."""
+    options = info.get("options")
+    if info.get("estimator") is None and isinstance(options, dict) and "estimator" in options:
+        return {**info, "options": {**options, "estimator": None}}
+    return info
 
 
 def run_batch(
@@ -131,13 +142,14 @@ def run_batch(
     printer: Callable[[dict], None],
     verb: str,
     make_task: Callable[..., Task],
+    json_view: Callable[[dict], dict] | None = None,
 ) -> None:
     """The part `daq analyze` and `daq fit` share: pick where to run (--jobs,
     --scheduler, $DAQ_SCHEDULER), pick the runs (named, or every run file with --all),
     run ``make_task(store_dir, run_id)`` of each on the executor (daq/batch/executor.py)
     with a progress bar, say each failure (or skip) on stderr as it comes, print each
-    summary (``printer``) or the JSON list, and end with one error line if any run
-    failed."""
+    summary (``printer``, a blank line between runs) or the JSON list (each summary
+    through ``json_view`` when given), and end with one error line if any run failed."""
     from daq.batch.executor import choose_backend, select_runs
     from daq.store import resolve_store_dir
 
@@ -150,10 +162,14 @@ def run_batch(
     tasks = [make_task(store_dir, run_id) for run_id in ids]
     backend = choice.backend(len(tasks))
     report = run_with_progress(tasks, backend, label, quiet=len(ids) == 1, skip_empty=all_runs)
+    summaries = report.summaries(ids)
     if json_output:
-        typer.echo(json.dumps(report.summaries(ids), indent=2, ensure_ascii=False))
+        shown = [json_view(s) for s in summaries] if json_view is not None else summaries
+        typer.echo(json.dumps(shown, indent=2, ensure_ascii=False))
     else:
-        for summary in report.summaries(ids):
+        for k, summary in enumerate(summaries):
+            if k:
+                typer.echo("")  # one run's lines apart from the next's
             printer(summary)
     if report.failures and len(ids) == 1:
         raise UserError(f"run {ids[0]}: {report.failures[0].error}")
@@ -167,7 +183,8 @@ def run_with_progress(
 ) -> BatchReport:
     """daq.batch.executor.execute with a progress bar on stderr (when it is a terminal)
     and a line there for each run skipped (always) or failed (unless ``quiet``: one run,
-    whose reason the caller makes its one error line). The BatchReport."""
+    whose reason the caller makes its one error line); a failure is a `daq: error:` line
+    like every other error. The BatchReport."""
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -182,7 +199,7 @@ def run_with_progress(
             if outcome.status == "skipped":
                 sys.stderr.write(f"daq {task.command}: run {task.run_id}: skipped: {outcome.error}\n")
             elif outcome.status == "failed" and not quiet:
-                sys.stderr.write(f"daq {task.command}: run {task.run_id}: {outcome.error}\n")
+                sys.stderr.write(f"daq: error: run {task.run_id}: {outcome.error}\n")
             progress.advance(bar)
 
         return execute(tasks, backend, skip_empty=skip_empty, on_outcome=said)
@@ -201,7 +218,7 @@ def _print(info: dict) -> None:
     )
     band = info.get("band")
     if band:
-        typer.echo(f"  band {band['low_hz']:.6g}-{band['high_hz']:.6g} Hz: {band['reason']}")
+        typer.echo(f"  band {span(band['low_hz'], band['high_hz'])}: {band['reason']}")
     zones = info.get("zones") or []
     if len(zones) > 1:
         typer.echo(f"  {len(zones)} frequency zones, LSCF orders {min(z['max_order'] for z in zones)}-"
@@ -217,7 +234,8 @@ def _print(info: dict) -> None:
         typer.echo(f"  ± is the standard uncertainty of the value{how} (docs/analysis.md)")
     error = info.get("synthesis_error")
     if error is not None:
-        typer.echo(f"  synthesis error {100 * error:.3g} % (the modes' FRF against the measured one)")
+        shown = plain(100 * error, ".3g")
+        typer.echo(f"  synthesis error {shown} % (the modes' FRF against the measured one)")
     for text in info.get("cautions", []):
         typer.echo(f"  caution: {text}")
     table = info["table2"]
@@ -227,7 +245,7 @@ def _print(info: dict) -> None:
         typer.echo("    mode   Ritz Hz  exact Hz   run Hz  run vs exact  damping")
         for r in rows:
             ritz = f"{r['ritz_hz']:.3f}" if r["ritz_hz"] is not None else "-"
-            zeta = f"{100 * r['damping_ratio']:.3g} %" if r["damping_ratio"] is not None else "-"
+            zeta = f"{plain(100 * r['damping_ratio'], '.3g')} %" if r["damping_ratio"] is not None else "-"
             typer.echo(
                 f"    {r['mode']:>4}  {ritz:>8}  {r['exact_hz']:>8.3f}  {r['identified_hz']:>7.3f}  "
                 f"{r['difference_exact_pct']:>+10.2f} %  {zeta:>7}"
@@ -240,9 +258,9 @@ def _mode_text(mode: dict) -> str:
     """'1234.5678 Hz ± 0.01 Hz, damping 0.123 % ± 0.004 %; stable over ...' of one mode."""
     zeta = mode["damping_ratio"]
     f_u, z_u = mode.get("frequency_u_hz"), mode.get("damping_u")
-    spread = f" ± {f_u:.2g} Hz" if f_u is not None else ""
-    zspread = f" ± {100 * z_u:.2g} %" if z_u is not None else ""
-    zeta_text = f"{100 * zeta:.3g} %{zspread}" if zeta is not None else "n/a (window decay larger)"
+    spread = f" ± {plain(f_u, '.2g')} Hz" if f_u is not None else ""
+    zspread = f" ± {plain(100 * z_u, '.2g')} %" if z_u is not None else ""
+    zeta_text = f"{plain(100 * zeta, '.3g')} %{zspread}" if zeta is not None else "n/a (window decay larger)"
     q = mode["quality"]
     flag = "" if q.get("accepted", True) else " (asked for; fails a selection rule)"
     # The second LSCF normalisation (analysis/modal_id/identify.py) is said: its poles differ.
@@ -250,5 +268,5 @@ def _mode_text(mode: dict) -> str:
     return (
         f"{mode['frequency_hz']:.4f} Hz{spread}, damping {zeta_text}; "
         f"stable over {q['n_stable_orders']} orders{read_with}{flag}, "
-        f"{100 * q['synthesis_share']:.2g} % of the synthesis"
+        f"{plain(100 * q['synthesis_share'], '.2g')} % of the synthesis"
     )
