@@ -17,6 +17,7 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import BandOption, FrequenciesOption, JsonOption, MaxOrderOption, StoreOption
+from daq.report.numbers import plain, span
 
 test_app = typer.Typer(
     help="Multi-point modal tests: points on a test article, one run per point, analysed together.\n\n"
@@ -161,7 +162,8 @@ def show(name: NameArgument, json_output: JsonOption = False, store: StoreOption
     """A test's points: which are measured, by which runs, with their coherence."""
     from daq.workflows.test import test_view
 
-    view = test_view(_store_dir(store), name)
+    store_dir = _store_dir(store)
+    view = test_view(store_dir, name)
     if json_output:
         typer.echo(_dumps(view))
         return
@@ -183,7 +185,23 @@ def show(name: NameArgument, json_output: JsonOption = False, store: StoreOption
         problem = f"; caution: {point['problem']}" if point.get("problem") else ""
         typer.echo(f"  {_point_text(point):<28} {state}{extra}{problem}")
     if view["next_point"] is not None:
-        typer.echo(f"next: daq capture --test {view['name']} --point {view['next_point']}")
+        typer.echo(f"next: {_next_command(store_dir, view)}")
+
+
+def _next_command(store_dir: Path, view: dict[str, Any]) -> str:
+    """How to measure the test's next point, the way its runs so far were made: a test
+    filled from files goes on with `daq import`, one captured with `daq capture`, one
+    with both (or none yet) gets the capture and, when files were used, the import."""
+    from daq.store import Store
+
+    name, point = view["name"], view["next_point"]
+    capture = f"daq capture --test {name} --point {point}"
+    importing = f"daq import FILE --test {name} --point {point}"
+    joined = {run["run_id"] for p in view["points"] for run in p["runs"]}
+    kinds = {s.kind for s in Store(store_dir).list() if s.run_id in joined} if joined else set()
+    if kinds == {"imported"}:
+        return importing
+    return f"{capture}, or {importing}" if "imported" in kinds else capture
 
 
 def _point_text(point: dict[str, Any]) -> str:
@@ -194,6 +212,8 @@ def _point_text(point: dict[str, Any]) -> str:
 
 
 def _analysis(store_dir: Path, name: str, band: str | None, frequencies: str | None, max_order: int | None):
+    from dataclasses import replace
+
     from analysis.run_analysis import AnalysisOptions
     from daq.cli.commands.analyze import parse_band, parse_frequencies
     from daq.workflows.test_analysis import analyze_test
@@ -205,7 +225,48 @@ def _analysis(store_dir: Path, name: str, band: str | None, frequencies: str | N
     except ValueError as exc:
         raise UserError(str(exc).replace("max_order", "--max-order").replace("band ", "--band "), 2) from None
     _progress(f"analysing test {name}...")
-    return analyze_test(store_dir, name, options)
+    analysis = analyze_test(store_dir, name, options)
+    # Every command showing the analysis (terminal, --json, report, fit) shows these.
+    return replace(analysis, cautions=alike_in_one(analysis.cautions, analysis.auto_mac))
+
+
+#: How daq/workflows/test_analysis.py words the caution of two modes alike at the points.
+ALIKE_TEXT = " look alike at these "
+
+
+def alike_in_one(cautions: list[str], auto_mac: Any) -> list[str]:
+    """``cautions`` with the pairwise "modes at A and B Hz look alike" lines made one
+    when the test measured fewer points than it found modes: n points span at most n
+    independent shapes, so with more modes than points many pairs look alike whatever
+    the data, and one line says why better than a line per pair (2 points, 5 modes:
+    10 lines). ``auto_mac`` (n_modes, n_modes), 0..1, of the measured shapes."""
+    import numpy as np
+
+    from daq.workflows.test_analysis import AUTO_MAC_ALIKE
+
+    auto = np.asarray(auto_mac, dtype=float)
+    n_modes = auto.shape[0] if auto.ndim == 2 else 0
+    alike = [k for k, text in enumerate(cautions) if ALIKE_TEXT in text]
+    n_points = _points_in(cautions[alike[0]]) if alike else None
+    if n_points is None or n_points >= n_modes:
+        return list(cautions)
+    upper = auto[np.triu_indices(n_modes, 1)]
+    close = upper[upper > AUTO_MAC_ALIKE]
+    points = f"{n_points} point{'s' * (n_points != 1)}"
+    one = (
+        f"{points} cannot tell {n_modes} modes apart (auto-MAC above {AUTO_MAC_ALIKE:g} for "
+        f"{close.size} of the {upper.size} pairs of modes, up to {np.max(close, initial=0.0):.2f}): "
+        "measure more points than there are modes, or narrow the band with --band"
+    )
+    out = [text for k, text in enumerate(cautions) if k not in alike]
+    out.insert(alike[0], one)
+    return out
+
+
+def _points_in(text: str) -> int | None:
+    """The number of points an "alike at these N points" caution names (None: none)."""
+    words = text.split(ALIKE_TEXT, 1)[1].split()
+    return int(words[0]) if words and words[0].isdigit() else None
 
 
 def _progress(text: str) -> None:
@@ -236,45 +297,71 @@ def analyze(
 
 
 def print_test_analysis(info: dict[str, Any]) -> None:
+    n_modes, n_points = len(info["modes"]), len(info["points"])
+    error = info["synthesis_error"]
     typer.echo(
-        f"Test {info['test']}: {len(info['modes'])} modes from {len(info['points'])} points in "
-        f"{info['band_hz'][0]:.6g}-{info['band_hz'][1]:.6g} Hz ({info['band_reason']}), synthesis error "
-        f"{100 * (info['synthesis_error'] or 0):.3g} %"
+        f"Test {info['test']}: {n_modes} mode{'s' * (n_modes != 1)} from {n_points} "
+        f"point{'s' * (n_points != 1)}"
+        + ("" if error is None else f", synthesis error {plain(100 * error, '.3g')} %")
     )
+    typer.echo(f"  band {span(*info['band_hz'])}: {for_a_test(info['band_reason'])}")
     for caution in info["cautions"]:
         typer.echo(f"caution: {caution}")
     typer.echo(f"  shapes: {info['shape_scaling']}; ± standard uncertainty, {info['shape_uncertainty_from']}")
+    # A test without a beam to compare with (one point, a free structure) has no MAC
+    # columns: said once under the table, not in every row.
+    paired = any("exact" in mode for mode in info["modes"])
     typer.echo(
-        "  mode  frequency Hz (± u)      damping % (± u)       MPC    exact beam (MAC)        Ritz N=3 (MAC)"
+        "  mode  frequency Hz (± u)      damping % (± u)       MPC"
+        + ("    exact beam (MAC)        Ritz N=3 (MAC)" if paired else "")
     )
     for k, mode in enumerate(info["modes"], start=1):
         f_u = mode["frequency_u_hz"]
         z_u = mode["damping_u"]
-        typer.echo(
+        row = (
             f"  {k:>4}  {mode['frequency_hz']:>10.4f} ± {_u(f_u, 1, '.2g'):<8}  "
-            f"{100 * mode['damping_ratio']:>7.3f} ± {_u(z_u, 100, '.2g'):<8}  {mode['mpc']:>5.3f}  "
-            f"{_pair_text(mode, 'exact'):<22}  {_pair_text(mode, 'ritz')}"
+            f"{100 * mode['damping_ratio']:>7.3f} ± {_u(z_u, 100, '.2g'):<8}  {mode['mpc']:>5.3f}"
         )
+        if paired:
+            row += f"  {_pair_text(mode, 'exact'):<22}  {_pair_text(mode, 'ritz')}"
+        typer.echo(row)
+    if not paired:
+        typer.echo(f"  no MAC against a beam: {_why_no_mac(info)}")
     names = [p["name"] for p in info["points"]]
     typer.echo("  shapes (real part ± u) at " + ", ".join(names) + ":")
     for k, mode in enumerate(info["modes"], start=1):
         values = ", ".join(
-            f"{re:.3g}±{u:.2g}" for re, u in zip(mode["shape"]["real"], mode["shape"]["real_u"], strict=True)
+            f"{plain(re, '.3g')}±{plain(u, '.2g')}"
+            for re, u in zip(mode["shape"]["real"], mode["shape"]["real_u"], strict=True)
         )
         typer.echo(f"    mode {k}: {values}")
 
 
+def for_a_test(reason: str) -> str:
+    """The band's reason (analysis/band_choice.py, written for one run) as said of a
+    test, whose band comes from all its points' runs."""
+    return reason.replace("in the run limits", "in the test's runs limits").replace(
+        "the run's lines", "the points' lines"
+    )
+
+
+def _why_no_mac(info: dict[str, Any]) -> str:
+    if len(info["points"]) < 2:
+        return "one point measured, and a shape needs two or more"
+    if any(x is None for x in info["positions_m"]):
+        return "the article is a free structure, with no beam model to compare the shapes with"
+    return "the article gives no beam model to compare the shapes with"
+
+
 def _u(value: float | None, scale: float, fmt: str) -> str:
-    return "–" if value is None else format(scale * value, fmt)
+    return "–" if value is None else plain(scale * value, fmt)
 
 
 def _pair_text(mode: dict[str, Any], model: str) -> str:
-    if model not in mode:
-        return "– (no MAC: one point, or no beam)"
-    pair = mode[model]
+    pair = mode.get(model)
     if pair is None:
         return "none within 25 %"
-    return f"mode {pair['mode']} {pair['frequency_hz']:.4g} Hz ({pair['mac']:.3f})"
+    return f"mode {pair['mode']} {plain(pair['frequency_hz'], '.4g')} Hz ({pair['mac']:.3f})"
 
 
 @test_app.command("fit")
@@ -311,10 +398,12 @@ def fit(
         typer.echo(_dumps(info))
         return
     floor = info["psi_noise_floor"]
-    floor_text = f" (noise floor {floor:.3g}, {info['psi'] / floor:.3g}x)" if floor else ""
+    floor_text = (
+        f" (noise floor {plain(floor, '.3g')}, {plain(info['psi'] / floor, '.3g')}x)" if floor else ""
+    )
     typer.echo(
-        f"Test {name}: {info['method']} over {info['n_points']} points, {info['band_hz'][0]:.4g}-"
-        f"{info['band_hz'][1]:.4g} Hz, Psi = {info['psi']:.4g}{floor_text}"
+        f"Test {name}: {info['method']} over {info['n_points']} points, {span(*info['band_hz'], '.4g')}, "
+        f"Psi = {plain(info['psi'], '.4g')}{floor_text}"
     )
     for caution in info["cautions"]:
         typer.echo(f"caution: {caution}")
@@ -324,10 +413,10 @@ def fit(
     for i, row in enumerate(info["damping_matrix"]):
         cells = []
         for j, value in enumerate(row):
-            u = "–" if std is None else f"{std[i][j]:.2g}"
+            u = "–" if std is None else plain(std[i][j], ".2g")
             term = names[3 * min(i, j) + max(i, j)]
             mark = " ?" if std is not None and term not in info["determined_terms"] else "  "
-            cells.append(f"{value:>10.4g} ± {u:<7}{mark}")
+            cells.append(f"{plain(value, '.4g'):>10} ± {u:<7}{mark}")
         typer.echo("    " + "".join(cells))
 
 
@@ -384,13 +473,12 @@ def report(
     max_order: MaxOrderOption = None,
     store: StoreOption = None,
 ) -> None:
-    """The test's report: stability diagram over all FRFs, mode shapes along the beam beside
-    the exact and Ritz shapes, MAC, R with its uncertainty, measured against fitted FRFs.
-    The analysis is made here with the options given (the defaults of daq test analyze)."""
-    from daq.cli.commands.report import _write
-    from daq.report.modal_test_report import render_modal_test_report
-    from daq.workflows.test_export import report_inputs
-    from daq.workflows.test_fit import fit_test
+    """The test's report, for a test on a beam with two measured points or more: stability
+    diagram over all FRFs, mode shapes along the beam beside the exact and Ritz shapes, MAC,
+    R with its uncertainty, measured against fitted FRFs. The analysis is made here with the
+    options given (the defaults of daq test analyze). Any other test: daq test analyze."""
+    from daq.workflows.article import article_beam
+    from daq.workflows.test import open_test
 
     folder = output if output is not None else Path(f"report-test-{name}")
     if folder.exists() and not folder.is_dir():
@@ -400,6 +488,25 @@ def report(
             f"{folder} already holds a report; give --force to write over it or -o another folder"
         )
     store_dir = _store_dir(store)
+    # What the report needs is known before the analysis, which takes seconds.
+    test = open_test(store_dir, name)
+    measured = sum(run is not None for run in test.counted_runs().values())
+    beam = article_beam(test.article)
+    if beam is None or measured < 2:
+        n_points = len(test.points)
+        lacks = (
+            "its article is not a beam" if beam is None
+            else f"only {measured} of its {n_points} points {'is' if measured == 1 else 'are'} measured"
+        )  # fmt: skip
+        raise UserError(
+            f"test {name}: the report draws shapes along a beam; it needs a beam article and two measured "
+            f"points or more, and {lacks} (daq test analyze {name} shows its modes)"
+        )
+    from daq.cli.commands.report import _write
+    from daq.report.modal_test_report import render_modal_test_report
+    from daq.workflows.test_export import report_inputs
+    from daq.workflows.test_fit import fit_test
+
     analysis = _analysis(store_dir, name, band, frequencies, max_order)
     fitted = None
     if fit_method is not None:
