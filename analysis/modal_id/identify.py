@@ -64,12 +64,15 @@ class StabilityDiagram:
     """orders (n_orders,) pole pairs of each model; poles per order, complex rad/s;
     status per order, one code per pole ("stable", "damping", "frequency", "new", see
     analysis.modal_id.stability); selected_cluster per order: index into
-    ModalResult.modes of the mode each pole belongs to, or -1."""
+    ModalResult.modes of the mode each pole belongs to, or -1; normalisation per order:
+    the LSCF normalisation (NORMALISATIONS) of the fit each pole comes from (every zone
+    is fitted once with each, so an order holds the poles of both fits)."""
 
     orders: np.ndarray
     poles: list[np.ndarray]
     status: list[np.ndarray]
     selected_cluster: list[np.ndarray]
+    normalisation: list[np.ndarray] = field(default_factory=list)
 
 
 @dataclass
@@ -306,18 +309,21 @@ def _diagram(fits: list[_ZoneFit], owner: list[tuple[int, int]], chosen: list[in
     """One stability diagram of all zones: per order, the poles of every zone."""
     to_mode = {owner[c]: r for r, c in enumerate(chosen)}
     n_orders = max(len(zf.fit.poles) for zf in fits)
-    poles, status, selected = [], [], []
+    poles, status, selected, normalisation = [], [], [], []
     for k in range(n_orders):
         p, s, m = [np.empty(0, complex)], [np.empty(0, dtype="<U9")], [np.empty(0, dtype=int)]
+        n = [np.empty(0, dtype="<U7")]
         for zi, zf in enumerate(fits):
             if k < len(zf.fit.poles):
                 p.append(zf.fit.poles[k])
                 s.append(np.asarray(zf.status[k], dtype="<U9"))
                 m.append(np.array([to_mode.get((zi, int(c)), -1) for c in zf.label[k]], dtype=int))
+                n.append(np.full(len(zf.fit.poles[k]), zf.normalisation, dtype="<U7"))
         poles.append(np.concatenate(p))
         status.append(np.concatenate(s))
         selected.append(np.concatenate(m))
-    return StabilityDiagram(np.arange(1, n_orders + 1), poles, status, selected)
+        normalisation.append(np.concatenate(n))
+    return StabilityDiagram(np.arange(1, n_orders + 1), poles, status, selected, normalisation)
 
 
 #: A mode is kept when removing it (the others refitted) worsens the fit near it by this

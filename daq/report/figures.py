@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.modal_id import DENOMINATOR, NORMALISATIONS
 from daq.report.numbers import plain
 
 #: Hits drawn at most (the rest are listed in the page's table).
@@ -281,31 +282,55 @@ def stability_figure(result: dict[str, Any]) -> bytes:
 
 
 def draw_stability(result: dict[str, Any]) -> Any:
-    """Poles per model order by status, the selected modes, and |H| behind them."""
+    """Poles per model order by status, the selected modes, and |H| behind them: one panel
+    per LSCF normalisation (every zone is fitted with each, analysis.modal_id), each mode's
+    line solid in the panel it was read from; one panel for results stored without it."""
     plt = _pyplot()
     summary = result["summary"]
-    fig, ax = plt.subplots(figsize=(10, 5))
-    if "stability_order" in result:
-        order = result["stability_order"]
-        freq = np.abs(result["stability_pole"]) / (2 * np.pi)
-        status = result["stability_status"]
-        for code, (label, marker, colour) in STATUS_STYLE.items():
-            pick = status == code
-            if pick.any():
-                ax.scatter(freq[pick], order[pick], marker=marker, s=18, color=colour, label=label)
-    for mode in summary["modes"]:
-        ax.axvline(mode["frequency_hz"], color="#1b7a2f", lw=0.8, alpha=0.6)
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("model order")
-    twin = ax.twinx()
+    norm = result.get("stability_normalisation")
+    panels = (
+        [None] if norm is None or "stability_order" not in result else sorted(set(np.asarray(norm).tolist()))
+    )
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(10 if len(panels) == 1 else 14, 5), sharey=True, squeeze=False
+    )
     f = result["frequency_hz"]
-    for h in np.atleast_2d(result["frf"]):
-        twin.semilogy(f, np.abs(h), color="#555555", lw=0.7, alpha=0.6)
-    twin.set_ylabel("|H| ((m/s²)/N)")
-    ax.set_xlim(f[0], f[-1])
+    for ax, panel in zip(axes[0], panels, strict=True):
+        if "stability_order" in result:
+            pick_panel = (
+                np.ones(len(result["stability_order"]), bool) if panel is None else np.asarray(norm) == panel
+            )
+            order = result["stability_order"][pick_panel]
+            freq = np.abs(result["stability_pole"][pick_panel]) / (2 * np.pi)
+            status = result["stability_status"][pick_panel]
+            for code, (label, marker, colour) in STATUS_STYLE.items():
+                pick = status == code
+                if pick.any():
+                    ax.scatter(freq[pick], order[pick], marker=marker, s=18, color=colour, label=label)
+        for mode in summary["modes"]:
+            mine = (
+                panel is None
+                or mode.get("quality", {}).get("normalisation", NORMALISATIONS[0]) == NORMALISATIONS[panel]
+            )
+            ax.axvline(mode["frequency_hz"], color="#1b7a2f", lw=0.8, alpha=0.6 if mine else 0.3,
+                       ls="-" if mine else ":")  # fmt: skip
+        ax.set_xlabel("frequency (Hz)")
+        twin = ax.twinx()
+        for h in np.atleast_2d(result["frf"]):
+            twin.semilogy(f, np.abs(h), color="#555555", lw=0.7, alpha=0.6)
+        if ax is axes[0][-1]:
+            twin.set_ylabel("|H| ((m/s²)/N)")
+        ax.set_xlim(f[0], f[-1])
+        if panel is not None:
+            n_read = sum(m.get("quality", {}).get("normalisation", NORMALISATIONS[0]) == NORMALISATIONS[panel]
+                         for m in summary["modes"])  # fmt: skip
+            ax.set_title(
+                f"LSCF with {DENOMINATOR[NORMALISATIONS[panel]]}: {n_read} modes read from it", fontsize=9
+            )
+    axes[0][0].set_ylabel("model order")
     # Below the plot: inside it, the legend hid the first mode's column.
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=4, fontsize=7, frameon=False)
-    ax.set_title(f"Run {summary['run_id']}: stability diagram, {len(summary['modes'])} modes selected")
+    axes[0][0].legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=4, fontsize=7, frameon=False)
+    fig.suptitle(f"Run {summary['run_id']}: stability diagram, {len(summary['modes'])} modes selected")
     return fig
 
 

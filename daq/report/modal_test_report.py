@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.modal_id import DENOMINATOR, NORMALISATIONS
 from daq.report.figures import STATUS_STYLE, _png, _pyplot
 from daq.report.numbers import plain
 from daq.report.page import STYLE, _cautions, _e, _img, _num, _table
@@ -52,7 +53,9 @@ class ModalTestReport:
         stability: the poles of every model order, either a sequence of
         ``(order: int, frequency_hz: float, status: str)`` or a mapping with the arrays
         ``"order"``, ``"frequency_hz"`` and ``"status"``; status is one of ``"stable"``,
-        ``"frequency"`` (frequency stable only) and ``"new"``.
+        ``"frequency"`` (frequency stable only) and ``"new"``. The mapping may also hold
+        ``"normalisation"``: the LSCF normalisation of the fit each pole is from (one of
+        analysis.modal_id.NORMALISATIONS); the diagram then has one panel per fit.
         selected_frequencies_hz: the modes chosen on the diagram, Hz (None: the modes'
         ``mode_frequency_hz``).
 
@@ -185,6 +188,14 @@ def _stability_arrays(stability: Any) -> tuple[np.ndarray, np.ndarray, np.ndarra
         order = np.asarray(stability["order"], dtype=int)
         freq = np.asarray(stability["frequency_hz"], dtype=float)
         status = np.asarray(stability["status"], dtype=str)
+        fits = stability.get("normalisation")
+        if fits is not None and (
+            np.shape(fits) != order.shape or not set(np.asarray(fits, str)) <= set(NORMALISATIONS)
+        ):
+            raise ValueError(
+                "modal test report: stability normalisation must name one of "
+                f"{', '.join(NORMALISATIONS)} per pole"
+            )
     else:
         rows = list(stability)
         order = np.array([int(o) for o, _, _ in rows], dtype=int)
@@ -215,23 +226,33 @@ def stability_figure(r: ModalTestReport) -> bytes:
     """The poles of every model order by status, over the sum of |FRF| of all FRFs."""
     plt = _pyplot()
     order, freq, status = _stability_arrays(r.stability)
+    fits = r.stability.get("normalisation") if isinstance(r.stability, Mapping) else None
+    fits = None if fits is None else np.asarray(fits, dtype=str)
+    # One panel per LSCF fit (every zone is fitted with each normalisation), in their order.
+    panels = [None] if fits is None else [n for n in NORMALISATIONS if np.any(fits == n)] or [None]
     f = np.asarray(r.frequency_hz, dtype=float)
-    fig, ax = plt.subplots(figsize=(10, 5))
-    for name, (code, label) in STABILITY_STATUS.items():
-        pick = status == name
-        if pick.any():
-            _, marker, colour = STATUS_STYLE[code]
-            ax.scatter(freq[pick], order[pick], marker=marker, s=18, color=colour, label=label)
-    for k, fk in enumerate(_selected(r)):
-        ax.axvline(fk, color="#1b7a2f", lw=0.8, alpha=0.6, label="selected mode" if k == 0 else None)
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("model order")
-    twin = ax.twinx()
-    twin.semilogy(f, np.abs(np.atleast_2d(r.measured_frf)).sum(axis=0), color="#555555", lw=0.8)
-    twin.set_ylabel(_t(f"sum of |H| over {len(r.frf_labels)} FRFs ({r.frf_unit})"))
-    ax.set_xlim(f[0], f[-1])
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=4, fontsize=7, frameon=False)
-    ax.set_title(
+    fig, axes = plt.subplots(1, len(panels), figsize=(10 if len(panels) == 1 else 14, 5), sharey=True,
+                             squeeze=False)  # fmt: skip
+    for ax, panel in zip(axes[0], panels, strict=True):
+        mine = np.ones(order.size, dtype=bool) if panel is None else fits == panel
+        for name, (code, label) in STABILITY_STATUS.items():
+            pick = mine & (status == name)
+            if pick.any():
+                _, marker, colour = STATUS_STYLE[code]
+                ax.scatter(freq[pick], order[pick], marker=marker, s=18, color=colour, label=label)
+        for k, fk in enumerate(_selected(r)):
+            ax.axvline(fk, color="#1b7a2f", lw=0.8, alpha=0.6, label="selected mode" if k == 0 else None)
+        ax.set_xlabel("frequency (Hz)")
+        twin = ax.twinx()
+        twin.semilogy(f, np.abs(np.atleast_2d(r.measured_frf)).sum(axis=0), color="#555555", lw=0.8)
+        if ax is axes[0][-1]:
+            twin.set_ylabel(_t(f"sum of |H| over {len(r.frf_labels)} FRFs ({r.frf_unit})"))
+        ax.set_xlim(f[0], f[-1])
+        if panel is not None:
+            ax.set_title(f"LSCF with {DENOMINATOR[panel]}", fontsize=9)
+    axes[0][0].set_ylabel("model order")
+    axes[0][0].legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=4, fontsize=7, frameon=False)
+    fig.suptitle(
         _t(f"Test {r.test_name}: stability diagram over all FRFs, {len(_selected(r))} modes selected")
     )
     return _png(fig)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from analysis.beam import TABLE_1, BeamProperties
+from analysis.modal_id import NORMALISATIONS
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits
 from analysis.spectra import convert_form
 from analysis.table2 import identified_table2
@@ -252,6 +253,12 @@ def result_arrays(result: RunAnalysis) -> dict[str, np.ndarray]:
             [np.array([STATUS_CODES.get(str(s), 0) for s in codes], dtype=np.int64) for codes in stab.status]
         )
         out["stability_mode"] = np.concatenate([np.asarray(c, dtype=np.int64) for c in stab.selected_cluster])
+        if stab.normalisation:
+            # Index into NORMALISATIONS: which of a zone's two LSCF fits each pole is from.
+            rank = {name: i for i, name in enumerate(NORMALISATIONS)}
+            out["stability_normalisation"] = np.concatenate(
+                [np.array([rank[str(n)] for n in names], dtype=np.int64) for names in stab.normalisation]
+            )
     return out
 
 

@@ -97,7 +97,10 @@ def _stability(analysis: TestAnalysis) -> dict[str, np.ndarray]:
             orders.append(int(order))
             freqs.append(abs(complex(pole)) / (2 * np.pi))
             status.append("frequency" if str(code) == "damping" else str(code))
-    return {"order": np.array(orders), "frequency_hz": np.array(freqs), "status": np.array(status)}
+    out = {"order": np.array(orders), "frequency_hz": np.array(freqs), "status": np.array(status)}
+    if diagram.normalisation:  # which of the zone's two LSCF fits each pole is from
+        out["normalisation"] = np.concatenate([np.asarray(n, dtype=str) for n in diagram.normalisation])
+    return out
 
 
 def report_inputs(analysis: TestAnalysis, fit: TestFit | None = None) -> ModalTestReport:
