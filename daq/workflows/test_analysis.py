@@ -241,12 +241,23 @@ def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = N
             + " is"
         )
     close = np.argwhere(np.triu(auto, 1) > AUTO_MAC_ALIKE)
-    for i, j in close:
+    n_points, n_modes = len(data.points), len(result.modes)
+    if close.size and n_points < n_modes:
+        # n points span at most n independent shapes: with more modes than points many pairs
+        # look alike whatever the data, and one line says why better than one per pair.
+        pairs = auto[np.triu_indices(n_modes, 1)]
         cautions.append(
-            f"modes at {result.modes[i].frequency_hz:.4g} and {result.modes[j].frequency_hz:.4g} Hz look "
-            f"alike at these {len(data.points)} points (auto-MAC {auto[i, j]:.2f}): too few points, or "
-            "badly placed"
+            f"{n_points} point{'s' * (n_points != 1)} cannot tell {n_modes} modes apart (auto-MAC above "
+            f"{AUTO_MAC_ALIKE:g} for {len(close)} of the {pairs.size} pairs of modes, up to "
+            f"{pairs.max():.2f}): measure more points than there are modes, or narrow the band with --band"
         )
+    else:
+        for i, j in close:
+            cautions.append(
+                f"modes at {result.modes[i].frequency_hz:.4g} and {result.modes[j].frequency_hz:.4g} Hz look "
+                f"alike at these {n_points} points (auto-MAC {auto[i, j]:.2f}): too few points, or "
+                "badly placed"
+            )
     for k, mode in enumerate(result.modes):
         if table is not None and table.exact_mode[k] < 0:
             cautions.append(

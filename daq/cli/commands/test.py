@@ -212,7 +212,6 @@ def _point_text(point: dict[str, Any]) -> str:
 
 
 def _analysis(store_dir: Path, name: str, band: str | None, frequencies: str | None, max_order: int | None):
-    from dataclasses import replace
 
     from analysis.run_analysis import AnalysisOptions
     from daq.cli.commands.analyze import parse_band, parse_frequencies
@@ -225,48 +224,7 @@ def _analysis(store_dir: Path, name: str, band: str | None, frequencies: str | N
     except ValueError as exc:
         raise UserError(str(exc).replace("max_order", "--max-order").replace("band ", "--band "), 2) from None
     _progress(f"analysing test {name}...")
-    analysis = analyze_test(store_dir, name, options)
-    # Every command showing the analysis (terminal, --json, report, fit) shows these.
-    return replace(analysis, cautions=alike_in_one(analysis.cautions, analysis.auto_mac))
-
-
-#: How daq/workflows/test_analysis.py words the caution of two modes alike at the points.
-ALIKE_TEXT = " look alike at these "
-
-
-def alike_in_one(cautions: list[str], auto_mac: Any) -> list[str]:
-    """``cautions`` with the pairwise "modes at A and B Hz look alike" lines made one
-    when the test measured fewer points than it found modes: n points span at most n
-    independent shapes, so with more modes than points many pairs look alike whatever
-    the data, and one line says why better than a line per pair (2 points, 5 modes:
-    10 lines). ``auto_mac`` (n_modes, n_modes), 0..1, of the measured shapes."""
-    import numpy as np
-
-    from daq.workflows.test_analysis import AUTO_MAC_ALIKE
-
-    auto = np.asarray(auto_mac, dtype=float)
-    n_modes = auto.shape[0] if auto.ndim == 2 else 0
-    alike = [k for k, text in enumerate(cautions) if ALIKE_TEXT in text]
-    n_points = _points_in(cautions[alike[0]]) if alike else None
-    if n_points is None or n_points >= n_modes:
-        return list(cautions)
-    upper = auto[np.triu_indices(n_modes, 1)]
-    close = upper[upper > AUTO_MAC_ALIKE]
-    points = f"{n_points} point{'s' * (n_points != 1)}"
-    one = (
-        f"{points} cannot tell {n_modes} modes apart (auto-MAC above {AUTO_MAC_ALIKE:g} for "
-        f"{close.size} of the {upper.size} pairs of modes, up to {np.max(close, initial=0.0):.2f}): "
-        "measure more points than there are modes, or narrow the band with --band"
-    )
-    out = [text for k, text in enumerate(cautions) if k not in alike]
-    out.insert(alike[0], one)
-    return out
-
-
-def _points_in(text: str) -> int | None:
-    """The number of points an "alike at these N points" caution names (None: none)."""
-    words = text.split(ALIKE_TEXT, 1)[1].split()
-    return int(words[0]) if words and words[0].isdigit() else None
+    return analyze_test(store_dir, name, options)
 
 
 def _progress(text: str) -> None:
