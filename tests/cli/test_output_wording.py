@@ -280,3 +280,14 @@ def test_a_beam_test_with_one_point_measured_is_refused_before_analysis(tmp_path
 def test_test_report_help_says_it_needs_a_beam():
     text = " ".join(daq_ok("test", "report", "--help").stdout.split())
     assert "for a test on a beam with two measured points or more" in text
+
+
+def test_zones_of_one_order_say_it_once(tmp_path):
+    """Twelve modes on 3001 lines make three zones of the least order: "LSCF order 30 in
+    each", not "LSCF orders 30-30"."""
+    modes = tuple((150.0 + 230.0 * k, 0.01) for k in range(12))
+    frf_table(tmp_path / "twelve.txt", (1.0,) * 12, modes)
+    store = str(tmp_path / "store")
+    daq_ok("import", str(tmp_path / "twelve.txt"), "--frf-form", "receptance", "--store", store)
+    printed = daq_ok("analyze", "latest", "--store", store).stdout
+    assert re.search(r"\n  [2-9] frequency zones, LSCF order 30 in each\n", printed), printed

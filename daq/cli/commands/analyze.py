@@ -221,8 +221,9 @@ def _print(info: dict) -> None:
         typer.echo(f"  band {span(band['low_hz'], band['high_hz'])}: {band['reason']}")
     zones = info.get("zones") or []
     if len(zones) > 1:
-        typer.echo(f"  {len(zones)} frequency zones, LSCF orders {min(z['max_order'] for z in zones)}-"
-                   f"{max(z['max_order'] for z in zones)}")  # fmt: skip
+        low, high = min(z["max_order"] for z in zones), max(z["max_order"] for z in zones)
+        orders = f"LSCF order {low} in each" if low == high else f"LSCF orders {low}-{high}"
+        typer.echo(f"  {len(zones)} frequency zones, {orders}")
     windows = str(info.get("windows", {}).get("from", ""))
     if windows.startswith("unknown") and f"windows {windows}" not in info.get("cautions", []):
         typer.echo(f"  caution: windows {windows}")  # an analysis stored before it was a caution
