@@ -63,7 +63,7 @@ _NO_UNIT = ("", "NONE")
 class _Record:
     """One dataset 58 as read: data (n,) float64 or complex128, x (n,) abscissa."""
 
-    index: int
+    index: int  # its number among the file's datasets 58, counted from 1 as people count
     func: int
     kind: int  # ordinate specific data type
     denominator_kind: int  # ordinate denominator specific data type
@@ -114,10 +114,12 @@ def _check_starts_as_uff(path: Path, name: str) -> None:
         raise FormatError(f"{name}: cannot read it ({exc.strerror or exc})") from None
     first = next((line for line in head.splitlines() if line.strip()), b"")
     if first.strip() != b"-1":
-        shown = first[:30].decode("utf-8", errors="replace").strip()
+        # repr shows tabs and control characters as \t, \x00: the line stays one line
+        # and a table's first line (tab-separated numbers) is named too.
+        shown = first.strip()[:40].decode("utf-8", errors="replace")
         raise FormatError(
             f"{name}: does not look like a UFF file: its first line is not a UFF -1 delimiter line"
-            + (f" but {shown!r}" if shown and shown.isprintable() else "")
+            + (f" but {shown!r}" if shown else "")
         )
 
 
@@ -161,28 +163,33 @@ def read_uff_sets(path: Path, name: str) -> list[dict]:
 
 
 def _record(d: Any, k: int, name: str) -> _Record:
-    """Check one pyuff dict and keep what the import needs."""
+    """Check one pyuff dict, the ``k``-th (0-based) dataset 58, and keep what the import
+    needs; its messages number it k + 1, as a person counts the records of a file."""
+    number = k + 1
     if not isinstance(d, dict):
-        raise FormatError(f"{name}: dataset 58 #{k} could not be read")
+        raise FormatError(f"{name}: dataset 58 #{number} could not be read")
     data = np.asarray(d.get("data"))
     x = np.asarray(d.get("x"))
     if data.ndim != 1 or data.dtype.kind not in "fc" or data.size == 0:
-        raise FormatError(f"{name}: dataset 58 #{k} has no data values")
+        raise FormatError(f"{name}: dataset 58 #{number} has no data values")
     if x.shape != data.shape or x.dtype.kind not in "fi":
-        raise FormatError(f"{name}: dataset 58 #{k} has {x.size} abscissa values for {data.size} data values")
+        raise FormatError(
+            f"{name}: dataset 58 #{number} has {x.size} abscissa values for {data.size} data values"
+        )
     declared = _int(d.get("num_pts"), data.size)
     if declared != data.size:
         raise FormatError(
-            f"{name}: dataset 58 #{k} declares {declared} values but holds {data.size}: truncated or damaged"
+            f"{name}: dataset 58 #{number} declares {declared} values but holds {data.size}: "
+            "truncated or damaged"
         )
     data = data.astype(np.complex128 if data.dtype.kind == "c" else np.float64)
     x = x.astype(np.float64)
     if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
-        raise FormatError(f"{name}: dataset 58 #{k} holds NaN or infinite values")
+        raise FormatError(f"{name}: dataset 58 #{number} holds NaN or infinite values")
     ids = [str(d.get(f"id{i}", "")).strip() for i in range(1, 6)]
     keys = dict(match for text in ids for match in _KEY_VALUE.findall(text))
     return _Record(
-        index=k,
+        index=number,
         func=_int(d.get("func_type"), -1),
         kind=_int(d.get("ordinate_spec_data_type"), 0),
         denominator_kind=_int(d.get("orddenom_spec_data_type"), 0),

@@ -818,7 +818,7 @@ def _modes(
     values: list[dict[int, np.ndarray]] = []
     freqs, damps = [], []
     for k, dset in enumerate(modes):
-        where = f"{name}: dataset 55 #{k} (mode {dset.get('mode_n', k + 1)})"
+        where = f"{name}: dataset 55 #{k + 1} (mode {dset.get('mode_n', k + 1)})"
         numbers = [_whole(v) for v in np.asarray(dset.get("node_nums", []), dtype=np.float64).ravel()]
         present = [f"r{i}" for i in range(1, 7) if i <= 3 or f"r{i}" in dset]
         components = [np.asarray(dset.get(key, []), dtype=np.complex128).ravel() for key in present]
