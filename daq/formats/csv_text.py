@@ -58,6 +58,7 @@ _REJECTED = re.compile(r"rejected hit ([0-9]{1,6}):(.*)")
 # "Force [N]", "acc (g)", "Time (s)", "a / mV": a name and the unit in brackets.
 _HEADER_UNIT = re.compile(r"(.*?)\s*(?:\[([^\]]*)\]|\(([^)]*)\))\s*")
 _DECIMAL_COMMA = re.compile(r"[-+]?[0-9]*,[0-9]+(?:[eE][-+]?[0-9]+)?")
+_PLAIN_NAME = re.compile(r"[A-Za-z0-9_.+-]+")
 
 
 def read_csv(
@@ -195,6 +196,7 @@ class Table:
             self.delimiter = self._choose_delimiter(line)
             cells = self._split(line)
             self.n_cols = len(cells)
+            _refuse_complex(self.name, number, cells)  # else a row of them reads as a header
             if not all(self._is_number(cell) for cell in cells):
                 self.header = [cell.strip().strip('"').strip("'") for cell in cells]
                 pairs = [header_name_unit(cell) for cell in self.header]
@@ -213,6 +215,7 @@ class Table:
             try:
                 value = self._number(cell)
             except ValueError:
+                _refuse_complex(self.name, number, [cell])
                 raise FormatError(
                     f"{self.name} line {number} column {col + 1}: {_show(cell)} is not a number"
                 ) from None
@@ -396,6 +399,9 @@ class Table:
             response_m_s2 = data[order, picked[2]].reshape(len(groups), n) * factors[1]
         hits = make_hits(path, force_n, response_m_s2, sample_rate_hz, start_s, center, stamp, self.rejected)
         names = [header[i] if header else str(i) for i in picked]
+        ignored = [i for i in range(self.n_cols) if i not in picked and i != hit_col]
+        if ignored:
+            notes["notes"] = [self._ignored_note(ignored, picked, complex_mode)]
         details = {
             "columns": names,
             "hit_column": header[hit_col] if hit_col is not None else None,
@@ -413,6 +419,32 @@ class Table:
             **notes,
         }
         return ImportedData(hits=hits, measured_frfs=None, format="csv", details=details)
+
+    def _ignored_note(self, ignored: list[int], picked: list[int], complex_mode: bool) -> str:
+        """One line naming the columns the run leaves out (counted from 1, as in the other
+        messages, with their header names) and how --columns picks others."""
+        header = self.header or []
+        shown = ", ".join(f"{i + 1} {header[i]!r}" if header else str(i + 1) for i in ignored)
+        plural = "s" if len(ignored) > 1 else ""
+        text = f"column{plural} {shown} ignored: a run holds one time, force and response"
+        if complex_mode:
+            return text
+        example = [header[i] if header else str(i) for i in (picked[0], picked[1], ignored[0])]
+        if not all(_PLAIN_NAME.fullmatch(c) for c in example):  # no quoting for the shell
+            example = [str(i) for i in (picked[0], picked[1], ignored[0])]
+        return (
+            f"{text}; give --columns to choose (header names or 0-based indices), e.g. --columns "
+            + ",".join(example)
+        )
+
+    def _time_said(self) -> str:
+        """What the time column is called in a message: "time" under a header; without one,
+        the first column may as well be a frequency (an FRF table whose axis is broken, so
+        that it was not detected as one), and the message must not insist on time."""
+        col = self.picked[0] if self.picked else 0
+        if self.header is not None:
+            return "time"
+        return "the first column (time or frequency)" if col == 0 else f"column {col + 1} (time)"
 
     def _groups(self, data, lines, time, hit_col) -> list[np.ndarray]:
         """Row indices of each hit, in order of first appearance; at most MAX_IMPORT_HITS
@@ -449,12 +481,21 @@ class Table:
         first_t = None
         for k, rows in enumerate(groups):
             t = time[rows]
+            said = self._time_said()
+            if t.size < 2 and self.hit_col is None and k + 1 < len(groups):
+                # Split here by a step back: say so, not only "fewer than 2 samples".
+                after = groups[k + 1][0]
+                raise FormatError(
+                    f"{self.name} line {lines[after]}: {said} goes down (from {time[rows[0]]:g} to "
+                    f"{time[after]:g}); read as time, a step back starts a new hit, which leaves line "
+                    f"{lines[rows[0]]} a hit of 1 sample"
+                )
             if t.size < 2:
                 raise FormatError(f"{self.name}: hit {k} (line {lines[rows[0]]}) has fewer than 2 samples")
             d = np.diff(t)
             bad = np.flatnonzero(d <= 0)
             if bad.size:
-                raise FormatError(f"{self.name} line {lines[rows[bad[0] + 1]]}: time does not increase")
+                raise FormatError(f"{self.name} line {lines[rows[bad[0] + 1]]}: {said} does not increase")
             if k and t.size != groups[0].size:
                 raise FormatError(f"{self.name}: hit {k} has {t.size} samples, hit 0 has {groups[0].size}")
             if k and np.array_equal(t, first_t):  # the same printed axis again (our exports)
@@ -463,10 +504,13 @@ class Table:
                 continue
             fit = fit_regular(t, half[rows])
             if fit.bad is not None:
+                if self.header is not None:
+                    what, unit = "uneven time step (the time column is", " s"
+                else:
+                    what, unit = f"{said} steps unevenly (it is", ""
                 raise FormatError(
-                    f"{self.name} line {lines[rows[fit.bad]]}: uneven time step (the time column is "
-                    f"not a straight line within its printed precision or 1 % of the step "
-                    f"{float(np.median(d)):g} s, whichever is larger)"
+                    f"{self.name} line {lines[rows[fit.bad]]}: {what} not a straight line within its printed "
+                    f"precision or 1 % of the step {float(np.median(d)):g}{unit}, whichever is larger)"
                 )
             tolerance = max(tolerance, fit.tolerance)
             if k:
@@ -556,6 +600,39 @@ def _comment_float(comments: dict[str, str], key: str) -> float | None:
     except ValueError:
         return None
     return value if math.isfinite(value) else None
+
+
+def looks_complex(cell: str) -> bool:
+    """A cell written as a complex number, ``(a+bj)`` as Python prints it, ``a+bi`` as
+    MATLAB does; not a plain real number."""
+    text = cell.strip().strip("\"'").replace(" ", "")
+    try:
+        float(text)
+        return False
+    except ValueError:
+        pass
+    if text.startswith("(") and text.endswith(")"):
+        text = text[1:-1]
+    if text.endswith(("i", "I")):
+        text = text[:-1] + "j"
+    if not text.endswith(("j", "J")):
+        return False
+    try:
+        complex(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _refuse_complex(name: str, number: int, cells: list[str]) -> None:
+    """FormatError when a cell of line ``number`` is a complex number (see looks_complex):
+    no reader here takes them, and read as a header or text they give a puzzling message."""
+    cell = next((c for c in cells if looks_complex(c)), None)
+    if cell is not None:
+        raise FormatError(
+            f"{name} line {number}: cells look like complex numbers (a+bj), e.g. {_show(cell)}; "
+            "write the real and imaginary parts as two columns"
+        )
 
 
 def _show(text: str) -> str:
