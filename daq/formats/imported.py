@@ -8,6 +8,7 @@ is a one-line :class:`~daq.formats.errors.FormatError` naming the file.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import stat
 import tempfile
@@ -29,6 +30,14 @@ MAX_IMPORT_BYTES = 512 * 2**20
 #: per-hit objects of a run (verdicts, stamps, checks) stay small. A legal 30 MB CSV of
 #: 10^6 two-sample hits once took 4.3 GB to import.
 MAX_IMPORT_HITS = 10_000
+#: Frequency lines above 0 Hz that any analysis needs: `daq analyze` refuses a band of
+#: fewer (analysis/run_analysis.py, even with --max-order 2, whose LSCF needs 6): an
+#: import holding fewer can never be analysed (short_of_lines says so).
+MIN_ANALYSIS_LINES = 8
+#: Sample rate per analysed band, analysis/spectra.py's ALIAS_FREE_FACTOR (the alias-free
+#: lines reach fs/2.56); copied, not imported, because importing analysis.spectra loads
+#: scipy.signal, most of a second on every import. tests/formats checks they agree.
+ALIAS_FREE_FACTOR = 2.56
 
 
 @dataclass
@@ -170,6 +179,54 @@ def make_frfs(
         return MeasuredFrf(frequency_hz=frequency_hz, frf=frf, coherence=coherence, labels=labels, form=form)
     except ValueError as exc:
         raise FormatError(f"{show_path(path)}: {one_line(str(exc))}") from None
+
+
+def lines_above_zero(n_samples: int, center_hz: float = 0.0, sample_rate_hz: float = 1.0) -> int:
+    """Frequency lines above 0 Hz the analysis gets from records of ``n_samples`` samples:
+    the alias-free band of analysis/spectra.py (``linear_spectra``), lines 1..n/2.56 at
+    baseband (``center_hz`` 0), centre +- n/2.56 lines in zoom (complex records, centre Hz,
+    at ``sample_rate_hz`` Hz); only the lines above 0 Hz count."""
+    # The same rounding as linear_spectra: fs/2.56 stays on its line.
+    k_max = math.floor(n_samples / ALIAS_FREE_FACTOR * (1 + 1e-12) + 1e-9)
+    if center_hz == 0:
+        return max(0, min(k_max, n_samples // 2))
+    offsets = np.arange(-k_max, min(k_max, (n_samples - 1) // 2) + 1)
+    return int(np.count_nonzero(center_hz + offsets * (sample_rate_hz / n_samples) > 0))
+
+
+def short_of_lines(hits: Hits | None, frfs: list[MeasuredFrf | None]) -> tuple[int, str] | None:
+    """(lines, why) when the time records or an FRF set hold fewer than MIN_ANALYSIS_LINES
+    frequency lines above 0 Hz, so that no analysis can use them; None when they hold
+    enough. ``lines``: the lines above 0 Hz they give (records of n_samples give
+    lines_above_zero(n_samples); FRFs, frequency_hz (n_lines,) Hz, their lines above 0 Hz);
+    ``why``: one clause saying so, and what would be enough."""
+    if hits is not None:
+        n = hits.n_samples
+        center, rate = float(hits.center_hz), float(hits.sample_rate_hz)
+        lines = lines_above_zero(n, center, rate)
+        if lines < MIN_ANALYSIS_LINES:
+            longer = range(n + 1, 100 * MIN_ANALYSIS_LINES)
+            need = next((m for m in longer if lines_above_zero(m, center, rate) >= MIN_ANALYSIS_LINES), None)
+            rule = "a zoom record of n samples gives about 2n/2.56" if center else "n samples give n/2.56"
+            # n >= 2: the readers refuse a record of fewer samples.
+            return lines, (
+                f"{n} samples per hit give {_lines(lines)} above 0 Hz ({rule}), "
+                f"and an analysis needs {MIN_ANALYSIS_LINES}"
+                + (f", so {need} samples per hit at least" if need else "")
+            )
+    for frf in frfs:
+        if frf is not None:
+            lines = int(np.count_nonzero(np.asarray(frf.frequency_hz) > 0))
+            if lines < MIN_ANALYSIS_LINES:
+                return lines, (
+                    f"the FRFs hold {_lines(lines)} above 0 Hz, and an analysis needs {MIN_ANALYSIS_LINES} "
+                    "at least"
+                )
+    return None
+
+
+def _lines(n: int) -> str:
+    return f"{n} frequency {'line' if n == 1 else 'lines'}"
 
 
 def one_line(text: str) -> str:

@@ -32,7 +32,7 @@ def test_daq_import_of_a_bad_file_is_one_line_and_exit_status_1(tmp_path):
     result = invoke_daq("import", str(path), "--store", str(store))
     assert result.returncode == 1
     assert_one_line_error(result, "line 2 column 1: '1.234,5' is not a number")
-    assert result.stderr == f"daq: error: {info.value}\n"
+    assert result.stderr.startswith(f"daq: error: {info.value} (read as csv: detected: ")
     assert not store.exists() or Store(store).list() == []
 
 

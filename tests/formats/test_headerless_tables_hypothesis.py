@@ -104,5 +104,6 @@ def test_the_tool_holders_receptance_as_its_source_wrote_it(tmp_path):
     assert "(frf-text: 1 FRF of 5001 points, receptance)" in result.stdout
     assert "no header, and its first column steps by 1" in result.stdout
     as_time = invoke_daq("import", str(path), "--format", "csv", "--store", str(tmp_path / "runs"))
-    assert as_time.returncode == 0, as_time.stderr
-    assert "1 hit of 5001 samples at 1 Hz" in as_time.stdout
+    assert as_time.returncode == 1, as_time.stdout
+    assert "a sampling rate of 1 Hz, which records no vibration" in as_time.stderr
+    assert "import it with --format frf-text" in as_time.stderr

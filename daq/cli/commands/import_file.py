@@ -11,6 +11,7 @@ source's name, size and SHA-256, so it can always be traced back to the bytes it
 from __future__ import annotations
 
 import enum
+import os
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -144,6 +145,7 @@ def import_file(
     written unless the whole file reads cleanly.
     """
     from daq.cli.commands.capture import check_operator_and_note
+    from daq.formats.errors import FormatError
     from daq.formats.imported import show_path
     from daq.store import Run, Store, StoreError, new_run_id, resolve_store_dir
     from daq.workflows.capture import utc_now
@@ -178,18 +180,26 @@ def import_file(
     else:
         try:
             data = _read(file, chosen, columns, force_unit, response_unit, frf_form)
+            check_read(file, chosen, format is not ImportFormat.auto, data)
         except MemoryError:
             # A well-formed file can still decode to more than this machine holds (int16
             # samples become float64 records four times their size).
             raise UserError(
                 f"{file}: its data do not fit in this machine's memory once decoded; nothing imported"
             ) from None
+        except (FormatError, UserError) as exc:
+            if format is not ImportFormat.auto:
+                raise
+            # The "format ... detected" line is printed only on success: say here which
+            # reader refused the file, and why it was chosen.
+            raise UserError(f"{exc} (read as {chosen}: {how})", getattr(exc, "exit_code", 1)) from None
         parts = {
             "hits": data.hits,
             "measured_frfs": data.measured_frfs,
             "spectra": data.spectra,
             "details": data.details,
         }
+    earlier = earlier_imports(store_dir, digest)
     provenance: dict[str, Any] = {
         "imported_from": {
             "file": file.name,
@@ -232,6 +242,16 @@ def import_file(
         typer.echo(f"format {chosen}: {how}")
     for line in said_units(provenance["imported_from"]):
         typer.echo(line)
+    for line in provenance["imported_from"].get("notes") or []:
+        typer.echo(f"note: {line}")  # what the file holds that the run leaves out
+    if short := short_note(run):
+        typer.echo(f"note: {short}")
+    if earlier:
+        more = f" (and {counted(len(earlier) - 1, 'earlier run')})" if len(earlier) > 1 else ""
+        typer.echo(
+            f"note: the same file (SHA-256 {digest[:12]}...) was imported before as run {earlier[0]}{more}; "
+            "this is another run of the same data"
+        )
     for warning in unit_warnings(provenance["imported_from"]):
         typer.echo(f"warning: {warning}", err=True)
     if where is not None:
@@ -354,6 +374,8 @@ def detect_format(path: Path) -> tuple[str, str]:
         # A NUL in the first two bytes is no text file: a damaged SDF file (HP analyzers
         # name theirs .DAT) gets the SDF reader's reason, not a CSV parse error.
         return "sdf", "it starts with SDF's B and NUL"
+    if refusal := not_readable(path, head):
+        raise UserError(refusal)
     preamble, names = frf_table_head(head)
     if names and preamble:
         return "frf-text", (
@@ -400,6 +422,42 @@ def check_not_uff(path: Path, chosen: str) -> None:
             f"{show_path(path)}: looks like a UFF file (it starts with a UFF -1 delimiter line), "
             f"not {chosen}; import it with --format uff"
         )
+    if refusal := not_readable(path, head):
+        raise UserError(refusal)
+
+
+def not_readable(path: Path, head: bytes) -> str:
+    """The one-line refusal of a file in a format daq does not read, told by ``head`` (its
+    first bytes) or its name, saying what to export instead; "" for anything else. A
+    binary file is never sent to the text readers, whose messages ("not UTF-8", "not a
+    number") would not say what it is."""
+    from daq.formats.imported import show_path
+
+    name, suffix = show_path(path), path.suffix.lower()
+    zipped = head.startswith(b"PK\x03\x04")
+    binary = b"\0" in head
+    if head.startswith(b"\x93NUMPY") or (suffix in (".npy", ".npz") and (zipped or binary)):
+        kind = ".npz" if zipped or suffix == ".npz" else ".npy"
+        return (
+            f"{name}: a binary NumPy file ({kind}), which daq does not read; write the arrays as "
+            "text, e.g. numpy.savetxt with columns time, force, response (or frequency, then Re, Im "
+            "per FRF), and import that"
+        )
+    if head.lstrip(b"\xef\xbb\xbf").startswith(b"LabVIEW Measurement") or suffix == ".lvm":
+        return (
+            f"{name}: a LabVIEW measurement file (.lvm), which daq does not read; export the channels "
+            "as a CSV with one header row (time, force, response columns) and import that"
+        )
+    if zipped:
+        return f"{name}: a ZIP archive; unpack it and import the files inside"
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return f"{name}: text in UTF-16, which daq does not read; save it as UTF-8 and import it again"
+    if binary:
+        return (
+            f"{name}: binary content (NUL bytes), and none of the binary formats daq reads (a run file, "
+            "HP SDF, UFF 58); export the data as text (CSV time records or an FRF table) and import that"
+        )
+    return ""
 
 
 def frf_table_head(head: bytes) -> tuple[int, list[str]]:
@@ -422,7 +480,7 @@ def frf_table_head(head: bytes) -> tuple[int, list[str]]:
 def text_header(head: bytes) -> list[str]:
     """The cells of a text file's header row (its first line that is neither empty nor a
     comment, when it is not all numbers), or [] when there is none or it is no text."""
-    from daq.formats.csv_text import COMMENT_MARKS
+    from daq.formats.csv_text import COMMENT_MARKS, looks_complex
 
     if b"\0" in head:
         return []
@@ -441,11 +499,16 @@ def text_header(head: bytes) -> list[str]:
                 float(cell.replace(",", "."))
                 numeric += 1
             except ValueError:
-                pass
+                numeric += looks_complex(cell)  # numbers too: the reader says what they are
         return cells if numeric < len(cells) else []
     return []
 
 
+#: A text table (csv, frf-text) whose records or FRFs give fewer frequency lines above 0 Hz
+#: than this is refused: no analysis can read it (`daq analyze`: "no line above 0 Hz"), a
+#: time table of 2 rows, say. Shorter than an analysis needs (MIN_ANALYSIS_LINES, 8) but
+#: not that short, an import goes ahead with a note (short_note).
+REFUSED_BELOW_LINES = 1
 #: A first column stepping by at least this many units is no time axis a vibration record
 #: has (1/step samples per second, 10 or fewer): it is a frequency axis.
 MIN_FREQUENCY_STEP = 0.1
@@ -471,10 +534,22 @@ def headerless_frf_table(head: bytes) -> str:
     table, step = found
     if table.shape[1] < 3 or table.shape[1] % 2 == 0:
         return ""
-    as_rate = f"no header, and its first column steps by {step:g}: as time, sampled at {1 / step:.3g} Hz"
+    why = frequency_axis_why(step, table[0, 0] == 0 and bool(np.all(table[0, 2::2] == 0)))
+    return f"no header, and its first column steps by {step:g}: {why}" if why else ""
+
+
+def frequency_axis_why(step: float, real_at_zero: bool) -> str:
+    """Why a headerless table's first column, rising by a steady ``step``, is a frequency
+    axis (Hz), or "" when nothing says so. ``real_at_zero``: its first line is 0 and every
+    imaginary part there is exactly 0. The one rule of both auto-detection
+    (headerless_frf_table) and a forced --format frf-text (check_frequency_axis): a step of
+    MIN_FREQUENCY_STEP or more, as time 10 samples/s or fewer, which records no vibration;
+    or MIN_FREQUENCY_STEP_AT_DC or more with a real value at 0 Hz, as an FRF is there."""
+    as_rate = f"as time, sampled at {1 / step:.3g} Hz"
     if step >= MIN_FREQUENCY_STEP:
-        return f"{as_rate}, which records no vibration; a frequency axis (--format csv if it is time)"
-    if step >= MIN_FREQUENCY_STEP_AT_DC and table[0, 0] == 0 and np.all(table[0, 2::2] == 0):
+        # No "--format csv if it is time": a time record that slow is refused (check_read).
+        return f"{as_rate}, which records no vibration; a frequency axis"
+    if step >= MIN_FREQUENCY_STEP_AT_DC and real_at_zero:
         return (
             f"{as_rate}, and at 0 every second value is exactly 0, as an FRF's imaginary part is "
             "at 0 Hz; a frequency axis (--format csv if it is time)"
@@ -494,9 +569,117 @@ def check_not_slow_time(path: Path, head: bytes) -> None:
         raise UserError(
             f"{show_path(path)}: cannot tell its format: its first column steps by {step:g}, as time a "
             f"sampling rate of {1 / step:.3g} Hz, which records no vibration, and as a frequency axis it "
-            f"needs an odd number of columns (frequency, then Re/Im pairs), not {table.shape[1]}; "
-            "give --format csv or frf-text"
+            f"needs an odd number of columns (frequency, then Re/Im pairs), not {table.shape[1]}; if it "
+            "is an FRF table, give it a header row naming the columns (e.g. Frequency (Hz), H1 Re, "
+            "H1 Im, H1 coh)"
         )
+
+
+def check_read(path: Path, chosen: str, forced: bool, data: Any) -> None:
+    """What a reader gave, refused when no analysis could use it (UserError or FormatError):
+
+    - csv: a time step of MIN_FREQUENCY_STEP s or more (10 samples/s or fewer), which
+      records no vibration: most likely a frequency axis read as time;
+    - frf-text forced on a headerless table whose first column steps as time does
+      (check_frequency_axis, the rule auto-detection uses);
+    - a text table whose records or FRFs give fewer than REFUSED_BELOW_LINES frequency
+      lines above 0 Hz (daq/formats/imported.py, short_of_lines).
+    ``forced``: the format was given with --format."""
+    from daq.formats.imported import short_of_lines, show_path
+
+    name = show_path(path)
+    hits = data.hits
+    short = short_of_lines(hits, [data.measured_frfs])
+    if short is not None and chosen in ("csv", "frf-text") and short[0] < REFUSED_BELOW_LINES:
+        # First: a table of 2 rows is nothing at all, whatever its step.
+        raise UserError(f"{name}: too short to analyse: {short[1]}")
+    if chosen == "csv" and hits is not None:
+        step = 1.0 / float(hits.sample_rate_hz)
+        if step * (1 + 1e-9) >= MIN_FREQUENCY_STEP:
+            header = data.details.get("header")
+            raise UserError(
+                f"{name}: its time column steps by {step:g} s, a sampling rate of "
+                f"{hz(hits.sample_rate_hz)} Hz, which records no vibration (a time record steps by less "
+                f"than {MIN_FREQUENCY_STEP:g} s); if the first column is a frequency, import it with "
+                "--format frf-text"
+                + ("; if the times are in ms, say so in the header (e.g. Time (ms))" if header else "")
+            )
+    if chosen == "frf-text" and forced and not data.details.get("header"):
+        check_frequency_axis(name, data.measured_frfs)
+
+
+def check_frequency_axis(name: str, frfs: Any) -> None:
+    """--format frf-text on a headerless table: UserError when its first column rises by a
+    steady step that auto-detection would not take for a frequency axis (frequency_axis_why),
+    e.g. 2e-5, a 51.2 kHz time record, which as frequency would be FRFs from 0 to 1 Hz.
+    A header naming the column a frequency (Frequency (Hz)) says otherwise, and is heeded."""
+    import numpy as np
+
+    f = np.asarray(frfs.frequency_hz, dtype=float)
+    if f.size < 3:
+        return  # too short to tell a step (and to analyse: short_of_lines says so)
+    steps = np.diff(f)
+    middle = float(np.median(steps))
+    if not middle > 0 or np.any(np.abs(steps - middle) > 0.01 * middle):
+        return  # no steady step (a log-spaced axis): nothing says it is time
+    # The mean step: printed to 7 digits, a 51.2 kHz axis has single steps of 1.95e-05 and
+    # 1.96e-05, while its span over its steps is 1.953125e-05. The slack, as in
+    # _steady_first_column: 0.09999999999999998 counts as 0.1.
+    step = float(f[-1] - f[0]) / (f.size - 1) * (1 + 1e-9)
+    if frequency_axis_why(step, f[0] == 0 and bool(np.all(np.asarray(frfs.frf)[:, 0].imag == 0))):
+        return
+    raise UserError(
+        f"{name}: its first column steps by {step:g}, which as frequency would be FRFs from {f[0]:g} to "
+        f"{f[-1]:g} Hz, and as time a record sampled at {hz(1 / step)} Hz; without a header a frequency "
+        f"axis steps by {MIN_FREQUENCY_STEP:g} Hz or more ({MIN_FREQUENCY_STEP_AT_DC:g} Hz from a real "
+        "value at 0 Hz): import it with --format csv, or if it is a frequency, name it in a header row "
+        "(e.g. Frequency (Hz))"
+    )
+
+
+def short_note(run: Any) -> str:
+    """The note of a run too short for any analysis (daq/formats/imported.py, short_of_lines),
+    or "": imported all the same, but told now rather than by `daq analyze` later."""
+    from daq.formats.imported import short_of_lines
+
+    short = short_of_lines(run.hits, [run.measured_frfs, run.analyzer])
+    return f"too short to analyse: {short[1]}; daq analyze will refuse this run" if short else ""
+
+
+def hz(value: float) -> str:
+    """A rate or frequency for a message: whole hertz from 100 Hz up (51200, not 5.12e+04)."""
+    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
+
+
+def earlier_imports(store_dir: Path, digest: str) -> list[str]:
+    """Ids of the runs of the store at ``store_dir`` imported from a file of SHA-256
+    ``digest`` (hex), newest first: only runs of kind "imported" are opened, for their
+    provenance alone. A run that cannot be read is passed over (runs verify tells of it)."""
+    from daq.store import StoreError, read_summary
+    from daq.store.h5io import get_json
+    from daq.store.layout import ATTR_PROVENANCE, ENTRY
+    from daq.store.reader import open_h5
+    from daq.store.store import is_run_file_name
+
+    try:
+        names = sorted((e.name for e in os.scandir(store_dir) if is_run_file_name(e.name)), reverse=True)
+    except OSError:
+        return []
+    found = []
+    for file_name in names:
+        path = store_dir / file_name
+        try:
+            summary = read_summary(path)
+            if summary.error is not None or summary.kind != "imported":
+                continue
+            with open_h5(path) as f:
+                provenance = get_json(f[ENTRY], ATTR_PROVENANCE)
+        except (StoreError, OSError, KeyError, TypeError, ValueError):
+            continue
+        source = provenance.get("imported_from") if isinstance(provenance, dict) else None
+        if isinstance(source, dict) and source.get("sha256") == digest:
+            found.append(summary.run_id)
+    return found
 
 
 def _steady_first_column(head: bytes) -> tuple[Any, float] | None:

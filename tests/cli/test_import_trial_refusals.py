@@ -1,0 +1,395 @@
+"""`daq import` of the files a new user brought (trial findings 5, 6, 7, 11, 12, 13):
+each refusal is one line on stderr, exit status 1 and nothing in the store; where the
+import goes ahead, one `note:` line on stdout says what the user would otherwise miss.
+Real files written here, the real command line run in this process."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import pyuff
+
+from daq.store import Store
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+
+
+def daq_import(store, *args: str):
+    return invoke_daq("import", *map(str, args), "--store", str(store))
+
+
+def runs_in(store) -> list[str]:
+    return [s.run_id for s in Store(store).list()] if store.exists() else []
+
+
+def refused(result, store, *fragments: str) -> str:
+    """One line on stderr with ``fragments``, exit status 1, no run in ``store``."""
+    assert_one_line_error(result, *fragments)
+    assert result.returncode == 1
+    assert "Traceback" not in result.stderr
+    assert runs_in(store) == [], "a refused import stored a run"
+    return result.stderr
+
+
+def table(path, rows, separator: str = "\t", header: str | None = None):
+    lines = [] if header is None else [header]
+    lines += [separator.join(repr(float(v)) for v in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def time_rows(n: int, rate_hz: float = 51200.0, extra: int = 0) -> np.ndarray:
+    """n samples: time, force, response and ``extra`` more columns (k, 2k, ...)."""
+    t = np.arange(n) / rate_hz
+    rng = np.random.default_rng(n)
+    cols = [t, rng.normal(size=n), rng.normal(size=n)] + [np.full(n, 10.0 * (k + 1)) for k in range(extra)]
+    return np.column_stack(cols)
+
+
+def notes(result) -> list[str]:
+    return [line for line in result.stdout.splitlines() if line.startswith("note: ")]
+
+
+# --- finding 6: too short to analyse ----------------------------------------------------
+
+
+def test_the_two_row_headerless_table_is_refused_with_the_minimum_said(tmp_path):
+    path = tmp_path / "tworows.txt"
+    path.write_text("0.0\t1.0\t0.0\n1.0\t2.0\t0.5\n")
+    store = tmp_path / "runs"
+    message = refused(daq_import(store, path), store, "tworows.txt: too short to analyse")
+    assert "2 samples per hit give 0 frequency lines above 0 Hz" in message
+    assert "an analysis needs 8, so 21 samples per hit at least" in message
+
+
+def test_a_two_sample_time_table_with_a_header_is_refused(tmp_path):
+    path = tmp_path / "tworows.csv"
+    path.write_text("time,force,acc\n0,1,2\n0.001,1,2\n")
+    store = tmp_path / "runs"
+    refused(daq_import(store, path), store, "too short to analyse", "21 samples per hit at least")
+
+
+@pytest.mark.parametrize(("n", "short"), [(20, True), (21, False)])
+def test_the_minimum_is_what_daq_analyze_needs(tmp_path, n, short):
+    """20 samples give 7 lines above 0 Hz, which `daq analyze` refuses even at the lowest
+    order; 21 give 8, which it analyses. The import notes the first, not the second."""
+    path = table(tmp_path / "hit.csv", time_rows(n, rate_hz=1000.0), ",", "time,force,response")
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    said = [line for line in notes(result) if "too short to analyse" in line]
+    assert bool(said) == short, result.stdout
+    if short:
+        assert said == [
+            f"note: too short to analyse: {n} samples per hit give 7 frequency lines above 0 Hz "
+            "(n samples give n/2.56), and an analysis needs 8, so 21 samples per hit at least; "
+            "daq analyze will refuse this run"
+        ]
+    analysed = invoke_daq("analyze", "latest", "--max-order", "2", "--store", str(store))
+    if short:
+        assert_one_line_error(analysed, "only 7 spectral lines")
+    else:
+        assert analysed.returncode == 0, analysed.stderr
+
+
+@pytest.mark.parametrize(("n", "short"), [(7, True), (8, False)])
+def test_an_frf_table_of_fewer_lines_than_an_analysis_needs_is_noted(tmp_path, n, short):
+    f = 10.0 * np.arange(1, n + 1)
+    h = 1 / (1 - (f / 45) ** 2 + 0.05j * f / 45)
+    path = table(tmp_path / "frf.csv", np.column_stack([f, h.real, h.imag]), ",", "Frequency (Hz),Re,Im")
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    said = [line for line in notes(result) if "too short to analyse" in line]
+    assert said == (
+        [f"note: too short to analyse: the FRFs hold {n} frequency lines above 0 Hz, and an analysis "
+         "needs 8 at least; daq analyze will refuse this run"] if short else []
+    )  # fmt: skip
+    analysed = invoke_daq("analyze", "latest", "--max-order", "2", "--store", str(store))
+    assert analysed.returncode == (1 if short else 0), analysed.stderr
+
+
+def test_an_frf_table_with_no_line_above_0_hz_is_refused(tmp_path):
+    path = tmp_path / "dc.txt"
+    path.write_text("0\t1.5\t0\n")
+    store = tmp_path / "runs"
+    refused(
+        daq_import(store, path, "--format", "frf-text"), store, "the FRFs hold 0 frequency lines above 0 Hz"
+    )
+
+
+# --- finding 5: columns left out, a 1 Hz "time record" -------------------------------------
+
+
+def test_a_fourth_column_is_named_in_a_note_and_the_note_says_how_to_take_it(tmp_path):
+    path = table(tmp_path / "t4.csv", time_rows(64, extra=1), ",", "t,F,a1,a2")
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    assert notes(result) == [
+        "note: column 4 'a2' ignored: a run holds one time, force and response; give --columns to "
+        "choose (header names or 0-based indices), e.g. --columns t,F,a2"
+    ]
+    # The way out the note gives works, and then a1 is the column left out.
+    again = daq_import(store, path, "--columns", "t,F,a2")
+    assert again.returncode == 0, again.stderr
+    assert "note: column 3 'a1' ignored" in again.stdout
+    run = Store(store).open(max(runs_in(store)))
+    assert np.all(run.hits.response_m_s2 == 10.0)
+
+
+def test_headerless_extra_columns_are_noted_by_number_and_index(tmp_path):
+    path = table(tmp_path / "t5.txt", time_rows(64, extra=2))
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    assert "note: columns 4, 5 ignored: a run holds one time, force and response" in result.stdout
+    assert "e.g. --columns 0,1,3" in result.stdout
+
+
+def test_our_own_export_layout_leaves_nothing_out(tmp_path):
+    rows = time_rows(64).tolist()
+    path = tmp_path / "hits.csv"
+    path.write_text("hit,time,force,response\n" + "".join(f"0,{t!r},{f!r},{a!r}\n" for t, f, a in rows))
+    result = daq_import(tmp_path / "runs", path)
+    assert result.returncode == 0, result.stderr
+    assert notes(result) == []
+
+
+def test_a_frequency_table_forced_as_csv_is_refused_with_the_way_out(tmp_path):
+    f = np.arange(100.0)
+    path = table(tmp_path / "frf.txt", np.column_stack([f, np.ones_like(f), np.zeros_like(f)]))
+    store = tmp_path / "runs"
+    message = refused(
+        daq_import(store, path, "--format", "csv"),
+        store,
+        "its time column steps by 1 s, a sampling rate of 1 Hz, which records no vibration",
+        "import it with --format frf-text",
+    )
+    assert "read as csv" not in message  # the format was given, not detected
+
+
+def test_a_slow_time_column_under_a_header_is_refused_and_told_about_units(tmp_path):
+    path = table(tmp_path / "slow.csv", time_rows(64, rate_hz=1.0), ",", "time,force,response")
+    store = tmp_path / "runs"
+    refused(daq_import(store, path), store, "records no vibration", "say so in the header (e.g. Time (ms))")
+    ms = table(tmp_path / "ms.csv", time_rows(64, rate_hz=1.0), ",", "time (ms),force,response")
+    result = daq_import(store, ms)
+    assert result.returncode == 0, result.stderr
+    assert "at 1000 Hz" in result.stdout
+
+
+def test_the_even_column_slow_table_is_told_to_get_a_header(tmp_path):
+    path = table(tmp_path / "even4.txt", [[k, 1, 0, 1] for k in range(100)])
+    store = tmp_path / "runs"
+    message = refused(daq_import(store, path), store, "cannot tell its format", "not 4")
+    assert "give it a header row naming the columns" in message
+    assert "--format csv" not in message  # csv would be refused: 1 Hz records no vibration
+
+
+# --- finding 11: frf-text forced on a time record -------------------------------------------
+
+
+def test_frf_text_forced_on_a_51200_hz_time_record_is_refused(tmp_path):
+    t = np.arange(512) / 51200.0
+    rows = [f"{v:.6e}\t{np.sin(v * 900):.6e}\t{np.cos(v * 700):.6e}" for v in t]
+    path = tmp_path / "Point1_Channel1_CH1.txt"
+    path.write_text("\n".join(rows) + "\n")
+    store = tmp_path / "runs"
+    message = refused(
+        daq_import(store, path, "--format", "frf-text"),
+        store,
+        "its first column steps by 1.95313e-05, which as frequency would be FRFs from 0 to 0.00998047 Hz",
+        "as time a record sampled at 51200 Hz",
+        "import it with --format csv",
+    )
+    assert "0.1 Hz or more (0.01 Hz from a real value at 0 Hz)" in message
+    as_time = daq_import(store, path)
+    assert as_time.returncode == 0, as_time.stderr
+    assert "(csv: 1 hit of 512 samples at 51200 Hz)" in as_time.stdout
+
+
+def test_a_header_naming_a_frequency_is_heeded_whatever_the_step(tmp_path):
+    f = 100 + 0.001 * np.arange(64)
+    path = table(
+        tmp_path / "zoom.txt",
+        np.column_stack([f, np.ones_like(f), np.ones_like(f)]),
+        "\t",
+        "Frequency (Hz)\tRe\tIm",
+    )
+    result = daq_import(tmp_path / "runs", path, "--format", "frf-text")
+    assert result.returncode == 0, result.stderr
+    assert "(frf-text: 1 FRF of 64 points" in result.stdout
+
+
+# --- finding 7: a broken frequency column, and which reader refused -------------------------
+
+
+def frequency_table(path, f):
+    return table(path, np.column_stack([f, np.ones_like(f), np.zeros_like(f)]))
+
+
+@pytest.mark.parametrize(
+    ("name", "axis", "fragment"),
+    [
+        ("nonincr.txt", lambda f: np.where(np.arange(f.size) == 50, f[49], f),
+         "nonincr.txt line 51: the first column (time or frequency) does not increase"),
+        ("swapped.txt", lambda f: f[np.r_[0:50, 51, 50, 52:f.size]],
+         "swapped.txt line 51: the first column (time or frequency) steps unevenly"),
+        ("decreasing.txt", lambda f: f[::-1] + 1,
+         "decreasing.txt line 2: the first column (time or frequency) goes down (from 100 to 99)"),
+    ],
+)  # fmt: skip
+def test_a_broken_frequency_column_gets_a_neutral_message_and_the_reader_tried(
+    tmp_path, name, axis, fragment
+):
+    path = frequency_table(tmp_path / name, axis(np.arange(100.0)))
+    store = tmp_path / "runs"
+    message = refused(daq_import(store, path), store, fragment)
+    assert message.rstrip().endswith("(read as csv: detected: the name ends in .txt)")
+    assert "time does not increase" not in message
+    assert "hit 0" not in message
+
+
+def test_a_time_column_under_a_header_is_still_called_time(tmp_path):
+    path = tmp_path / "t.csv"
+    path.write_text("time,force,response\n" + "".join(f"{k / 1000},1,2\n" for k in (0, 1, 2, 2, 3)))
+    store = tmp_path / "runs"
+    refused(daq_import(store, path), store, "t.csv line 5: time does not increase (read as csv: detected:")
+
+
+# --- finding 12: files of other kinds -------------------------------------------------------
+
+
+@pytest.mark.parametrize("forced", [[], ["--format", "frf-text"]])
+def test_python_complex_numbers_are_named_as_such(tmp_path, forced):
+    path = tmp_path / "meas_point_1.txt"
+    path.write_text("".join(f"({0.1 * k}-{0.02 * k}j)\n" for k in range(1, 40)))
+    store = tmp_path / "runs"
+    refused(
+        daq_import(store, path, *forced),
+        store,
+        "meas_point_1.txt line 1: cells look like complex numbers (a+bj), e.g. '(0.1-0.02j)'",
+        "write the real and imaginary parts as two columns",
+    )
+
+
+def test_a_complex_cell_among_real_ones_is_named_with_its_line(tmp_path):
+    path = tmp_path / "c.csv"
+    path.write_text("time,force,response\n0,1,2\n0.001,1,3+4i\n")
+    refused(
+        daq_import(tmp_path / "runs", path),
+        tmp_path / "runs",
+        "c.csv line 3: cells look like complex numbers",
+    )
+
+
+LVM = (
+    "LabVIEW Measurement\t\nWriter_Version\t0.92\nSeparator\tTab\n***End_of_Header***\t\n\t\n"
+    "Channels\t3\t\t\t\n***End_of_Header***\t\t\t\t\nX_Value\tF\tm_1\tm_2\tComment\n"
+    + "".join(f"\t{0.05 * k}\t{0.2 * k}\t{0.3 * k}\n" for k in range(50))
+)
+
+
+@pytest.mark.parametrize(
+    ("name", "forced"), [("m.lvm", []), ("m.lvm", ["--format", "csv"]), ("m.txt", ["--format", "csv"])]
+)
+def test_a_labview_measurement_file_is_named_and_told_what_to_export(tmp_path, name, forced):
+    path = tmp_path / name
+    path.write_text(LVM)
+    store = tmp_path / "runs"
+    message = refused(
+        daq_import(store, path, *forced), store, "a LabVIEW measurement file (.lvm), which daq does not read"
+    )
+    assert "as a CSV with one header row" in message
+    assert "data column" not in message
+
+
+@pytest.mark.parametrize("kind", ["npy", "npz"])
+def test_a_numpy_file_gets_no_text_format_suggested(tmp_path, kind):
+    path = tmp_path / f"measurements_1.{kind}"
+    if kind == "npy":
+        np.save(path, np.zeros((3, 100)))
+    else:
+        np.savez(path, force=np.zeros(100))
+    store = tmp_path / "runs"
+    message = refused(
+        daq_import(store, path), store, f"a binary NumPy file (.{kind}), which daq does not read"
+    )
+    assert "give --format" not in message
+    assert "numpy.savetxt" in message
+    forced = daq_import(store, path, "--format", "csv")
+    refused(forced, store, "binary NumPy file")
+
+
+def test_other_binary_content_is_not_sent_to_the_text_readers(tmp_path):
+    path = tmp_path / "capture.dat"
+    path.write_bytes(b"\x01\x02\x00\x00" + bytes(range(256)) * 4)
+    store = tmp_path / "runs"
+    message = refused(daq_import(store, path), store, "binary content (NUL bytes)", "export the data as text")
+    assert "give --format" not in message
+
+
+def test_utf16_text_is_told_to_be_saved_as_utf8(tmp_path):
+    path = tmp_path / "hits.csv"
+    path.write_text("time,force,response\n0,1,2\n", encoding="utf-16")
+    refused(daq_import(tmp_path / "runs", path), tmp_path / "runs", "text in UTF-16", "save it as UTF-8")
+
+
+# --- finding 13: UFF wording, the same file twice ------------------------------------------
+
+
+def uff_frf_file(path, kinds: list[int]):
+    f = np.arange(1.0, 41.0)
+    sets = []
+    for k, kind in enumerate(kinds):
+        dset = pyuff.prepare_58(
+            binary=0, id1=f"H{k}", func_type=4, rsp_node=2, rsp_dir=3, ref_node=1, ref_dir=3,
+            abscissa_spacing=1, abscissa_spec_data_type=18, ordinate_spec_data_type=kind,
+            orddenom_spec_data_type=13, z_axis_spec_data_type=0, data=(1 + 1j) * f, x=f,
+        )  # fmt: skip
+        dset.update(ordinate_axis_units_lab="NONE", orddenom_axis_units_lab="N")
+        sets.append(dset)
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    return path
+
+
+def test_uff_records_are_counted_from_1(tmp_path):
+    store = tmp_path / "runs"
+    mixed = uff_frf_file(tmp_path / "mixed.uff", [8, 12])
+    refused(daq_import(store, mixed), store, "FRF records #1 (receptance) and #2 (accelerance)")
+    odd = uff_frf_file(tmp_path / "odd.uff", [3])
+    refused(daq_import(store, odd), store, "FRF record #1 has ordinate data type 3")
+
+
+def test_uff_forced_on_a_tab_separated_table_names_its_first_line(tmp_path):
+    path = tmp_path / "Point_1.txt"
+    path.write_text("0.000000e+000\t3.100538e-020\t2.6e-003\n1.0\t2.0\t3.0\n")
+    store = tmp_path / "runs"
+    refused(
+        daq_import(store, path, "--format", "uff"),
+        store,
+        "does not look like a UFF file: its first line is not a UFF -1 delimiter line but "
+        "'0.000000e+000\\t3.100538e-020\\t2.6e-003'",
+    )
+
+
+def test_importing_the_same_file_again_imports_it_and_names_the_earlier_run(tmp_path):
+    path = table(tmp_path / "hit.csv", time_rows(64), ",", "time,force,response")
+    store = tmp_path / "runs"
+    first = daq_import(store, path)
+    assert first.returncode == 0, first.stderr
+    assert not [n for n in notes(first) if "imported before" in n]
+    (first_id,) = runs_in(store)
+    second = daq_import(store, path)
+    assert second.returncode == 0, second.stderr
+    assert len(runs_in(store)) == 2
+    said = [n for n in notes(second) if "imported before" in n]
+    assert len(said) == 1
+    assert f"was imported before as run {first_id};" in said[0]
+    third = daq_import(store, path)
+    assert "(and 1 earlier run)" in third.stdout
+    # Another file is another file, even under the same name.
+    table(path, time_rows(65), ",", "time,force,response")
+    other = daq_import(store, path)
+    assert other.returncode == 0, other.stderr
+    assert "imported before" not in other.stdout
