@@ -651,10 +651,15 @@ def hz(value: float) -> str:
     return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
 
 
+#: The newest run files earlier_imports opens.
+EARLIER_IMPORTS_CHECKED = 200
+
+
 def earlier_imports(store_dir: Path, digest: str) -> list[str]:
     """Ids of the runs of the store at ``store_dir`` imported from a file of SHA-256
-    ``digest`` (hex), newest first: only runs of kind "imported" are opened, for their
-    provenance alone. A run that cannot be read is passed over (runs verify tells of it)."""
+    ``digest`` (hex), newest first, among its EARLIER_IMPORTS_CHECKED newest run files:
+    only runs of kind "imported" are opened, for their provenance alone. A run that cannot
+    be read is passed over (runs verify tells of it)."""
     from daq.store import StoreError, read_summary
     from daq.store.h5io import get_json
     from daq.store.layout import ATTR_PROVENANCE, ENTRY
@@ -665,6 +670,10 @@ def earlier_imports(store_dir: Path, digest: str) -> list[str]:
         names = sorted((e.name for e in os.scandir(store_dir) if is_run_file_name(e.name)), reverse=True)
     except OSError:
         return []
+    # A few milliseconds per run opened: a store of thousands would slow every import by
+    # seconds for a note, so only the newest are looked at (a file imported twice is
+    # most often imported twice in a row).
+    names = names[:EARLIER_IMPORTS_CHECKED]
     found = []
     for file_name in names:
         path = store_dir / file_name
