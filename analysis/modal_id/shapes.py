@@ -407,7 +407,8 @@ def mode_shapes(
             f"unit modal mass through the driving point (FRF {driving_index}): psi_i psi_s = 2 j w_d R_is, "
             "R the receptance residue; 1/sqrt(kg) for SI FRFs"
         )
-        fn_hz = np.abs(lam) / (2 * np.pi)
+        # Named by the given poles, the modes as the caller lists them (a refit moves them).
+        fn_hz = np.abs(given) / (2 * np.pi)
         ratio = np.abs(rec[:, driving_index]) / np.abs(rec[np.arange(n_modes), largest])
         prod_phase = np.degrees(np.angle(2j * lam.imag * rec[:, driving_index]))
         for r in range(n_modes):
