@@ -208,6 +208,14 @@ def test_frf_text_forced_on_a_51200_hz_time_record_is_refused(tmp_path):
     assert "(csv: 1 hit of 512 samples at 51200 Hz)" in as_time.stdout
 
 
+def test_frf_text_forced_on_two_rows_of_a_time_record_is_refused_too(tmp_path):
+    """Two rows have one step, enough to tell time from frequency (a new user's trial: two
+    rows stepping by 1 ms were stored as FRFs at 0 and 0.001 Hz, ten were refused)."""
+    path = table(tmp_path / "t2_nohdr.txt", time_rows(2, 1000.0))
+    store = tmp_path / "runs"
+    refused(daq_import(store, path, "--format", "frf-text"), store, "its first column steps by 0.001")
+
+
 def test_a_header_naming_a_frequency_is_heeded_whatever_the_step(tmp_path):
     f = 100 + 0.001 * np.arange(64)
     path = table(
