@@ -193,17 +193,30 @@ def _band(frequency_hz, options: AnalysisOptions, g_ff, coherence) -> BandChoice
     return choose_band(frequency_hz, g_ff, coherence)
 
 
+#: Lines an analysis needs at least (daq/formats/imported.py's MIN_ANALYSIS_LINES, copied
+#: there so that an import need not load the numerics; a test keeps the two equal).
+MIN_LINES = 8
+
+
 def _lines(frequency_hz: np.ndarray, band: BandChoice) -> np.ndarray:
-    keep = np.isfinite(frequency_hz) & (frequency_hz > 0)
-    keep &= (frequency_hz >= band.low_hz) & (frequency_hz <= band.high_hz)
-    if keep.sum() < 8:
-        raise ValueError(f"only {int(keep.sum())} spectral lines in the band: widen it")
+    above_zero = np.isfinite(frequency_hz) & (frequency_hz > 0)
+    keep = above_zero & (frequency_hz >= band.low_hz) & (frequency_hz <= band.high_hz)
+    if above_zero.sum() < MIN_LINES:
+        raise ValueError(
+            f"the run has {int(above_zero.sum())} lines above 0 Hz and an analysis needs {MIN_LINES}: "
+            "the record is too short (record more samples per hit, or a finer frequency step)"
+        )
+    if keep.sum() < MIN_LINES:
+        raise ValueError(
+            f"only {int(keep.sum())} lines in the band {band.low_hz:.6g}-{band.high_hz:.6g} Hz and an "
+            f"analysis needs {MIN_LINES}: widen it"
+        )
     return keep
 
 
 def _identify(frequency_hz, frf, coherence, source, options, decay, band) -> RunAnalysis:
     keep = _lines(frequency_hz, band) & np.all(np.isfinite(frf), axis=0)
-    if keep.sum() < 8:
+    if keep.sum() < MIN_LINES:
         raise ValueError(
             f"only {int(keep.sum())} lines of the band hold a finite FRF (where the force's spectrum is "
             "zero the FRF is not defined): the record is too short or holds no force"

@@ -19,7 +19,7 @@ from analysis.modal_id.stability import (
     pick_clusters,
     stability_diagram,
 )
-from analysis.modal_id.zones import MIN_ORDER, Zone, plan_zones
+from analysis.modal_id.zones import Zone, plan_zones
 
 
 @dataclass
@@ -113,11 +113,14 @@ def _check_inputs(frequency_hz, frf, band, max_order, form):
     if not f1 < f2:
         raise ValueError(f"band must be (f1, f2) with f1 < f2, got {band}")
     use = (f >= f1) & (f <= f2)
-    need = 2 * (max_order or MIN_ORDER) + 2
+    # A zone's order is cut to what its lines hold (_fit_zone); an order given must fit.
+    need = 2 * (max_order or 2) + 2
     if use.sum() < need:
+        most = (int(use.sum()) - 2) // 2
         raise ValueError(
-            f"band {band} holds {use.sum()} lines; LSCF of order {max_order or MIN_ORDER} needs at least "
-            f"{need}: widen the band or lower max_order"
+            f"band {f1:.6g}-{f2:.6g} Hz holds {use.sum()} lines; an LSCF of order {max_order or 2} needs at "
+            f"least {need}: widen the band"
+            + (f" or give --max-order {most} or less" if max_order and most >= 2 else "")
         )
     return f, h, (f1, f2), use
 

@@ -86,7 +86,7 @@ def test_the_minimum_is_what_daq_analyze_needs(tmp_path, n, short):
         ]
     analysed = invoke_daq("analyze", "latest", "--max-order", "2", "--store", str(store))
     if short:
-        assert_one_line_error(analysed, "only 7 spectral lines")
+        assert_one_line_error(analysed, "the run has 7 lines above 0 Hz and an analysis needs 8")
     else:
         assert analysed.returncode == 0, analysed.stderr
 
@@ -401,3 +401,27 @@ def test_importing_the_same_file_again_imports_it_and_names_the_earlier_run(tmp_
     other = daq_import(store, path)
     assert other.returncode == 0, other.stderr
     assert "imported before" not in other.stdout
+
+
+@pytest.mark.parametrize("n", [21, 40, 100])
+def test_a_record_the_import_keeps_is_analysed_at_the_order_its_lines_hold(tmp_path, n):
+    """21 samples give the 8 lines an analysis needs: the default analysis fits the order
+    those lines hold, where it used to refuse for want of the 62 lines of order 30 (a new
+    user's trial: 'band (47.61904761904762, 380.95238095238096) holds 8 lines; ...')."""
+    path = table(tmp_path / "short.csv", time_rows(n, 1000.0), ",", "time,force,response")
+    store = tmp_path / "runs"
+    assert daq_import(store, path).returncode == 0
+    analysed = invoke_daq("analyze", "latest", "--store", str(store))
+    assert analysed.returncode == 0, analysed.stderr
+    assert "Traceback" not in analysed.stderr
+
+
+def test_a_record_too_short_says_so_in_analyze_not_widen_the_band(tmp_path):
+    path = table(tmp_path / "ten.csv", time_rows(10, 1000.0), ",", "time,force,response")
+    store = tmp_path / "runs"
+    assert daq_import(store, path).returncode == 0  # imported with a note
+    analysed = invoke_daq("analyze", "latest", "--store", str(store))
+    assert_one_line_error(
+        analysed, "the run has 3 lines above 0 Hz and an analysis needs 8: the record is too short"
+    )
+    assert "widen" not in analysed.stderr

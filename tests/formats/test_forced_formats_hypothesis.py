@@ -132,3 +132,9 @@ def test_the_lines_the_import_counts_are_the_lines_the_analysis_gets(n, rate, zo
 
 def test_the_import_uses_the_analysiss_alias_free_factor():
     assert imported.ALIAS_FREE_FACTOR == spectra.ALIAS_FREE_FACTOR
+
+
+def test_the_import_uses_the_analysiss_least_lines():
+    from analysis import run_analysis
+
+    assert imported.MIN_ANALYSIS_LINES == run_analysis.MIN_LINES
