@@ -272,8 +272,18 @@ def draw_frf(result: dict[str, Any]) -> Any:
     for ax in axes:
         ax.grid(alpha=0.3, which="both")
     summary = result["summary"]
-    fig.suptitle(f"Run {summary['run_id']}: FRF ({summary['source']}, accelerance)")
+    fig.suptitle(f"Run {summary['run_id']}: FRF ({summary['source']}, {_form_shown(summary)})")
     return fig
+
+
+def _form_shown(summary: dict[str, Any]) -> str:
+    """The FRF's form as drawn: accelerance, said converted when the run stored another."""
+    stored = (summary.get("form") or {}).get("stored", "accelerance")
+    return "accelerance" if stored == "accelerance" else f"accelerance, converted from the {stored} stored"
+
+
+def _modes(n: int) -> str:
+    return f"{n} mode{'s' * (n != 1)}"
 
 
 def stability_figure(result: dict[str, Any]) -> bytes:
@@ -295,6 +305,9 @@ def draw_stability(result: dict[str, Any]) -> Any:
         1, len(panels), figsize=(10 if len(panels) == 1 else 14, 5), sharey=True, squeeze=False
     )
     f = result["frequency_hz"]
+    # The lines analysed (the band): the poles lie there, and a record's lines may reach far beyond.
+    analysed = np.asarray(result.get("synthesized_frequency_hz", f))
+    in_band = (f >= analysed[0]) & (f <= analysed[-1])
     for ax, panel in zip(axes[0], panels, strict=True):
         if "stability_order" in result:
             pick_panel = (
@@ -317,20 +330,22 @@ def draw_stability(result: dict[str, Any]) -> Any:
         ax.set_xlabel("frequency (Hz)")
         twin = ax.twinx()
         for h in np.atleast_2d(result["frf"]):
-            twin.semilogy(f, np.abs(h), color="#555555", lw=0.7, alpha=0.6)
+            twin.semilogy(f[in_band], np.abs(h[in_band]), color="#555555", lw=0.7, alpha=0.6)
         if ax is axes[0][-1]:
             twin.set_ylabel("|H| ((m/s²)/N)")
-        ax.set_xlim(f[0], f[-1])
+        ax.set_xlim(analysed[0], analysed[-1])
         if panel is not None:
             n_read = sum(m.get("quality", {}).get("normalisation", NORMALISATIONS[0]) == NORMALISATIONS[panel]
                          for m in summary["modes"])  # fmt: skip
             ax.set_title(
-                f"LSCF with {DENOMINATOR[NORMALISATIONS[panel]]}: {n_read} modes read from it", fontsize=9
+                f"LSCF with {DENOMINATOR[NORMALISATIONS[panel]]}: "
+                f"{_modes(n_read)} read from it (solid lines)",
+                fontsize=9,
             )
     axes[0][0].set_ylabel("model order")
     # Below the plot: inside it, the legend hid the first mode's column.
     axes[0][0].legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=4, fontsize=7, frameon=False)
-    fig.suptitle(f"Run {summary['run_id']}: stability diagram, {len(summary['modes'])} modes selected")
+    fig.suptitle(f"Run {summary['run_id']}: stability diagram, {_modes(len(summary['modes']))} selected")
     return fig
 
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from analysis.modal_id import DENOMINATOR, NORMALISATIONS, identify_modes
-from daq.report.figures import draw_stability
+from daq.report.figures import draw_frf, draw_stability
 from daq.workflows.analysis import result_arrays
 from tests.analysis.modal_id.test_heavily_damped_modes import tool_holder_like
 
@@ -55,7 +55,8 @@ def test_the_report_draws_one_panel_per_fit_and_one_for_a_result_stored_before(a
     titled = [ax.get_title() for ax in fig.axes if ax.get_title()]
     assert len(titled) == 2, titled
     for name, title in zip(NORMALISATIONS, titled, strict=True):
-        assert f"LSCF with {DENOMINATOR[name]}: {read_with.count(name)} modes read from it" == title
+        n = read_with.count(name)
+        assert f"LSCF with {DENOMINATOR[name]}: {n} mode{'s' * (n != 1)} read from it (solid lines)" == title
     old = {k: v for k, v in payload.items() if k != "stability_normalisation"}
     fig = draw_stability(old)
     assert [ax.get_title() for ax in fig.axes if ax.get_title()] == []
@@ -81,3 +82,33 @@ def test_a_modal_tests_diagram_has_a_panel_per_fit_and_refuses_an_unknown_one(mo
     arrays["normalisation"] = np.array(["both"] * len(rows))
     with pytest.raises(ValueError, match="stability normalisation must name one of highest, lowest per pole"):
         mtr.render_modal_test_report(_report(stability=arrays))
+
+
+def test_the_diagram_spans_the_band_analysed_not_the_whole_record(analysed):
+    """A hit's record reaches 20 kHz while the band analysed ends at 1.4 kHz: the poles lie
+    in the band, and the diagram is drawn over it (a new user's trial)."""
+    _, _, payload = analysed
+    wide = dict(payload)
+    f = payload["frequency_hz"]
+    step = f[1] - f[0]
+    wide["frequency_hz"] = np.concatenate([f, f[-1] + step * np.arange(1, 4 * f.size)])
+    wide["frf"] = np.concatenate([payload["frf"], np.ones((payload["frf"].shape[0], 4 * f.size - 1))], axis=1)
+    fig = draw_stability(wide)
+    band = payload["synthesized_frequency_hz"]
+    for ax in fig.axes:
+        assert ax.get_xlim() == (band[0], band[-1])
+
+
+@pytest.mark.parametrize(
+    ("stored", "said"),
+    [("receptance", "accelerance, converted from the receptance stored"), ("accelerance", "accelerance")],
+)
+def test_the_frf_figure_says_a_stored_form_was_converted(analysed, stored, said):
+    _, _, payload = analysed
+    summary = {
+        **payload["summary"],
+        "source": "measured_frf",
+        "form": {"stored": stored, "analysed": "accelerance"},
+    }
+    fig = draw_frf({**payload, "summary": summary})
+    assert fig._suptitle.get_text() == f"Run panels: FRF (measured_frf, {said})"
