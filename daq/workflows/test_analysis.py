@@ -249,7 +249,8 @@ def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = N
         cautions.append(
             f"{n_points} point{'s' * (n_points != 1)} cannot tell {n_modes} modes apart (auto-MAC above "
             f"{AUTO_MAC_ALIKE:g} for {len(close)} of the {pairs.size} pairs of modes, up to "
-            f"{pairs.max():.2f}): measure more points than there are modes, or narrow the band with --band"
+            f"{pairs.max():.2f}): measure more points than there are modes, or name the modes wanted "
+            "with --frequencies"
         )
     else:
         for i, j in close:

@@ -185,7 +185,8 @@ def test_fewer_points_than_modes_is_one_caution(two_points, tmp_path):
     one = [c for c in info["cautions"] if "cannot tell" in c]
     assert one == [
         f"2 points cannot tell 5 modes apart (auto-MAC above 0.5 for {alike} of the 10 pairs of modes, "
-        f"up to {auto.max():.2f}): measure more points than there are modes, or narrow the band with --band"
+        f"up to {auto.max():.2f}): measure more points than there are modes, or name the modes wanted "
+        "with --frequencies"
     ]
     assert not [c for c in info["cautions"] if "look alike" in c]
     assert printed.count("caution: 2 points cannot tell 5 modes apart") == 1
