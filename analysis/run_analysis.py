@@ -297,7 +297,7 @@ def _cautions(result: RunAnalysis, asked: bool = False) -> list[str]:
     error = result.modal.synthesis_error
     if np.isfinite(error) and error > POOR_SYNTHESIS:
         out.append(
-            f"the modes reproduce the FRF poorly (synthesis error {100 * error:.0f} % > "
+            f"the modes reproduce the FRF poorly (synthesis error {100 * error:.3g} % > "
             f"{100 * POOR_SYNTHESIS:.0f} %): modes are missing or the data are noisy; look at synthesis.png "
             "of daq report and try --band or --max-order"
         )
