@@ -19,7 +19,7 @@ import numpy as np
 
 from analysis.modal_id import DENOMINATOR, NORMALISATIONS
 from daq.report.figures import STATUS_STYLE, _png, _pyplot
-from daq.report.numbers import plain
+from daq.report.numbers import plain, with_uncertainty
 from daq.report.page import STYLE, _cautions, _e, _img, _num, _table
 
 #: Stability status of a pole -> the code of figures.STATUS_STYLE whose marker and colour
@@ -429,8 +429,8 @@ def render_page(r: ModalTestReport, figures: dict[str, bytes]) -> str:
             mac = float(r.mac_exact[k][k]) if k < n_exact else None
         mode_rows.append([
             _td(str(k + 1)),
-            _td(f"{r.mode_frequency_hz[k]:.4f} ± {plain(r.mode_frequency_std_hz[k], '.2g')}"),
-            _td(f"{plain(100 * r.damping_ratio[k], '.3g')} ± {plain(100 * r.damping_std[k], '.2g')}"),
+            _td(" ± ".join(with_uncertainty(r.mode_frequency_hz[k], r.mode_frequency_std_hz[k], ".4f"))),
+            _td(" ± ".join(with_uncertainty(100 * r.damping_ratio[k], 100 * r.damping_std[k], ".3g"))),
             _td(f"{r.mpc[k]:.3f}"), _td(_num(mac, ".3f")),
         ])  # fmt: skip
     header = [

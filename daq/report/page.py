@@ -20,7 +20,7 @@ from typing import Any
 
 from analysis.hit_checks import BAND_FRACTION, MAX_DROP_DB
 from daq.report.figures import QUALITY_HITS, psi_unit
-from daq.report.numbers import plain, span
+from daq.report.numbers import plain, span, with_uncertainty
 from daq.workflows.run_views import accepted_against_checks as _against
 from daq.workflows.run_views import failed_check_names
 
@@ -546,9 +546,9 @@ def sections(
         q = m["quality"]
         zeta = m["damping_ratio"]
         mode_rows.append([
-            str(k), f"{m['frequency_hz']:.4f} ± {_num(m.get('frequency_u_hz'), '.2g')}",
-            f"{_num(None if zeta is None else 100 * zeta, '.3g')} ± "
-            f"{_num(None if m.get('damping_u') is None else 100 * m['damping_u'], '.2g')}",
+            str(k), " ± ".join(with_uncertainty(m["frequency_hz"], m.get("frequency_u_hz"), ".4f")),
+            "– ± –" if zeta is None else " ± ".join(with_uncertainty(
+                100 * zeta, None if m.get("damping_u") is None else 100 * m["damping_u"], ".3g")),
             str(q["n_stable_orders"]) + (" (alpha_0 = 1)" if q.get("normalisation") == "lowest" else ""),
             f"{plain(100 * q['synthesis_share'], '.2g')} %",
         ])  # fmt: skip

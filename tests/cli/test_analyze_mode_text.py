@@ -11,7 +11,7 @@ QUALITY = {"n_stable_orders": 16, "synthesis_share": 0.16, "accepted": True}
 def test_a_mode_read_with_the_second_normalisation_says_so():
     first = _mode_text({**MODE, "quality": {**QUALITY, "normalisation": "highest"}})
     assert (
-        first == "2608.9060 Hz ± 1 Hz, damping 2.26 % ± 0.27 %; stable over 16 orders, 16 % of the synthesis"
+        first == "2608.9 Hz ± 1.0 Hz, damping 2.26 % ± 0.27 %; stable over 16 orders, 16 % of the synthesis"
     )
     second = _mode_text({**MODE, "quality": {**QUALITY, "normalisation": "lowest"}})
     assert "stable over 16 orders with alpha_0 = 1, 16 %" in second

@@ -134,7 +134,7 @@ def test_a_mode_near_all_of_the_synthesis_reads_100_percent():
     mode = {"frequency_hz": 30.0, "damping_ratio": 0.02, "frequency_u_hz": 123.0, "damping_u": 0.0001}
     text = _mode_text({**mode, "quality": {"n_stable_orders": 27, "synthesis_share": 0.996}})
     assert text == (
-        "30.0000 Hz ± 120 Hz, damping 2 % ± 0.01 %; stable over 27 orders, 100 % of the synthesis"
+        "30 Hz ± 120 Hz, damping 2.000 % ± 0.010 %; stable over 27 orders, 100 % of the synthesis"
     )
 
 
@@ -260,7 +260,7 @@ def test_a_free_structure_says_once_that_it_has_no_mac_and_has_no_report(two_poi
     assert printed.count("no MAC") == 1
     assert "\n  no MAC against a beam: the article is a free structure" in printed
     header = next(line for line in printed.splitlines() if line.startswith("  mode  frequency"))
-    rows = [line for line in printed.splitlines() if re.match(r"\s+\d+\s+\d+\.\d{4} ± ", line)]
+    rows = [line for line in printed.splitlines() if re.match(r"\s+\d+\s+\d+(\.\d+)? ± ", line)]
     assert len(rows) == 5
     assert "MAC" not in header
     assert max(len(line) for line in [header, *rows]) <= 80

@@ -129,8 +129,8 @@ def test_the_page_holds_every_section_figure_caution_and_the_r_table(drawn):
     # Every ± on the page is labelled: each table header that has one says so.
     for header in re.findall(r"<th>([^<]*±[^<]*)</th>", page):
         assert "std. uncertainty" in header
-    assert "11.3000 ± 0.004" in page  # mode 1's frequency
-    assert "1.2 ± 0.04" in page  # mode 1's damping in %
+    assert "11.3000 ± 0.0040" in page  # mode 1's frequency, to the place of its u
+    assert "1.200 ± 0.040" in page  # mode 1's damping in %, to the place of its u
     assert "not fitted" not in page
 
 

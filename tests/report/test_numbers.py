@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from daq.report.numbers import plain, span
+from daq.report.numbers import plain, span, with_uncertainty
 
 
 @pytest.mark.parametrize(
@@ -46,3 +46,21 @@ def test_plain_of_nan_is_nan():
 )
 def test_span_joins_with_to_when_an_end_keeps_its_exponent(low, high, spec, text):
     assert span(low, high, spec) == text
+
+
+@pytest.mark.parametrize(
+    ("value", "u", "written"),
+    [
+        (1073.2692, 2.5, ("1073.3", "2.5")),  # a new user's trial: '1073.2692 Hz ± 2.5 Hz'
+        (19.768523, 0.0017, ("19.7685", "0.0017")),
+        (2608.906, 1.0, ("2608.9", "1.0")),
+        (30.0, 123.0, ("30", "120")),
+        (1967.14, 18.0, ("1967", "18")),
+        (0.20612, 0.0123, ("0.206", "0.012")),
+        (5.0, None, ("5.0000", "–")),
+        (5.0, float("nan"), ("5.0000", "–")),
+        (5.0, 0.0, ("5.0000", "–")),
+    ],
+)
+def test_a_value_is_written_to_the_place_of_its_uncertainty(value, u, written):
+    assert with_uncertainty(value, u) == written

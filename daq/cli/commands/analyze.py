@@ -27,7 +27,7 @@ from daq.cli.options import (
     SchedulerOption,
     StoreOption,
 )
-from daq.report.numbers import plain, span
+from daq.report.numbers import plain, span, with_uncertainty
 
 if TYPE_CHECKING:
     from daq.batch.executor import Backend, BatchReport
@@ -259,15 +259,22 @@ def _mode_text(mode: dict) -> str:
     """'1234.5678 Hz ± 0.01 Hz, damping 0.123 % ± 0.004 %; stable over ...' of one mode."""
     zeta = mode["damping_ratio"]
     f_u, z_u = mode.get("frequency_u_hz"), mode.get("damping_u")
-    spread = f" ± {plain(f_u, '.2g')} Hz" if f_u is not None else ""
-    zspread = f" ± {plain(100 * z_u, '.2g')} %" if z_u is not None else ""
-    zeta_text = f"{plain(100 * zeta, '.3g')} %{zspread}" if zeta is not None else "n/a (window decay larger)"
+    # Each value to the decimal place of its u (two significant digits), as measurements are written.
+    f_text, f_u_text = with_uncertainty(mode["frequency_hz"], f_u, ".4f")
+    spread = f" ± {f_u_text} Hz" if f_u_text != "–" else ""
+    if zeta is None:
+        zeta_text = "n/a (window decay larger)"
+    else:
+        z_text, z_u_text = with_uncertainty(100 * zeta, None if z_u is None else 100 * z_u, ".3g")
+        zeta_text = f"{z_text if z_u_text != '–' else plain(100 * zeta, '.3g')} %" + (
+            f" ± {z_u_text} %" if z_u_text != "–" else ""
+        )
     q = mode["quality"]
     flag = "" if q.get("accepted", True) else " (asked for; fails a selection rule)"
     # The second LSCF normalisation (analysis/modal_id/identify.py) is said: its poles differ.
     read_with = " with alpha_0 = 1" if q.get("normalisation") == "lowest" else ""
     return (
-        f"{mode['frequency_hz']:.4f} Hz{spread}, damping {zeta_text}; "
+        f"{f_text} Hz{spread}, damping {zeta_text}; "
         f"stable over {q['n_stable_orders']} orders{read_with}{flag}, "
         f"{plain(100 * q['synthesis_share'], '.2g')} % of the synthesis"
     )

@@ -17,7 +17,7 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import BandOption, FrequenciesOption, JsonOption, MaxOrderOption, StoreOption
-from daq.report.numbers import plain, span
+from daq.report.numbers import plain, span, with_uncertainty
 
 test_app = typer.Typer(
     help="Multi-point modal tests: points on a test article, one run per point, analysed together.\n\n"
@@ -276,10 +276,10 @@ def print_test_analysis(info: dict[str, Any]) -> None:
     for k, mode in enumerate(info["modes"], start=1):
         f_u = mode["frequency_u_hz"]
         z_u = mode["damping_u"]
-        row = (
-            f"  {k:>4}  {mode['frequency_hz']:>10.4f} ± {_u(f_u, 1, '.2g'):<8}  "
-            f"{100 * mode['damping_ratio']:>7.3f} ± {_u(z_u, 100, '.2g'):<8}  {mode['mpc']:>5.3f}"
-        )
+        f_text, f_u_text = with_uncertainty(mode["frequency_hz"], f_u, ".4f")
+        z_u_percent = None if z_u is None else 100 * z_u
+        z_text, z_u_text = with_uncertainty(100 * mode["damping_ratio"], z_u_percent, ".3f")
+        row = f"  {k:>4}  {f_text:>10} ± {f_u_text:<8}  {z_text:>7} ± {z_u_text:<8}  {mode['mpc']:>5.3f}"
         if paired:
             row += f"  {_pair_text(mode, 'exact'):<22}  {_pair_text(mode, 'ritz')}"
         typer.echo(row)
@@ -309,10 +309,6 @@ def _why_no_mac(info: dict[str, Any]) -> str:
     if any(x is None for x in info["positions_m"]):
         return "the article is a free structure, with no beam model to compare the shapes with"
     return "the article gives no beam model to compare the shapes with"
-
-
-def _u(value: float | None, scale: float, fmt: str) -> str:
-    return "–" if value is None else plain(scale * value, fmt)
 
 
 def _pair_text(mode: dict[str, Any], model: str) -> str:
