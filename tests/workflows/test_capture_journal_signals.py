@@ -23,6 +23,18 @@ from tests.service.service_helpers import serving, wait_for
 from tests.workflows.capture_processes import capture_env, listed, start_capture, wait_for_accepted
 
 EXIT = {signal.SIGTERM: 143, signal.SIGHUP: 129, signal.SIGKILL: -signal.SIGKILL}
+
+
+@pytest.fixture(autouse=True)
+def hangup_not_ignored():
+    """The processes these tests start inherit SIGHUP's disposition, and daq keeps an
+    ignored SIGHUP ignored (a capture under nohup must survive its terminal): a suite run
+    under nohup would see no SIGHUP at all. Set it to the default for what they start."""
+    old = signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    yield
+    signal.signal(signal.SIGHUP, old)
+
+
 WHY = {signal.SIGTERM: "terminated (SIGTERM)", signal.SIGHUP: "hung up (SIGHUP)"}
 
 
