@@ -1,6 +1,15 @@
 """Shared fixtures. Reference numbers live in tests/reference.py, computed before any
 code existed (docs/method.md) or copied from the seed paper, never produced by our code."""
 
+import os
+
+# Before numpy loads (test modules import it before daq.cli.app, which sets the same):
+# one BLAS thread, as `daq` runs. The analysis solves many small matrices, where BLAS
+# threads cost more than they give; with a worker per core (pytest -n) they fight over
+# the cores and the suite runs several times slower. A setting in the environment wins.
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
 #: Skip reasons of the browser tests start with this; the summary counts them.
 NO_BROWSER = "no Chromium"
 #: Skip reasons of the real-data tests (tests/corpus) start with this.
