@@ -15,6 +15,7 @@ import numpy as np
 
 from analysis.band_choice import BandChoice, choose_band
 from analysis.modal_id import ModalResult, identify_modes
+from analysis.modal_id.identify import NOISE_FACTOR
 from analysis.modal_id.lscf import lscf_poles
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
 from analysis.windows import WindowSpec, added_decay_rate, correct_pole
@@ -306,6 +307,17 @@ def _cautions(result: RunAnalysis, asked: bool = False) -> list[str]:
             "the coherence is below 0.5 over the whole band: the FRF is mostly noise (too weak a hit, "
             "a loose sensor, or the wrong channels)"
         )
+    aside = set_aside(result)
+    if aside:
+        listed = ", ".join(f"{f:.6g}" for f, _ in aside)
+        every = sorted([m.frequency_hz for m in result.modes] + [f for f, _ in aside])
+        out.append(
+            f"{len(aside)} stable chain{'s' if len(aside) > 1 else ''} set aside ({listed} Hz): "
+            f"{'each improves' if len(aside) > 1 else 'it improves'} the fit near it but does not stand "
+            f"{NOISE_FACTOR:g} times above the misfit there, as a broad mode beside larger ones or a bump "
+            "of noise would; to keep them, give every mode: --frequencies "
+            + ",".join(f"{f:.6g}" for f in every)
+        )
     if band is not None:
         margin = EDGE_FRACTION * (band.high_hz - band.low_hz)
         for m in result.modes:
@@ -315,6 +327,19 @@ def _cautions(result: RunAnalysis, asked: bool = False) -> list[str]:
                     "for modes outside; widen the band to check it"
                 )
     return out
+
+
+def set_aside(result: RunAnalysis) -> list[tuple[float, float]]:
+    """(frequency Hz, damping ratio) of each chain the spurious test set aside
+    (analysis.modal_id.identify.SetAside), the window's decay removed like the modes'."""
+    aside = result.modal.set_aside
+    if not aside:
+        return []
+    f, z = correct_pole(
+        np.array([a.frequency_hz for a in aside]), np.array([a.damping_ratio for a in aside]),
+        result.added_decay_1_s,
+    )  # fmt: skip
+    return [(float(a), float(b)) for a, b in zip(f, z, strict=True)]
 
 
 def _match(poles: np.ndarray, wanted: np.ndarray, tolerance_hz: np.ndarray, decay: float) -> np.ndarray:

@@ -18,7 +18,7 @@ import numpy as np
 
 from analysis.beam import TABLE_1, BeamProperties
 from analysis.modal_id import NORMALISATIONS
-from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits
+from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits, set_aside
 from analysis.spectra import convert_form
 from analysis.table2 import identified_table2
 from analysis.windows import WindowSpec
@@ -192,6 +192,7 @@ def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: Analy
             }
             for m in result.modes
         ],
+        "set_aside": [{"frequency_hz": f, "damping_ratio": _num(z)} for f, z in set_aside(result)],
         "cautions": input_cautions(run, notes) + list(result.cautions),
         "table2": _table2(run, result),
         "options": asdict(options),
