@@ -112,3 +112,15 @@ def test_the_frf_figure_says_a_stored_form_was_converted(analysed, stored, said)
     }
     fig = draw_frf({**payload, "summary": summary})
     assert fig._suptitle.get_text() == f"Run panels: FRF (measured_frf, {said})"
+
+
+def test_chains_set_aside_are_drawn_where_the_caution_names_them(analysed):
+    _, _, payload = analysed
+    summary = {**payload["summary"], "set_aside": [{"frequency_hz": 640.0, "damping_ratio": 0.02}]}
+    fig = draw_stability({**payload, "summary": summary})
+    panels = [ax for ax in fig.axes if ax.get_title()]
+    for ax in panels:
+        dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
+        assert [line.get_xdata()[0] for line in dashed] == [640.0]
+    labels = panels[0].get_legend_handles_labels()[1]
+    assert "set aside (see the cautions)" in labels
