@@ -101,7 +101,8 @@ def header_name_unit(cell: str) -> tuple[str, str | None]:
 
 
 def is_frequency_name(name: str, unit: str | None) -> bool:
-    """A header cell that names a frequency column: "f", "Frequency (Hz)", "freq [kHz]"..."""
+    """A header cell that names a frequency column: "freq", "Frequency (Hz)", "f [kHz]"...
+    ("f" alone is no frequency here: in a time record's header it is the force)."""
     return name.strip().lower() in FREQUENCY_NAMES or (unit or "").lower() in ("hz", "khz")
 
 
@@ -491,13 +492,17 @@ class Table:
                     f"{lines[rows[0]]} a hit of 1 sample"
                 )
             if t.size < 2:
-                raise FormatError(f"{self.name}: hit {k} (line {lines[rows[0]]}) has fewer than 2 samples")
+                raise FormatError(
+                    f"{self.name}: hit {k + 1} (line {lines[rows[0]]}) has fewer than 2 samples"
+                )
             d = np.diff(t)
             bad = np.flatnonzero(d <= 0)
             if bad.size:
                 raise FormatError(f"{self.name} line {lines[rows[bad[0] + 1]]}: {said} does not increase")
             if k and t.size != groups[0].size:
-                raise FormatError(f"{self.name}: hit {k} has {t.size} samples, hit 0 has {groups[0].size}")
+                raise FormatError(
+                    f"{self.name}: hit {k + 1} has {t.size} samples, hit 1 has {groups[0].size}"
+                )
             if k and np.array_equal(t, first_t):  # the same printed axis again (our exports)
                 starts.append(starts[0])
                 steps.append(steps[0])
@@ -517,7 +522,8 @@ class Table:
                 drift = abs(fit.step - steps[0]) * (t.size - 1)
                 if abs(fit.start - starts[0]) > tolerance or drift > tolerance:
                     raise FormatError(
-                        f"{self.name}: hit {k} (line {lines[rows[0]]}) has a different time axis from hit 0"
+                        f"{self.name}: hit {k + 1} (line {lines[rows[0]]}) has a different time axis "
+                        "from hit 1"
                     )
             else:
                 first_t = t

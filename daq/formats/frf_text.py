@@ -198,7 +198,7 @@ def scan_layout(lines: list[str]) -> Layout:
             layout.first_data, layout.data_cells = index, cells
             break
         first = header_name_unit(cells[0].strip("\"'"))
-        if is_frequency_name(*first) and (len(cells) >= 3 or not candidates):
+        if (is_frequency_name(*first) or f_then_frf_columns(cells)) and (len(cells) >= 3 or not candidates):
             layout.header, layout.header_cells = index, cells
             start = index + 1
             break
@@ -384,9 +384,21 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     return ImportedData(hits=None, measured_frfs=measured, format="frf-text", details=details)
 
 
+def f_then_frf_columns(cells: list[str]) -> bool:
+    """A header "f, Re, Im, ...": "f" alone is frequency only beside FRF columns (in a
+    time record's header "F" is the force)."""
+    names = [header_name_unit(c.strip("\"'")) for c in cells]
+    return (
+        len(names) >= 3
+        and names[0][0].strip().lower() == "f"
+        and all(_kind(n, u, False)[0] is not None for n, u in names[1:])
+    )
+
+
 def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
-    """(kind, label) of a header cell: kind "freq", "re", "im", "mag", "phase", "coh"."""
-    if first and is_frequency_name(cell, unit):
+    """(kind, label) of a header cell: kind "freq", "re", "im", "mag", "phase", "coh"
+    ("f" as the first cell is frequency here: the table is read as FRFs, f_then_frf_columns)."""
+    if first and (is_frequency_name(cell, unit) or cell.strip().lower() == "f"):
         return "freq", ""
     tokens = _TOKEN.findall(cell)
     kind = next((_KINDS[t.lower()] for t in tokens if t.lower() in _KINDS), None)

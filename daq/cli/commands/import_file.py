@@ -385,6 +385,8 @@ def detect_format(path: Path) -> tuple[str, str]:
     header = text_header(head)
     if header and is_frequency_header(header[0]):
         return "frf-text", f"the header's first column {header[0]!r} is a frequency"
+    if header and f_then_frf_columns(header):
+        return "frf-text", f"the header names {header[0]!r}, then FRF columns ({', '.join(header[1:3])}, ...)"
     if not header and (why := headerless_frf_table(head)):
         return "frf-text", why
     if not header:
@@ -721,6 +723,12 @@ def _steady_first_column(head: bytes) -> tuple[Any, float] | None:
     if not step > 0 or np.any(np.abs(steps - step) > 0.01 * step):
         return None
     return table, step * (1 + 1e-9)
+
+
+def f_then_frf_columns(header: list[str]) -> bool:
+    from daq.formats.frf_text import f_then_frf_columns as names_frfs
+
+    return names_frfs(header)
 
 
 def is_frequency_header(cell: str) -> bool:
