@@ -181,4 +181,6 @@ def _summary_from_data(path: Path, size: int) -> RunSummary:
 
 def _short(exc: BaseException) -> str:
     text = " ".join(str(exc).split()) or type(exc).__name__
+    if "file signature not found" in text:
+        return "no HDF5 signature at its start"  # HDF5's own words name its C call
     return text if len(text) <= 160 else text[:157] + "..."

@@ -199,3 +199,10 @@ def test_format_guessing_trusts_the_content(tmp_path):
     damaged = tmp_path / "e.sdf"
     damaged.write_bytes(b"B\0" + bytes(3))
     assert guess_format(damaged) == "sdf"
+
+
+def test_a_file_forced_as_sdf_is_refused_with_its_first_bytes_shown_plainly():
+    """No Python bytes repr (b'a,') in a technician's error line: hex, and the text if printable."""
+    refused(
+        b"a,b,c\n1,2,3\n" + bytes(100), "its first two bytes are 61 2C ('a,'), not SDF's 42 00 ('B' and NUL)"
+    )

@@ -288,3 +288,11 @@ def test_read_hits_tells_other_hdf5_files_from_damaged_runs(tmp_path):
     assert not isinstance(caught.value, NotARunError)
     with pytest.raises(StoreError, match="no such run file"):
         read_hits(tmp_path / "absent.h5")
+
+
+def test_a_file_without_the_hdf5_signature_is_said_so_in_plain_words(tmp_path):
+    path = tmp_path / "table.csv"
+    path.write_text("t,F,a\n0,1,2\n")
+    with pytest.raises(StoreError) as caught:
+        open_run(path)
+    assert str(caught.value).endswith("damaged or not an HDF5 run file (no HDF5 signature at its start)")

@@ -75,7 +75,12 @@ def _logical_file(src: Source, window: str) -> tuple[SdfFile, int]:
     src.need(src.at(0), 2, f"{where}the format mark B\\0")
     mark = src.data[src.at(0) : src.at(2)]
     if mark != SIGNATURE:
-        src.fail(f"{where}not an SDF file: it starts with {mark!r}, not b'B\\x00'")
+        shown = mark.decode("latin-1") if mark.isascii() and mark.decode("latin-1").isprintable() else ""
+        src.fail(
+            f"{where}not an SDF file: its first two bytes are {mark.hex(' ').upper()}"
+            + (f" ({shown!r})" if shown else "")
+            + ", not SDF's 42 00 ('B' and NUL)"
+        )
     src.need(src.at(2), HEAD_SIZE + 2, "the FILE_HDR record")
     revision = int.from_bytes(src.data[src.at(8) : src.at(10)], "big", signed=True)
     if revision not in (0, 1, 2, 3):
