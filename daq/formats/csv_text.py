@@ -362,7 +362,8 @@ class Table:
         time = data[:, picked[0]] * time_factor if time_factor != 1.0 else data[:, picked[0]]
         groups = self._groups(data, lines, time, hit_col)
         half = printed_half_units(self.time_texts) * time_factor
-        starts, steps, tolerance = self._check_axes(time, half, lines, groups)
+        ids = None if hit_col is None else data[:, hit_col]
+        starts, steps, tolerance = self._check_axes(time, half, lines, groups, ids)
         n = groups[0].size
         sample_rate_hz, start_s, notes = 1.0 / steps[0], starts[0], {}
         # The exporter writes the exact rate and start; trust them only if the time column agrees.
@@ -475,9 +476,17 @@ class Table:
                 "split the file"
             )
 
-    def _check_axes(self, time, half, lines, groups):
+    def _check_axes(self, time, half, lines, groups, ids=None):
         """(starts, steps, tolerance) of the hits' time axes, which must all be regular
-        (daq/formats/axis.py) and one and the same axis within the tolerance."""
+        (daq/formats/axis.py) and one and the same axis within the tolerance. ids: the
+        hit column (n_rows,), whose values (the file's own numbers) name the hits in a
+        refusal; without one the hits (split where the time starts over) count from 1."""
+
+        def hit(k: int) -> str:
+            if ids is None:
+                return f"hit {k + 1}"
+            return f"hit {float(ids[groups[k][0]]):g}"
+
         starts, steps, tolerance = [], [], 0.0
         first_t = None
         for k, rows in enumerate(groups):
@@ -492,16 +501,15 @@ class Table:
                     f"{lines[rows[0]]} a hit of 1 sample"
                 )
             if t.size < 2:
-                raise FormatError(
-                    f"{self.name}: hit {k + 1} (line {lines[rows[0]]}) has fewer than 2 samples"
-                )
+                raise FormatError(f"{self.name}: {hit(k)} (line {lines[rows[0]]}) has fewer than 2 samples")
             d = np.diff(t)
             bad = np.flatnonzero(d <= 0)
             if bad.size:
                 raise FormatError(f"{self.name} line {lines[rows[bad[0] + 1]]}: {said} does not increase")
             if k and t.size != groups[0].size:
                 raise FormatError(
-                    f"{self.name}: hit {k + 1} has {t.size} samples, hit 1 has {groups[0].size}"
+                    f"{self.name}: {hit(k)} (line {lines[rows[0]]}) has {t.size} samples, {hit(0)} has "
+                    f"{groups[0].size}"
                 )
             if k and np.array_equal(t, first_t):  # the same printed axis again (our exports)
                 starts.append(starts[0])
@@ -522,8 +530,8 @@ class Table:
                 drift = abs(fit.step - steps[0]) * (t.size - 1)
                 if abs(fit.start - starts[0]) > tolerance or drift > tolerance:
                     raise FormatError(
-                        f"{self.name}: hit {k + 1} (line {lines[rows[0]]}) has a different time axis "
-                        "from hit 1"
+                        f"{self.name}: {hit(k)} (line {lines[rows[0]]}) has a different time axis "
+                        f"from {hit(0)}"
                     )
             else:
                 first_t = t

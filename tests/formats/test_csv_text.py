@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -226,7 +227,7 @@ def test_hand_written_zoom_file(tmp_path):
         ("# only comments\n\n", {}, "no data rows"),
         ("0,1,2\n1,2,3\n1,3,4\n", {}, "line 3: the first column (time or frequency) does not increase"),
         ("0,1,2\n1,2,3\n2,3,4\n3.5,4,5\n", {}, "line 4: the first column (time or frequency) steps unevenly"),
-        ("0,1,2\n1,2,3\n0,1,2\n1,2,3\n2,3,4\n", {}, "hit 2 has 3 samples, hit 1 has 2"),
+        ("0,1,2\n1,2,3\n0,1,2\n1,2,3\n2,3,4\n", {}, "hit 2 (line 3) has 3 samples, hit 1 has 2"),
         ("0,1,2\n1,2,3\n0.5,1,2\n1.5,2,3\n", {}, "hit 2 (line 3) has a different time axis from hit 1"),
         ("0,1,2\n1,2,3\n0,1,2\n2,2,3\n", {}, "different time axis"),
         ("t,F,a\n0,1,2\n1,2,3\n", {"columns": "t,F,x"}, "no column 'x' in the header (t, F, a)"),
@@ -286,3 +287,23 @@ def test_newline_in_file_name_stays_one_line(tmp_path):
         read_csv(path)
     assert "\n" not in str(info.value)
     assert "bad\\nname.csv" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        (
+            "hit,t,F,a\n0,0,1,2\n0,1,1,2\n1,0,1,2\n1,1,1,2\n1,2,1,2\n",
+            "hit 1 (line 4) has 3 samples, hit 0 has 2",
+        ),
+        (
+            "hit,t,F,a\n7,0,1,2\n7,0.001,1,2\n9,0.0005,1,2\n9,0.0015,1,2\n",
+            "hit 9 (line 4) has a different time axis from hit 7",
+        ),
+    ],
+)
+def test_a_hit_column_names_its_hits_by_the_files_own_numbers(tmp_path, text, said):
+    path = tmp_path / "hits.csv"
+    path.write_text(text)
+    with pytest.raises(FormatError, match=re.escape(said)):
+        read_csv(path)
