@@ -1,6 +1,7 @@
 """Shared fixtures. Reference numbers live in tests/reference.py, computed before any
 code existed (docs/method.md) or copied from the seed paper, never produced by our code."""
 
+import gc
 import os
 
 # Before numpy loads (test modules import it before daq.cli.app, which sets the same):
@@ -14,6 +15,17 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 NO_BROWSER = "no Chromium"
 #: Skip reasons of the real-data tests (tests/corpus) start with this.
 NO_CORPUS = "measured data set not here"
+
+
+def pytest_collection_finish(session):
+    """Freeze what collection left alive (every test module and what it imported: numpy,
+    scipy, h5py, dask, ...) out of the cyclic garbage collector's sight. Each full
+    collection otherwise walks all of it again: a hypothesis test that allocates freely
+    spent three quarters of its time there (16.7 s against 1.4 s). Only objects alive
+    now are frozen, after a collection; whatever a test creates is collected as before,
+    so an unclosed file or socket it leaves still warns."""
+    gc.collect()
+    gc.freeze()
 
 
 def pytest_terminal_summary(terminalreporter):
