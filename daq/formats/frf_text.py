@@ -391,6 +391,7 @@ def f_then_frf_columns(cells: list[str]) -> bool:
     return (
         len(names) >= 3
         and names[0][0].strip().lower() == "f"
+        and (names[0][1] or "hz").lower() in ("hz", "khz")
         and all(_kind(n, u, False)[0] is not None for n, u in names[1:])
     )
 
@@ -398,7 +399,7 @@ def f_then_frf_columns(cells: list[str]) -> bool:
 def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
     """(kind, label) of a header cell: kind "freq", "re", "im", "mag", "phase", "coh"
     ("f" as the first cell is frequency here: the table is read as FRFs, f_then_frf_columns)."""
-    if first and (is_frequency_name(cell, unit) or cell.strip().lower() == "f"):
+    if first and (is_frequency_name(cell, unit) or (cell.strip().lower() == "f" and unit is None)):
         return "freq", ""
     tokens = _TOKEN.findall(cell)
     kind = next((_KINDS[t.lower()] for t in tokens if t.lower() in _KINDS), None)

@@ -52,3 +52,9 @@ def test_f_beside_time_record_columns_is_no_frequency(tmp_path_factory, names):
         ",".join(["F", *names]) + "\n" + "".join(f"{k},1,2{',3' * (len(names) - 1)}\n" for k in range(3))
     )
     assert detect_format(path)[0] == "csv"
+
+
+def test_f_with_a_unit_that_is_no_frequency_is_no_frequency(tmp_path):
+    path = tmp_path / "table.csv"
+    path.write_text("f (N),re,im\n" + "".join(f"{k},1,0\n" for k in range(1, 10)))
+    assert detect_format(path)[0] == "csv"

@@ -386,7 +386,11 @@ def detect_format(path: Path) -> tuple[str, str]:
     if header and is_frequency_header(header[0]):
         return "frf-text", f"the header's first column {header[0]!r} is a frequency"
     if header and f_then_frf_columns(header):
-        return "frf-text", f"the header names {header[0]!r}, then FRF columns ({', '.join(header[1:3])}, ...)"
+        more = ", ..." if len(header) > 3 else ""
+        return (
+            "frf-text",
+            f"the header names {header[0]!r}, then FRF columns ({', '.join(header[1:3])}{more})",
+        )
     if not header and (why := headerless_frf_table(head)):
         return "frf-text", why
     if not header:
