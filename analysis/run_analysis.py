@@ -15,7 +15,6 @@ import numpy as np
 
 from analysis.band_choice import BandChoice, choose_band
 from analysis.modal_id import ModalResult, identify_modes
-from analysis.modal_id.identify import NOISE_FACTOR
 from analysis.modal_id.lscf import lscf_poles
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
 from analysis.windows import WindowSpec, added_decay_rate, correct_pole
@@ -151,7 +150,7 @@ def analyze_hits(
             _scatter(result, per_hit_frf(spectra), options, decay)
         else:
             _bootstrap(result, decay)
-    result.cautions += _cautions(result, options.frequencies_hz is not None)
+    result.cautions += _cautions(result, options)
     return result
 
 
@@ -174,7 +173,7 @@ def analyze_frfs(
     result = _identify(f, frf, coherence, source, options, added_decay_1_s, band)
     if result.modes:
         _bootstrap(result, added_decay_1_s)
-    result.cautions += _cautions(result, options.frequencies_hz is not None)
+    result.cautions += _cautions(result, options)
     return result
 
 
@@ -284,15 +283,22 @@ POOR_SYNTHESIS = 0.2
 EDGE_FRACTION = 0.02
 
 
-def _cautions(result: RunAnalysis, asked: bool = False) -> list[str]:
-    """What in the result may mislead, and what to try: one sentence each. ``asked``:
-    frequencies of interest were given (each has its own caution when not found)."""
+def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> list[str]:
+    """What in the result may mislead, and what to try: one sentence each. ``options``:
+    those the result was made with (frequencies of interest, when given, have a caution
+    each when not found)."""
+    options = options or AnalysisOptions()
+    asked = options.frequencies_hz is not None
     out = []
     band = result.band
     span = f"{band.low_hz:.6g}-{band.high_hz:.6g} Hz" if band else "the band"
+    aside = set_aside(result)
     if not result.modes and not asked:
         out.append(
-            f"no mode found in {span}: the stability diagram holds no pole that stays stable; try "
+            f"no mode kept in {span}: the poles that stay stable were all left out as too weak (see the "
+            "possible modes left out)"
+            if aside
+            else f"no mode found in {span}: the stability diagram holds no pole that stays stable; try "
             "--band around a peak of the FRF, --max-order higher, or --frequencies with the peaks you expect"
         )
     error = result.modal.synthesis_error
@@ -307,17 +313,8 @@ def _cautions(result: RunAnalysis, asked: bool = False) -> list[str]:
             "the coherence is below 0.5 over the whole band: the FRF is mostly noise (too weak a hit, "
             "a loose sensor, or the wrong channels)"
         )
-    aside = set_aside(result)
     if aside:
-        listed = ", ".join(f"{f:.6g}" for f, _ in aside)
-        every = sorted([m.frequency_hz for m in result.modes] + [f for f, _ in aside])
-        out.append(
-            f"{len(aside)} stable chain{'s' if len(aside) > 1 else ''} set aside ({listed} Hz): "
-            f"{'each improves' if len(aside) > 1 else 'it improves'} the fit near it but does not stand "
-            f"{NOISE_FACTOR:g} times above the misfit there, as a broad mode beside larger ones or a bump "
-            "of noise would; to keep them, give every mode: --frequencies "
-            + ",".join(f"{f:.6g}" for f in every)
-        )
+        out.append(_set_aside_caution(result, aside, options))
     if band is not None:
         margin = EDGE_FRACTION * (band.high_hz - band.low_hz)
         for m in result.modes:
@@ -327,6 +324,30 @@ def _cautions(result: RunAnalysis, asked: bool = False) -> list[str]:
                     "for modes outside; widen the band to check it"
                 )
     return out
+
+
+def _set_aside_caution(
+    result: RunAnalysis, aside: list[tuple[float, float]], options: AnalysisOptions
+) -> str:
+    """The chains set aside, what they may be, where to see them and the options that keep
+    them (the same band, order and estimator as this result, so that the same chains come)."""
+    one = len(aside) == 1
+    listed = ", ".join(f"{f:.6g}" for f, _ in aside)
+    every = sorted([m.frequency_hz for m in result.modes] + [f for f, _ in aside])
+    again = f"--frequencies {','.join(f'{f:.6g}' for f in every)}"
+    if options.band_hz is not None:
+        again += f" --band {options.band_hz[0]:g}:{options.band_hz[1]:g}"
+    if options.max_order is not None:
+        again += f" --max-order {options.max_order}"
+    if options.estimator != AnalysisOptions.estimator and result.source == "hits":
+        again += f" --estimator {options.estimator}"
+    return (
+        f"{len(aside)} possible mode{'' if one else 's'} left out, at {listed} Hz: "
+        f"{'it improves' if one else 'each improves'} the fit where it lies, but not clearly enough to "
+        "be told from noise or from the misfit larger, heavily damped modes leave; look at "
+        f"{'it' if one else 'them'} on the report's stability diagram (dashed) before keeping "
+        f"{'it' if one else 'them'} with {again}"
+    )
 
 
 def set_aside(result: RunAnalysis) -> list[tuple[float, float]]:

@@ -330,7 +330,7 @@ def draw_stability(result: dict[str, Any]) -> Any:
         for k, chain in enumerate(summary.get("set_aside") or []):
             # Named in a caution: the reader finds them here (analysis.modal_id.SetAside).
             ax.axvline(chain["frequency_hz"], color="#d35400", lw=0.9, ls="--",
-                       label="set aside (see the cautions)" if k == 0 else None)  # fmt: skip
+                       label="possible mode left out (see the cautions)" if k == 0 else None)  # fmt: skip
         ax.set_xlabel("frequency (Hz)")
         twin = ax.twinx()
         for h in np.atleast_2d(result["frf"]):

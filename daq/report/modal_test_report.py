@@ -58,6 +58,8 @@ class ModalTestReport:
         analysis.modal_id.NORMALISATIONS); the diagram then has one panel per fit.
         selected_frequencies_hz: the modes chosen on the diagram, Hz (None: the modes'
         ``mode_frequency_hz``).
+        set_aside_hz: the possible modes left out that a caution names, Hz, drawn as
+        dashed lines (None or empty: none).
 
     Modes (n_modes of them)
         mode_frequency_hz, mode_frequency_std_hz: natural frequency and its standard
@@ -113,6 +115,7 @@ class ModalTestReport:
     ritz_shapes: np.ndarray | None = None
     mac_ritz: np.ndarray | None = None
     selected_frequencies_hz: np.ndarray | None = None
+    set_aside_hz: np.ndarray | None = None
     fit_method: str | None = None
     damping_matrix: np.ndarray | None = None
     damping_matrix_std: np.ndarray | None = None
@@ -242,6 +245,10 @@ def stability_figure(r: ModalTestReport) -> bytes:
                 ax.scatter(freq[pick], order[pick], marker=marker, s=18, color=colour, label=label)
         for k, fk in enumerate(_selected(r)):
             ax.axvline(fk, color="#1b7a2f", lw=0.8, alpha=0.6, label="selected mode" if k == 0 else None)
+        for k, fk in enumerate(np.asarray(r.set_aside_hz if r.set_aside_hz is not None else [], dtype=float)):
+            # The possible modes left out that a caution names (analysis.modal_id.SetAside).
+            ax.axvline(fk, color="#d35400", lw=0.9, ls="--",
+                       label="possible mode left out (see the cautions)" if k == 0 else None)  # fmt: skip
         ax.set_xlabel("frequency (Hz)")
         twin = ax.twinx()
         twin.semilogy(f, np.abs(np.atleast_2d(r.measured_frf)).sum(axis=0), color="#555555", lw=0.8)

@@ -21,7 +21,7 @@ from analysis.band_choice import choose_band
 from analysis.beam_shapes import exact_shapes
 from analysis.mac import align, auto_mac
 from analysis.modal_id.shapes import ModeShapes, mode_shapes
-from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs
+from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, set_aside
 from analysis.table2 import ModalTestTable2, modal_test_table2
 from daq.store import ModalTest, Point, Store, StoreError
 from daq.workflows.analysis import form_assumed
@@ -204,9 +204,15 @@ def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = N
         result.band = band
     cautions = list(data.cautions) + list(result.cautions)
     if not result.modes:
+        aside = ",".join(f"{f:.6g}" for f, _ in set_aside(result))
         raise WorkflowError(
             f"test {name}: no mode found in {result.band.low_hz:g}-{result.band.high_hz:g} Hz over "
-            f"{len(data.points)} points; give --band or --frequencies"
+            f"{len(data.points)} points; "
+            + (
+                f"possible modes left out as too weak at {aside} Hz: keep them with --frequencies {aside}"
+                if aside
+                else "give --band or --frequencies"
+            )
         )
     poles = _poles_seen(result)
     band = (result.band.low_hz, result.band.high_hz)
@@ -331,6 +337,7 @@ def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
         "band_reason": result.band.reason,
         "n_lines": int(data.frequency_hz.size),
         "synthesis_error": _finite(result.modal.synthesis_error),
+        "set_aside": [{"frequency_hz": f, "damping_ratio": _finite(z)} for f, z in set_aside(result)],
         "shape_scaling": _scaling_text(shapes.scaling, data),
         "shape_uncertainty_from": shapes.uncertainty_from,
         "modes": modes,

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from analysis.beam_shapes import exact_shapes, ritz_shapes
+from analysis.run_analysis import set_aside
 from daq.formats.errors import FormatError
 from daq.formats.uff_multipoint import Dof, ModeShapes, MultiPointExchange, Node, write_multipoint_uff
 from daq.report.modal_test_report import ModalTestReport
@@ -180,4 +181,5 @@ def report_inputs(analysis: TestAnalysis, fit: TestFit | None = None) -> ModalTe
         fit_notes=notes,
         cautions=list(analysis.cautions) + ([] if fit is None else list(fit.cautions)),
         paired_exact_mode=np.array([-1 if j is None else j for j in exact_pairs]),
+        set_aside_hz=np.array([f for f, _ in set_aside(result)]),
     )

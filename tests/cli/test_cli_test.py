@@ -373,3 +373,6 @@ def test_two_points_without_a_driving_point_say_so(tmp_path):
     alike = np.triu(auto, 1) > 0.5
     assert cautions.count("look alike") == int(alike.sum())
     assert "nan" not in cautions
+    # The possible modes left out are listed as in daq analyze --json, each named by a caution.
+    for chain in info["set_aside"]:
+        assert f"{chain['frequency_hz']:.6g}" in cautions

@@ -123,4 +123,19 @@ def test_chains_set_aside_are_drawn_where_the_caution_names_them(analysed):
         dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
         assert [line.get_xdata()[0] for line in dashed] == [640.0]
     labels = panels[0].get_legend_handles_labels()[1]
-    assert "set aside (see the cautions)" in labels
+    assert "possible mode left out (see the cautions)" in labels
+
+
+def test_a_modal_tests_diagram_draws_the_possible_modes_left_out(monkeypatch):
+    from daq.report import modal_test_report as mtr
+    from tests.report.test_modal_test_report import _report
+
+    drawn = []
+    monkeypatch.setattr(mtr, "_png", lambda fig: drawn.append(fig) or b"")
+    report = _report()
+    inside = float(np.mean(report.frequency_hz[[0, -1]]))
+    mtr.stability_figure(_report(set_aside_hz=np.array([inside])))
+    (ax,) = [ax for ax in drawn[0].axes if ax.get_ylabel() == "model order"]
+    dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
+    assert [line.get_xdata()[0] for line in dashed] == [inside]
+    assert "possible mode left out (see the cautions)" in ax.get_legend_handles_labels()[1]

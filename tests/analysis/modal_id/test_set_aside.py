@@ -42,7 +42,8 @@ def test_a_mode_dropped_for_the_misfit_around_it_is_named_and_kept_when_asked_fo
     assert not any(abs(f - 683.0) <= 0.02 * 683.0 for f in found), found  # the defaults drop it ...
     aside = [a.frequency_hz for a in result.modal.set_aside]
     assert any(abs(f - 683.0) <= 0.02 * 683.0 for f in aside), aside  # ... and say so
-    (caution,) = [c for c in result.cautions if "set aside" in c]
+    (caution,) = [c for c in result.cautions if "left out" in c]
+    assert caution.startswith("4 possible modes left out, at "), caution
     asked = tuple(float(x) for x in re.search(r"--frequencies (\S+)$", caution).group(1).split(","))
     assert len(asked) == len(found) + len(aside)
     kept = analyze_frfs(F, h, None, "measured_frf", AnalysisOptions(frequencies_hz=asked))
@@ -50,6 +51,25 @@ def test_a_mode_dropped_for_the_misfit_around_it_is_named_and_kept_when_asked_fo
     assert len(near) == 1
     assert abs(near[0].damping_ratio - 0.025) <= 0.5 * 0.025
     assert kept.modal.set_aside == []  # frequencies asked for: nothing is set aside
+
+
+def test_the_caution_repeats_the_options_that_give_the_same_chains_and_no_mode_kept_says_why():
+    h = _with_smooth_error(0.06, seed=2)
+    options = AnalysisOptions(band_hz=(600.0, 760.0), max_order=30)
+    result = analyze_frfs(F, h, None, "measured_frf", options)
+    (caution,) = [c for c in result.cautions if "left out" in c]
+    assert caution.endswith(" --band 600:760 --max-order 30"), caution
+    asked = tuple(float(x) for x in re.search(r"--frequencies (\S+) ", caution).group(1).split(","))
+    kept = analyze_frfs(F, h, None, "measured_frf", AnalysisOptions(band_hz=(600.0, 760.0), max_order=30,
+                                                                    frequencies_hz=asked))  # fmt: skip
+    assert len(kept.modes) == len(asked)
+    nothing = analyze_frfs(F, h, None, "measured_frf", AnalysisOptions(band_hz=(20.0, 300.0)))
+    assert nothing.modes == []
+    assert any(
+        c.startswith("no mode kept in 20-300 Hz: the poles that stay stable") for c in nothing.cautions
+    )
+    assert not any(c.startswith("no mode found") for c in nothing.cautions)  # it would contradict
+    assert any(c.startswith("1 possible mode left out, at ") for c in nothing.cautions)
 
 
 @pytest.mark.parametrize("seed", [1, 2])
