@@ -1,5 +1,7 @@
-"""`daq test ...` and `daq capture --test` as a user runs them: the real console script
-in subprocesses, the real simulator over a socket, a real HDF5 store (issue 23).
+"""`daq test ...` and `daq capture --test` as a user runs them: through daq.cli.app.main,
+the real simulator over a socket, a real HDF5 store (issue 23). The real console script
+in subprocesses where processes are the point: two captures into one test at the same
+time (the test's lock) and a capture killed mid-test.
 
 The seven-point roving-hammer test of the `seed` scenario (the paper's Ritz N = 3 beam
 with the eq (18) damping matrix) is captured once for the module; the damping matrix
@@ -8,6 +10,7 @@ with the eq (18) damping matrix) is captured once for the module; the damping ma
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -17,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.cli_helpers import DAQ, ENV, assert_one_line_error, run_daq
+from tests.cli_helpers import DAQ, ENV, assert_one_line_error, invoke_daq
 from tests.workflows.capture_processes import capture_env, wait_for_accepted
 
 #: Seed paper, eq (18): the damping matrix of the Ritz N = 3 beam, N s/m.
@@ -33,8 +36,15 @@ POINTS = ",".join(f"p{k}={x}" for k, x in enumerate(POSITIONS_M, start=1))
 HITS = 5
 
 
-def daq_ok(*args: str, timeout: float = 120, **kwargs) -> subprocess.CompletedProcess[str]:
-    result = run_daq(*args, timeout=timeout, **kwargs)
+def run_daq(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    """`daq ARGS` in this process (tests/cli_helpers.py), from ``cwd`` if given: a
+    subprocess would add a second of start-up to every call and prove nothing more."""
+    with contextlib.chdir(cwd) if cwd is not None else contextlib.nullcontext():
+        return invoke_daq(*args)
+
+
+def daq_ok(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    result = run_daq(*args, cwd=cwd)
     assert result.returncode == 0, result.stderr
     return result
 
@@ -152,7 +162,7 @@ def test_fit_recovers_eq18_within_three_stated_uncertainties(seed_store):
     from analysis.seed import eq18_damping_matrix
 
     np.testing.assert_allclose(eq18_damping_matrix(), EQ18, rtol=1e-4)
-    result = daq_ok("test", "fit", "s7", "--json", "--store", str(seed_store), timeout=300)
+    result = daq_ok("test", "fit", "s7", "--json", "--store", str(seed_store))
     fit = json.loads(result.stdout)
     assert fit["n_points"] == 7
     assert fit["ritz_functions"] == 3
@@ -203,7 +213,7 @@ def test_export_is_read_back_by_pyuff_and_by_the_test_reader(seed_store, tmp_pat
 
 def test_report_of_the_test(seed_store, tmp_path):
     folder = tmp_path / "rep"
-    result = daq_ok("test", "report", "s7", "-o", str(folder), "--store", str(seed_store), timeout=300)
+    result = daq_ok("test", "report", "s7", "-o", str(folder), "--store", str(seed_store))
     assert "index.html" in result.stdout
     html = (folder / "index.html").read_text(encoding="utf-8")
     assert "s7" in html
@@ -348,9 +358,7 @@ def test_reject_and_accept_a_run_of_the_test(seed_store):
         daq_ok("test", "accept", "s7", run_id, "--store", store)
     again = json.loads(daq_ok("test", "show", "s7", "--json", "--store", store).stdout)
     assert again["measured"] == view["measured"]
-    bad = subprocess.run(
-        [str(DAQ), "test", "reject", "s7", "nosuchrun", "--store", store], capture_output=True, text=True
-    )
+    bad = run_daq("test", "reject", "s7", "nosuchrun", "--store", store)
     assert bad.returncode == 2
     assert bad.stderr.count("\n") == 1
     assert "no run starting with" in bad.stderr
