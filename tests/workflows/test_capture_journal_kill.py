@@ -1,4 +1,4 @@
-"""SIGKILL a real `daq capture --sim` at 54 random moments (six at a time into one
+"""SIGKILL a real `daq capture --sim` at 36 random moments (nine at a time into one
 store), then list the store once: no half run (every run verifies, no journal is
 left), and no capture lost a hit it had said was accepted (the capture says so only
 after the verdict is fsynced in its journal). Then a store on a small real
@@ -24,7 +24,11 @@ from daq.store import open_run, verify
 from tests.cli_helpers import DAQ
 from tests.workflows.capture_processes import capture_env, listed, start_capture, wait_for_accepted
 
-KILLS = 54
+# 36 kills: 30 timed within the hits (below), 6 from the start. Measured: 19-21 of them
+# leave an incomplete run holding hits, as many as 54 kills timed up to 1.5 s after
+# "Hammer away" did (20; the other third landed after the capture had ended). Those
+# mid-capture kills are what can catch a hit said accepted but not kept.
+KILLS = 36
 AT_ONCE = 9
 
 
@@ -43,8 +47,10 @@ def _kill_when(proc: subprocess.Popen, output: Path, ready: str | None, delay_s:
 @pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_sigkill_at_random_moments_never_loses_an_accepted_hit(tmp_path):
-    """Most kills land while hits are taken (a random moment after "Hammer away"), one
-    in six anywhere from the start (start-up, connecting, configuring)."""
+    """Most kills land while hits are taken (a random moment up to 1 s after "Hammer
+    away": the 4 hits at --time-scale 0.05 and the seal take about 0.9 s here, longer
+    on a loaded machine), one in six anywhere from the start (start-up, connecting,
+    configuring)."""
     store = tmp_path / "runs"
     env = capture_env(tmp_path)
     rng = random.Random(20261124)
@@ -71,7 +77,7 @@ def test_sigkill_at_random_moments_never_loses_an_accepted_hit(tmp_path):
                 )  # fmt: skip
             procs.append(proc)
             ready, delay = (
-                ("Hammer away", rng.uniform(0.0, 1.5)) if seed % 6 else (None, rng.uniform(0.0, 3.0))
+                ("Hammer away", rng.uniform(0.0, 1.0)) if seed % 6 else (None, rng.uniform(0.0, 3.0))
             )
             killers.append(threading.Thread(target=_kill_when, args=(proc, outputs[seed], ready, delay)))
         for killer in killers:
