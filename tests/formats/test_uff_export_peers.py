@@ -1,10 +1,11 @@
 """Our UFF export read by another modal tool: pyuff reads the file, sdypy-EMA finds the
 modes in it, and finds the damping `daq analyze` finds (issue 24).
 
-Real processes and real files: `python -m daq capture --sim` of the `realistic` beam
-(seed 3, 5 hits), `daq analyze RUN --json`, `daq export RUN --format uff`; then pyuff
-and sdypy-EMA (LSCF, polynomial order 30, 1-199 Hz, its own `select_closest_poles` near
-daq's frequencies) on the file, as a user of that tool would.
+Real files, through daq's command line (in this process: tests/cli_helpers.py): `daq
+capture --sim` of the `realistic` beam (seed 3, 5 hits), `daq analyze RUN --json`, `daq
+export RUN --format uff`; then pyuff and sdypy-EMA (LSCF, polynomial order 30, 1-199 Hz,
+its own `select_closest_poles` near daq's frequencies) on the file, as a user of that
+tool would.
 
 Tolerance. `daq analyze` states a standard uncertainty (scatter over the 5 hits) of
 0.05-0.3 % of each damping ratio here: three of them would test sdypy's method, not our
@@ -26,7 +27,6 @@ import contextlib
 import io
 import json
 import subprocess
-import sys
 import warnings
 from pathlib import Path
 
@@ -36,6 +36,7 @@ import pyuff
 
 from daq.formats.uff58_export import write_uff
 from daq.store import open_run
+from tests.cli_helpers import invoke_daq
 
 EMA = pytest.importorskip("sdypy.EMA")
 
@@ -47,7 +48,7 @@ ORDER = 30
 
 
 def daq(*args: str) -> subprocess.CompletedProcess:
-    result = subprocess.run([sys.executable, "-m", "daq", *args], capture_output=True, text=True, timeout=120)
+    result = invoke_daq(*args)
     assert result.returncode == 0, result.stderr
     return result
 
