@@ -90,6 +90,25 @@ def serve(
     into the store, then analysed and fitted in worker processes. Ctrl-C stops the
     service; a capture in progress is sealed as an incomplete run.
     """
+    # First, before the slow imports: a signal that lands while the service starts
+    # stops it, even where SIGINT arrived ignored (see _stop_on_signals).
+    _stop_on_signals()
+    try:
+        _serve(
+            jobs=jobs, workers=workers, analyzer=analyzer, model=model, show_token=show_token, sim=sim,
+            resource=resource, port=port, scenario=scenario, seed=seed, time_scale=time_scale,
+            hammer=hammer, undo_window=undo_window, dialect=dialect, scheduler=scheduler, store=store,
+            setup=setup, host=host,
+        )  # fmt: skip
+    except _Shutdown:
+        # Before the service existed (nothing to seal), or a second signal while it closed.
+        sys.stderr.write("daq serve: stopped\n")
+
+
+def _serve(
+    *, jobs, workers, analyzer, model, show_token, sim, resource, port, scenario, seed, time_scale,
+    hammer, undo_window, dialect, scheduler, store, setup, host,
+) -> None:  # fmt: skip
     from daq.service.auth import TokenError, load_or_create_token, token_path
     from daq.store import resolve_store_dir
     from daq.workflows.connect import configured_resource
@@ -212,7 +231,6 @@ def run_service(
     if undo_window_s is not None:
         config.undo_window_s = undo_window_s
     service = Service(config)
-    _stop_on_signals()
     # Everything after this point ends in close(): a Ctrl-C that lands during start-up,
     # before uvicorn handles signals, must not leave the simulator's or the workers'
     # threads keeping the process alive.
