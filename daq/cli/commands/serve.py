@@ -91,8 +91,10 @@ def serve(
     service; a capture in progress is sealed as an incomplete run.
     """
     # First, before the slow imports: a signal that lands while the service starts
-    # stops it, even where SIGINT arrived ignored (see _stop_on_signals).
-    _stop_on_signals()
+    # stops it, even where SIGINT arrived ignored (see _stop_on_signals). It is only
+    # noted until the service exists: raised inside an import, it would come out as
+    # that library's error (pydantic wraps it while building its schemas).
+    previous = _note_signals()
     try:
         _serve(
             jobs=jobs, workers=workers, analyzer=analyzer, model=model, show_token=show_token, sim=sim,
@@ -101,8 +103,11 @@ def serve(
             setup=setup, host=host,
         )  # fmt: skip
     except _Shutdown:
-        # Before the service existed (nothing to seal), or a second signal while it closed.
+        # A second signal while the service closed.
         sys.stderr.write("daq serve: stopped\n")
+    finally:
+        for signum, handler in previous.items():  # as found: serve may run inside another program
+            signal.signal(signum, handler)
 
 
 def _serve(
@@ -231,10 +236,13 @@ def run_service(
     if undo_window_s is not None:
         config.undo_window_s = undo_window_s
     service = Service(config)
+    _stop_on_signals()
     # Everything after this point ends in close(): a Ctrl-C that lands during start-up,
     # before uvicorn handles signals, must not leave the simulator's or the workers'
     # threads keeping the process alive.
     try:
+        if _NOTED:
+            raise _Shutdown  # a signal came while the service was being built
         try:
             service.start()
         except (DriverError, StoreError, ValueError) as exc:
@@ -292,6 +300,26 @@ def _exit_after(seconds: float) -> None:
 
 class _Shutdown(Exception):
     """SIGTERM or SIGINT: stop as Ctrl-C does (the capture in progress is sealed)."""
+
+
+#: Signals received before the service existed (_note_signals).
+_NOTED: list[int] = []
+
+
+def _note_signals() -> dict:
+    """From the command's first line until _stop_on_signals: SIGTERM, SIGINT (even where
+    it arrived ignored) and SIGHUP (unless ignored) are noted, and the service stops as
+    soon as it exists. Returns the handlers found, to be put back."""
+    _NOTED.clear()
+    previous = {}
+    for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+        if signum != signal.SIGHUP or signal.getsignal(signum) is not signal.SIG_IGN:
+            previous[signum] = signal.signal(signum, _note)
+    return previous
+
+
+def _note(signum: int, frame: object) -> None:
+    _NOTED.append(signum)
 
 
 def _raise_shutdown(signum: int, frame: object) -> None:
