@@ -328,7 +328,7 @@ def draw_stability(result: dict[str, Any]) -> Any:
             ax.axvline(mode["frequency_hz"], color="#1b7a2f", lw=0.8, alpha=0.6 if mine else 0.3,
                        ls="-" if mine else ":")  # fmt: skip
         for k, chain in enumerate(summary.get("set_aside") or []):
-            # Named in a caution: the reader finds them here (analysis.modal_id.SetAside).
+            # Named in a caution: the reader finds them here (analysis.modal_id.identify.SetAside).
             ax.axvline(chain["frequency_hz"], color="#d35400", lw=0.9, ls="--",
                        label="possible mode left out (see the cautions)" if k == 0 else None)  # fmt: skip
         ax.set_xlabel("frequency (Hz)")

@@ -246,7 +246,7 @@ def stability_figure(r: ModalTestReport) -> bytes:
         for k, fk in enumerate(_selected(r)):
             ax.axvline(fk, color="#1b7a2f", lw=0.8, alpha=0.6, label="selected mode" if k == 0 else None)
         for k, fk in enumerate(np.asarray(r.set_aside_hz if r.set_aside_hz is not None else [], dtype=float)):
-            # The possible modes left out that a caution names (analysis.modal_id.SetAside).
+            # The possible modes left out that a caution names (analysis.modal_id.identify.SetAside).
             ax.axvline(fk, color="#d35400", lw=0.9, ls="--",
                        label="possible mode left out (see the cautions)" if k == 0 else None)  # fmt: skip
         ax.set_xlabel("frequency (Hz)")
