@@ -458,12 +458,35 @@ def not_readable(path: Path, head: bytes) -> str:
         return f"{name}: a ZIP archive; unpack it and import the files inside"
     if head.startswith((b"\xff\xfe", b"\xfe\xff")):
         return f"{name}: text in UTF-16, which daq does not read; save it as UTF-8 and import it again"
+    if _utf16_without_bom(head):
+        return (
+            f"{name}: text in UTF-16 (no byte-order mark), which daq does not read; save it as UTF-8 and "
+            "import it again"
+        )
     if binary:
         return (
             f"{name}: binary content (NUL bytes), and none of the binary formats daq reads (a run file, "
             "HP SDF, UFF 58); export the data as text (CSV time records or an FRF table) and import that"
         )
     return ""
+
+
+def _utf16_without_bom(head: bytes) -> bool:
+    """Whether ``head`` reads as UTF-16 text with no byte-order mark. The text an export
+    writes is mostly ASCII, whose UTF-16 form has a NUL as the high byte of every
+    character (the second byte in little-endian, the first in big-endian) and a
+    printable character or line end as the low byte; binary data have NULs at random
+    places. Up to a tenth of the characters may lie beyond Latin-1 (a unit's Greek
+    letter)."""
+    pairs = len(head) // 2
+    if pairs < 2:
+        return False
+    even, odd = head[0 : 2 * pairs : 2], head[1 : 2 * pairs : 2]
+    for low, high in ((even, odd), (odd, even)):
+        text = sum(32 <= b < 127 or b >= 160 or b in b"\t\r\n" for b in low)
+        if 0 not in low and high.count(0) >= 0.9 * pairs and text >= 0.9 * pairs:
+            return True
+    return False
 
 
 def frf_table_head(head: bytes) -> tuple[int, list[str]]:
