@@ -138,7 +138,9 @@ def analyze_hits(
     band = _band(
         estimate.frequency_hz, options, estimate.g_ff, coherence if estimate.n_averages >= 2 else None
     )
-    result = _identify(estimate.frequency_hz, frf, coherence, "hits", options, decay, band)
+    hit_frfs = per_hit_frf(spectra) if estimate.n_averages >= 2 else None
+    noise = None if hit_frfs is None else _noise_of_mean(hit_frfs)
+    result = _identify(estimate.frequency_hz, frf, coherence, "hits", options, decay, band, noise)
     result.n_averages = estimate.n_averages
     if estimate.n_averages == 1:
         result.cautions.append(
@@ -147,7 +149,7 @@ def analyze_hits(
         )
     if result.modes:
         if options.per_hit and estimate.n_averages >= 2:
-            _scatter(result, per_hit_frf(spectra), options, decay)
+            _scatter(result, hit_frfs, options, decay)
         else:
             _bootstrap(result, decay)
     result.cautions += _cautions(result, options)
@@ -214,7 +216,20 @@ def _lines(frequency_hz: np.ndarray, band: BandChoice) -> np.ndarray:
     return keep
 
 
-def _identify(frequency_hz, frf, coherence, source, options, decay, band) -> RunAnalysis:
+def _noise_of_mean(hit_frfs: np.ndarray) -> np.ndarray:
+    """(n_lines,) the standard deviation of the noise of the hits' averaged FRF at each
+    line: the scatter of the hits' own FRFs (n_hits, n_lines) over sqrt(hits); NaN where
+    fewer than 2 hits have a finite FRF. It holds whatever the windows do to the noise
+    (smooth over the lines under a force window), which the FRF alone cannot show."""
+    finite = np.isfinite(hit_frfs)
+    n = finite.sum(axis=0)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a line without 2 finite hits: NaN
+        spread = np.nanstd(np.where(finite, hit_frfs, np.nan), axis=0, ddof=1)
+    return np.where(n >= 2, spread / np.sqrt(np.maximum(n, 1)), np.nan)
+
+
+def _identify(frequency_hz, frf, coherence, source, options, decay, band, noise=None) -> RunAnalysis:
     keep = _lines(frequency_hz, band) & np.all(np.isfinite(frf), axis=0)
     if keep.sum() < MIN_LINES:
         raise ValueError(
@@ -234,6 +249,7 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band) -> Run
         frf[:, keep],
         max_order=options.max_order,
         frequencies_hz=options.frequencies_hz,
+        noise_std=None if noise is None else noise[keep],
     )
     modes = []
     cautions = []

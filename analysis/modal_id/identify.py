@@ -189,6 +189,7 @@ def identify_modes(
     min_stable_orders: int | None = None,
     max_damping: float = 0.3,
     zones: list[Zone] | None = None,
+    noise_std: np.ndarray | None = None,
 ) -> ModalResult:
     """Find the modes of FRFs without being told how many.
 
@@ -199,10 +200,15 @@ def identify_modes(
     selected instead of every accepted cluster. Tolerances are relative, the damping
     tolerance widened to a fraction of a line (analysis.modal_id.stability).
     min_stable_orders defaults to max(4, zone order // 5). zones: given zones instead of
-    planning them. Raises ValueError on bad inputs.
+    planning them. noise_std (n_lines,) or (n_frf, n_lines): the standard deviation of
+    the noise of ``frf`` at each line, in its units (from the scatter over hits), which
+    names the possible modes left out (spurious_check); default: read from the FRF's
+    second differences, right only where the noise is uncorrelated between lines.
+    Raises ValueError on bad inputs.
     """
     f, h, band, use = _check_inputs(frequency_hz, frf, band, max_order, form)
     fu, hu = f[use], h[:, use]
+    noise_u = _check_noise(noise_std, h.shape, use)
     line_hz = float(np.median(np.diff(fu)))
     if zones is None:
         zones = plan_zones(fu, hu, max_order)
@@ -226,7 +232,7 @@ def identify_modes(
     est = lsfd(fu, hu, poles, form)
     set_aside: list[SetAside] = []
     if poles.size:
-        keep, worse, candidate = spurious_check(fu, hu, poles, est, form, line_hz)
+        keep, worse, candidate = spurious_check(fu, hu, poles, est, form, line_hz, noise_u)
         if freqs is not None:
             # Asked for: an accepted cluster stays whatever; one that failed a selection
             # rule must at least be a feature of the data, not a noise pole near the ask.
@@ -279,6 +285,16 @@ def identify_modes(
         zones=list(zones),
         set_aside=set_aside,
     )
+
+
+def _check_noise(noise_std, shape: tuple[int, int], use: np.ndarray) -> np.ndarray | None:
+    """noise_std as (n_frf, n_lines used), or None; ValueError if it does not fit the FRF."""
+    if noise_std is None:
+        return None
+    noise = np.asarray(noise_std, dtype=float)
+    if noise.shape not in ((shape[1],), shape):
+        raise ValueError(f"noise_std must have shape ({shape[1]},) or {shape}, got {noise.shape}")
+    return np.broadcast_to(noise, shape)[:, use]
 
 
 def _drop_second_opinions(clusters: list[Cluster], normalisation: list[str], freq_tol: float) -> None:
@@ -363,7 +379,9 @@ SPURIOUS_ERROR_RATIO = 1.25
 SPURIOUS_ERROR_GAIN = 0.02
 
 
-def spurious_check(f, h, poles, est, form, line_hz) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def spurious_check(
+    f, h, poles, est, form, line_hz, noise_std: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(n_modes,) bool: True for each pole that is a feature of the data; (n_modes,)
     float: how many times the misfit near each grows when it is removed (NaN: too few
     lines to tell, kept); (n_modes,) bool: a pole dropped that is still worth naming
@@ -377,6 +395,12 @@ def spurious_check(f, h, poles, est, form, line_hz) -> tuple[np.ndarray, np.ndar
     poles with no feature leave the fit unchanged. The refit is local (the lines within
     LOCAL_SPAN half-widths, the poles there, residual terms for the rest), so the check
     costs a few small solves per mode, not a fit of the whole band.
+
+    The noise a dropped pole is named against is ``noise_std`` (n_frf, n_lines), the
+    noise's standard deviation per line (RMS over the lines near the pole; non-finite
+    values ignored), where given, else _roughness. Windows make the noise smooth over
+    the lines (a force window of width T over 1/T Hz): there the second differences
+    read it many times too low and noise bumps would be named.
     """
     fn = np.abs(poles) / (2 * np.pi)
     zeta = -poles.real / np.abs(poles)
@@ -400,7 +424,8 @@ def spurious_check(f, h, poles, est, form, line_hz) -> tuple[np.ndarray, np.ndar
         scale = np.linalg.norm(h[:, near])
         worse, gain = e_without / max(e_with, 1e-300), (e_without - e_with) / max(scale, 1e-300)
         worse_by[r] = worse
-        candidate[r] = worse >= SET_ASIDE_RATIO and peak >= SET_ASIDE_ROUGHNESS * _roughness(h[:, local])
+        floor = SET_ASIDE_ROUGHNESS * _noise_level(h, noise_std, local)
+        candidate[r] = worse >= SET_ASIDE_RATIO and peak >= floor
         if peak < NOISE_FACTOR * noise:
             # Below the misfit around it: a feature only if the fit cannot do without it.
             strong = worse > STRONG_ERROR_RATIO and gain > STRONG_ERROR_GAIN
@@ -408,6 +433,17 @@ def spurious_check(f, h, poles, est, form, line_hz) -> tuple[np.ndarray, np.ndar
             continue
         keep[r] = bool(worse > SPURIOUS_ERROR_RATIO and gain > SPURIOUS_ERROR_GAIN)
     return keep, worse_by, candidate & ~keep
+
+
+def _noise_level(h: np.ndarray, noise_std: np.ndarray | None, lines: np.ndarray) -> float:
+    """The noise's standard deviation over ``lines`` (bool, (n_lines,)): the RMS of
+    noise_std there where it is given and finite, else _roughness of h there."""
+    if noise_std is not None:
+        values = noise_std[:, lines]
+        values = values[np.isfinite(values)]
+        if values.size:
+            return float(np.sqrt(np.mean(values**2)))
+    return _roughness(h[:, lines])
 
 
 def _roughness(h: np.ndarray) -> float:
@@ -434,11 +470,13 @@ STRONG_LINES = 20
 #: misfit near it grows at least this many times without it (a pole on an antiresonance
 #: or on nothing leaves it under 1.1) ...
 SET_ASIDE_RATIO = 1.1
-#: ... and its term peaks this many times above the line-to-line noise (_roughness). Poles
+#: ... and its term peaks this many times above the noise (_noise_level: the scatter over
+#: hits where the caller gives it, else the line-to-line noise of _roughness). Poles
 #: fitted to white noise reach 2.4 times it (the highest of 425 such poles in 1,600-line
 #: FRFs at 2-10 % noise and of pure noise, 48 draws); the broad modes of the corpus that
-#: our thresholds drop stand 4.9 to 320 times above it. Noise smoothed over lines passes
-#: this test too: a candidate is no mode, and the user decides.
+#: our thresholds drop stand 4.9 to 320 times above it. Windowed hits make the noise
+#: smooth over lines, where _roughness reads it 20 times too low (the seed scenario):
+#: the scatter over hits is given there. A candidate is no mode: the user decides.
 SET_ASIDE_ROUGHNESS = 4.0
 #: The local refit of spurious_check spans this many of its windows' half-widths.
 LOCAL_SPAN = 8
