@@ -330,9 +330,15 @@ def _top_spread(zone_fit: _ZoneFit, cluster: Cluster, preferred: _ZoneFit) -> di
     the mode, medians over the top orders) say by how much."""
     top = len(zone_fit.fit.poles) - TOP_ORDERS
     p = np.array([zone_fit.fit.poles[k][i] for k, i in cluster.members if k >= top])
-    if p.size < 2:
-        return {}
     f, z = frequency_damping(p)
+    # A chain can step to a close neighbour for an order or two (two lightly damped modes
+    # 0.85 % apart pass the 1 % tolerance): such poles are the neighbour's, not spread.
+    others = np.array([c.frequency_hz for c in zone_fit.clusters if c.accepted and c is not cluster])
+    if others.size and f.size:
+        nearer = np.abs(f[:, None] - others[None, :]).min(axis=1) < np.abs(f - cluster.frequency_hz)
+        f, z = f[~nearer], z[~nearer]
+    if f.size < 2:
+        return {}
     spread_f, spread_z = float(np.std(f, ddof=1)), float(np.std(z, ddof=1))
     if preferred is not zone_fit:
         near = []
