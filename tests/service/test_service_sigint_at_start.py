@@ -75,3 +75,14 @@ def test_one_signal_during_start_up_stops_the_service(tmp_path, signum, delay_s)
     assert "Traceback" not in stderr
     assert stderr.endswith("daq serve: stopped\n"), stderr
     assert proc.returncode == 0
+
+
+def test_serve_run_inside_another_program_leaves_its_signal_handlers_as_it_found_them(tmp_path):
+    from tests.cli_helpers import invoke_daq
+
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    result = invoke_daq("serve", "--show-token", env={"DAQ_TOKEN_FILE": str(tmp_path / "token")})
+    assert result.returncode == 0, result.stderr
+    result = invoke_daq("serve", "--sim", "--port", "70000", "--store", str(tmp_path / "store"))
+    assert result.returncode == 2
+    assert {s: signal.getsignal(s) for s in before} == before
