@@ -35,7 +35,6 @@ MIN_COHERENCE = 0.5
 SMOOTH_FRACTION = 0.01
 LOW_FRACTION = 0.05
 _FORCE_WITHIN = f"the force spectrum stays within {FORCE_DROP_DB:g} dB of its low-frequency level"
-_FORCE_WITHIN = f"the force spectrum stays within {FORCE_DROP_DB:g} dB of its low-frequency level"
 #: The chosen band must hold at least this many lines, else every line is used.
 MIN_LINES = 40
 
