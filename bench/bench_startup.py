@@ -4,9 +4,11 @@
 
 Runs each of `daq --help`, `daq runs list --store <small store>` and `daq model`
 --repeat times as `python -m daq ...` subprocesses and prints the min and median wall
-time of each. The small store (5 runs of 10 hits) is built in a temporary folder and
-removed afterwards; one untimed call of each command comes first (page cache, .pyc
-files, the store's index).
+time of each; and `daq serve --sim --port 0` (a fifth as many times, at least 3: each
+call takes seconds), timed from the start to the line that prints the page's address,
+then stopped. The small store (5 runs of 10 hits) and the service's store and token are
+made in a temporary folder and removed afterwards; one untimed call of each command
+comes first (page cache, .pyc files, the store's index).
 
 --repo DIR times the code in DIR instead of this checkout (PYTHONPATH=DIR, run from
 DIR), e.g. an older commit checked out with `git worktree add /tmp/wt-before <commit>`.
@@ -59,6 +61,27 @@ def timed(argv: list[str], repo: Path) -> float:
     return elapsed
 
 
+def timed_serve(argv: list[str], repo: Path, token_file: Path) -> float:
+    """Wall seconds from starting the service ``argv`` to its line with the page's
+    address (http://...), after which it is stopped with SIGTERM."""
+    env = {**os.environ, "PYTHONPATH": str(repo), "COLUMNS": "120", "DAQ_TOKEN_FILE": str(token_file)}
+    start = time.perf_counter()
+    proc = subprocess.Popen(
+        argv, cwd=repo, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        seen = []
+        for line in proc.stderr:
+            seen.append(line)
+            if "http://" in line:
+                return time.perf_counter() - start
+        raise SystemExit(f"{' '.join(argv)} ended before printing its address:\n{''.join(seen)[-2000:]}")
+    finally:
+        proc.terminate()
+        proc.wait(30)
+        proc.stderr.close()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=20, help="timed calls of each command")
@@ -80,6 +103,12 @@ def main() -> None:
             timed(argv, repo)  # warm-up: page cache, .pyc files, the store's index
             times = [timed(argv, repo) for _ in range(args.repeat)]
             rows.append((label, min(times), statistics.median(times)))
+        serve = [*daq, "serve", "--sim", "--port", "0", "--jobs", "1", "--store", str(root / "served")]
+        label = "daq serve --sim: start to its address"
+        token = root / "token"
+        timed_serve(serve, repo, token)  # warm-up
+        times = [timed_serve(serve, repo, token) for _ in range(max(3, args.repeat // 5))]
+        rows.append((label, min(times), statistics.median(times)))
     finally:
         shutil.rmtree(root, ignore_errors=True)
     width = max(len(label) for label, *_ in rows)
