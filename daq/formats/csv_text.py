@@ -58,6 +58,27 @@ _REJECTED = re.compile(r"rejected hit ([0-9]{1,6}):(.*)")
 # "Force [N]", "acc (g)", "Time (s)", "a / mV": a name and the unit in brackets.
 _HEADER_UNIT = re.compile(r"(.*?)\s*(?:\[([^\]]*)\]|\(([^)]*)\))\s*")
 _DECIMAL_COMMA = re.compile(r"[-+]?[0-9]*,[0-9]+(?:[eE][-+]?[0-9]+)?")
+_THOUSANDS_POINT = re.compile(r"[-+]?[0-9]{1,3}(?:\.[0-9]{3})+")
+_POINT_NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
+
+
+def choose_delimiter(line: str) -> str | None:
+    """The cell delimiter of a text table's line: ";" or tab where the line holds one,
+    else "," unless the commas are decimal commas between runs of spaces ("0,001 1,0 2",
+    "0 2,46e-07 0,025": every cell a number, one with a decimal comma; the table reader
+    refuses points and commas mixed), else None (runs of whitespace)."""
+    if ";" in line:
+        return ";"
+    if "\t" in line:
+        return "\t"
+    if "," in line:
+        cells = line.split()
+        if len(cells) >= 2 and all(_DECIMAL_COMMA.fullmatch(c) or _POINT_NUMBER.fullmatch(c) for c in cells):
+            return None
+        return ","
+    return None
+
+
 _PLAIN_NAME = re.compile(r"[A-Za-z0-9_.+-]+")
 
 
@@ -124,6 +145,10 @@ class Table:
         self.units: list[str | None] = []  # the units in the header, None where none
         self.delimiter: str | None = None  # None: runs of whitespace
         self.decimal_comma = False
+        # The first data line with a decimal comma, and the first cell that may hold a
+        # thousands point (line, text), where the delimiter leaves both (_mixed_decimals).
+        self.first_comma_line: int | None = None
+        self.first_grouped: tuple[int, str] | None = None
         self.n_cols = 0
         self.values = array("d")
         self.lines = array("q")
@@ -172,19 +197,6 @@ class Table:
             return line.split()
         return [cell.strip() for cell in line.split(self.delimiter)]
 
-    def _choose_delimiter(self, line: str) -> str | None:
-        if ";" in line:
-            return ";"
-        if "\t" in line:
-            return "\t"
-        if "," in line:
-            # "0,001 1,0 2,0": decimal commas between runs of spaces, not comma separators.
-            cells = line.split()
-            if len(cells) >= 2 and all(_DECIMAL_COMMA.fullmatch(c) for c in cells):
-                return None
-            return ","
-        return None
-
     def _number(self, cell: str) -> float:
         # With ";", tab or spaces between the cells, a comma can only be a decimal comma.
         if self.delimiter != "," and "," in cell:
@@ -194,7 +206,7 @@ class Table:
 
     def _row(self, line: str, number: int) -> None:
         if self.n_cols == 0:
-            self.delimiter = self._choose_delimiter(line)
+            self.delimiter = choose_delimiter(line)
             cells = self._split(line)
             self.n_cols = len(cells)
             _refuse_complex(self.name, number, cells)  # else a row of them reads as a header
@@ -223,9 +235,32 @@ class Table:
             if not math.isfinite(value):
                 raise FormatError(f"{self.name} line {number} column {col + 1}: {_show(cell)} is not finite")
             self.values.append(value)
+        if self.delimiter != ",":
+            self._mixed_decimals(cells, number)
         if self.picked is not None:
             self.time_texts.append(cells[self.picked[0]])
         self.lines.append(number)
+
+    def _mixed_decimals(self, cells: list[str], number: int) -> None:
+        """Refuse a cell like "1.500" in a file that writes decimal commas: where commas
+        are decimal, a point between groups of three digits is a thousands point (1500),
+        and read as a decimal point it would silently be 1.5. Points that cannot be
+        thousands points ("1.953125e-05", "0.5") are decimal points."""
+        if self.first_comma_line is None and any("," in c for c in cells):
+            self.first_comma_line = number
+        if self.first_grouped is None:
+            grouped = next((c for c in cells if _THOUSANDS_POINT.fullmatch(c)), None)
+            if grouped is not None:
+                self.first_grouped = (number, grouped)
+        if self.first_comma_line is not None and self.first_grouped is not None:
+            line, cell = self.first_grouped
+            whole = cell.replace(".", "")
+            decimal = cell.lstrip("+-").rstrip("0").rstrip(".") or "0"
+            raise FormatError(
+                f"{self.name} line {line}: {_show(cell)} could mean {whole} (a thousands point) or "
+                f"{'-' if cell.startswith('-') else ''}{decimal}, and the file writes decimal commas "
+                f"(line {self.first_comma_line}); write the numbers without thousands points"
+            )
 
     def _is_number(self, cell: str) -> bool:
         try:

@@ -44,7 +44,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from daq.formats.csv_text import COMMENT_MARKS, Table, header_name_unit, is_frequency_name
+from daq.formats.csv_text import COMMENT_MARKS, Table, choose_delimiter, header_name_unit, is_frequency_name
 from daq.formats.errors import FormatError
 from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
 from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
@@ -121,18 +121,9 @@ def split_cells(line: str, delimiter: str | None = None) -> tuple[list[str], str
     """(cells, delimiter) of a line: ";", tab or "," (found in the line when not given),
     else runs of whitespace; cells stripped."""
     if delimiter is None:
-        delimiter = next((d for d in (";", "\t", ",") if d in line), None)
-        if (
-            delimiter == ","
-            and all(_DECIMAL_COMMA.fullmatch(c) for c in line.split())
-            and len(line.split()) > 1
-        ):
-            delimiter = None  # "0,5 1,0 2,0": decimal commas between runs of spaces
+        delimiter = choose_delimiter(line)
     cells = line.split(delimiter) if delimiter else line.split()
     return [c.strip() for c in cells], delimiter
-
-
-_DECIMAL_COMMA = re.compile(r"[-+]?[0-9]*,[0-9]+(?:[eE][-+]?[0-9]+)?")
 
 
 def is_number_text(cell: str) -> bool:
@@ -337,7 +328,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
             if not db and np.any(first < 0):
                 row = int(np.flatnonzero(first < 0)[0])
                 raise FormatError(
-                    f"{name} line {lines[row]}: negative magnitude {first[row]!r} (dB? say [dB])"
+                    f"{name} line {lines[row]}: negative magnitude {first[row]:g} (dB? say [dB])"
                 )
             phase_unit = (units[col + 1] or "deg").lower()
             if phase_unit not in _PHASE_UNITS:

@@ -425,3 +425,37 @@ def test_a_record_too_short_says_so_in_analyze_not_widen_the_band(tmp_path):
         analysed, "the run has 3 lines above 0 Hz and an analysis needs 8: the record is too short"
     )
     assert "widen" not in analysed.stderr
+
+
+# --- a new user's trial, November 25 -------------------------------------------------
+
+
+def test_a_negative_magnitude_is_named_as_the_file_wrote_it(tmp_path):
+    path = tmp_path / "frf.csv"
+    rows = ["freq,mag,phase", "1,1.0,0", "2,-2.0,10", *(f"{k},1,0" for k in range(3, 12))]
+    path.write_text("\n".join(rows) + "\n")
+    store = tmp_path / "runs"
+    message = refused(daq_import(store, path), store, "line 3: negative magnitude -2 (dB?")
+    assert "np." not in message
+
+
+def test_spaces_and_decimal_commas_with_a_whole_number_in_the_first_line(tmp_path):
+    """ "0 2,46e-07 0,025": the "0" cell made the comma a separator (line 2: 4 columns,
+    expected 3) or, without a header, a header '0' in the detection's words."""
+    frf = tmp_path / "frf.txt"
+    rows = ["0 2,46031e-07 0,0254927"] + [
+        f"{k * 0.25:.4f} {1e-3 * k:.6e} {-2e-3 * k:.6e}" for k in range(1, 40)
+    ]
+    frf.write_text("\n".join(r.replace(".", ",") for r in rows) + "\n")
+    result = daq_import(tmp_path / "frf_runs", frf)
+    assert result.returncode == 0, result.stderr
+    assert "format frf-text: detected: no header, and its first column steps by 0.25" in result.stdout
+    hits = tmp_path / "hits.txt"
+    rows = ["0 -3 0,5"] + [f"{k / 1000:g} {k % 7 - 3:g} {0.5 * (k % 5) + 0.5:g}" for k in range(1, 64)]
+    hits.write_text("\n".join(r.replace(".", ",") for r in rows) + "\n")
+    result = daq_import(tmp_path / "hit_runs", hits)
+    assert result.returncode == 0, result.stderr
+    assert "format csv: detected: the name ends in .txt\n" in result.stdout  # no header '0' said
+    (run,) = runs_in(tmp_path / "hit_runs")
+    stored = Store(tmp_path / "hit_runs").open(run).hits
+    assert stored.response_m_s2[0, :6].tolist() == [0.5, 1.0, 1.5, 2.0, 2.5, 0.5]

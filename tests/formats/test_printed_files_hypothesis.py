@@ -118,20 +118,65 @@ def test_the_51200_hz_impact_test_printed_to_7_digits():
 
 @SETTINGS
 @given(
-    sep=st.sampled_from([";", "\t"]),
+    sep=st.sampled_from([";", "\t", " ", "   "]),
     values=st.lists(
         st.floats(-1e3, 1e3, allow_nan=False).map(lambda v: round(v, 4)), min_size=6, max_size=30
     ),
     header=st.booleans(),
+    whole=st.booleans(),
 )
-def test_decimal_commas_with_semicolons_and_tabs(sep, values, header):
-    rows = [f"Zeit (s){sep}Kraft (N){sep}Beschl. (m/s^2)"] if header else []
+def test_decimal_commas_with_semicolons_tabs_and_spaces(sep, values, header, whole):
+    """``whole``: numbers without a fraction printed without one ("0", "12"), as %g
+    does: a line "0 2,46e-07 0,025" is still read with decimal commas."""
+    names = (
+        ["Zeit (s)", "Kraft (N)", "Beschl. (m/s^2)"]
+        if sep.strip()
+        else ["Zeit[s]", "Kraft[N]", "Beschl[m/s^2]"]
+    )
+    rows = [sep.join(names)] if header else []
     rows += ["# exportiert", "% und kommentiert"]
-    rows += [sep.join(f"{v}".replace(".", ",") for v in (i * 0.001, x, -x)) for i, x in enumerate(values)]
+    text = (lambda v: f"{v:.12g}") if whole else (lambda v: f"{v}")
+    rows += [sep.join(text(v).replace(".", ",") for v in (i * 0.001, x, -x)) for i, x in enumerate(values)]
     hits = read_csv(put("\n".join(rows) + "\n", "komma.csv")).hits
     assert hits.force_n[0].tolist() == values
     assert hits.response_m_s2[0].tolist() == [-v for v in values]
     assert hits.sample_rate_hz == pytest.approx(1000.0)
+
+
+@SETTINGS
+@given(
+    sep=st.sampled_from([";", "\t", " "]),
+    n=st.integers(4, 30),
+    grouped=st.integers(1, 999).flatmap(lambda a: st.sampled_from([f"{a}.000", f"{a}.500", f"-{a}.250"])),
+    data=st.data(),
+)
+def test_a_thousands_point_in_a_decimal_comma_file_is_refused_with_the_line(sep, n, grouped, data):
+    """ "1.500" beside "0,25" may be 1500 or 1.5: refused, never read one way silently."""
+    rows = [sep.join(f"{v:.4f}".replace(".", ",") for v in (i * 0.001, i + 0.5, -i - 0.25)) for i in range(n)]
+    k = data.draw(st.integers(0, n - 1))
+    cells = rows[k].split(sep)
+    cells[data.draw(st.integers(1, 2))] = grouped
+    rows[k] = sep.join(cells)
+    with pytest.raises(FormatError) as caught:
+        read_csv(put("\n".join(rows) + "\n", "gemischt.csv"))
+    message = str(caught.value)
+    assert (
+        f"gemischt.csv line {k + 1}: '{grouped}' could mean {grouped.replace('.', '')} (a thousands point)"
+        in message
+    )
+    assert "decimal commas (line 1)" in message
+    assert "\n" not in message
+
+
+@SETTINGS
+@given(digits=st.integers(4, 9), n=st.integers(8, 40))
+def test_decimal_points_that_cannot_be_thousands_points_mix_with_decimal_commas(digits, n):
+    """A time column printed with points ("1.953125e-05") beside data with decimal commas
+    is read: such a point is no thousands point."""
+    rows = ["Time (s)\tForce [N]\tacc"] + [f"{i / 51200:.{digits}g}\t0,5\t{i},25" for i in range(n)]
+    hits = read_csv(put("\n".join(rows) + "\n", "zeit.txt")).hits
+    assert hits.force_n[0].tolist() == [0.5] * n
+    assert hits.response_m_s2[0].tolist() == [i + 0.25 for i in range(n)]
 
 
 UNITS = {

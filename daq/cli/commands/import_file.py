@@ -509,7 +509,7 @@ def frf_table_head(head: bytes) -> tuple[int, list[str]]:
 def text_header(head: bytes) -> list[str]:
     """The cells of a text file's header row (its first line that is neither empty nor a
     comment, when it is not all numbers), or [] when there is none or it is no text."""
-    from daq.formats.csv_text import COMMENT_MARKS, looks_complex
+    from daq.formats.csv_text import COMMENT_MARKS, choose_delimiter, looks_complex
 
     if b"\0" in head:
         return []
@@ -518,7 +518,7 @@ def text_header(head: bytes) -> list[str]:
         stripped = line.strip()
         if not stripped or stripped.startswith(COMMENT_MARKS):
             continue
-        delimiter = next((d for d in (";", "\t", ",") if d in stripped), None)
+        delimiter = choose_delimiter(stripped)
         cells = [
             c.strip().strip("\"'") for c in (stripped.split(delimiter) if delimiter else stripped.split())
         ]
