@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.signal
 
 from sims.hammer import Hit
 from sims.pole_residue import HalfSinePulses, PoleResidueSystem
@@ -51,9 +52,6 @@ ANTI_ALIAS_PASS_DB, ANTI_ALIAS_STOP_DB, ANTI_ALIAS_STOP_EDGE = 0.05, 50.0, 1.56
 def _normalised_anti_alias() -> PoleResidueSystem:
     """Zero-phase low-pass H(s) H(-s), passband edge at 1 rad/s: real and positive
     on the imaginary axis, so it neither delays nor shifts the phase of anything."""
-    import scipy.signal  # here, not at the top: it takes a second to load, and daq serve
-    # loads the simulator when it starts, long before the first capture needs the filter.
-
     order, edge = scipy.signal.cheb2ord(
         1.0, ANTI_ALIAS_STOP_EDGE, ANTI_ALIAS_PASS_DB, ANTI_ALIAS_STOP_DB, analog=True
     )

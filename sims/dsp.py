@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.signal
 
 from sims.settings import N_LINES
 
@@ -25,8 +26,6 @@ def window(
     """
     if kind == "UNIF":
         return np.ones(n_points)
-    import scipy.signal  # here: loading it takes a second, which daq serve's start need not pay
-
     if kind == "HANN":
         return scipy.signal.get_window("hann", n_points, fftbins=True)
     if kind == "FLAT":
