@@ -42,8 +42,13 @@ BAND_FRACTION = 0.10
 #: too weak: a hit's peak below this fraction of the force channel's range is too weak.
 WEAK_FRACTION = 0.05
 
+#: clipped: a record at its largest magnitude in at least this many samples.
+CLIP_SAMPLES = 4
+
 #: The names of the checks, as used in reject reasons.
 OVERLOAD, DOUBLE_IMPACT, FORCE_ROLLOFF, TOO_WEAK = "overload", "double impact", "force roll-off", "too weak"
+#: The check of records from a file, which carry no analyzer overload flags.
+CLIPPED = "clipped"
 
 
 @dataclass(frozen=True)
@@ -71,7 +76,12 @@ def _magnitude_or_signed(force_n: np.ndarray) -> np.ndarray:
     if force.ndim != 1 or force.size == 0:
         raise ValueError(f"a force record must be a non-empty 1-D array, got shape {force.shape}")
     # A zoom record is a complex envelope: its magnitude is the pulse's outline.
-    return np.abs(force) if np.iscomplexobj(force) else force.astype(np.float64)
+    if np.iscomplexobj(force):
+        return np.abs(force)
+    # A force gauge wired the other way round (files from other systems) records the
+    # pulse negative: turned so that the largest excursion is the positive peak.
+    force = force.astype(np.float64)
+    return force if force[np.argmax(np.abs(force))] >= 0 else -force
 
 
 def overload(flags: tuple[bool, bool]) -> HitCheck:
@@ -100,13 +110,7 @@ def double_impact(
     peak = float(force[i_peak])
     if not peak > 0:
         return HitCheck(DOUBLE_IMPACT, True, "no force pulse", 0.0)
-    below = force < fall_fraction * peak
-    after = np.flatnonzero(below[i_peak + 1 :])
-    before = np.flatnonzero(below[:i_peak])
-    end = i_peak + 1 + int(after[0]) if after.size else force.size  # first sample past the pulse
-    start = int(before[-1]) if before.size else -1  # last sample before the pulse
-    # The samples where the force crossed FALL_FRACTION belong to the pulse's edges.
-    first, last = max(start, 0), min(end + 1, force.size)
+    first, last = _main_pulse(force, i_peak, fall_fraction)
     outside = np.concatenate([force[:first], force[last:]])
     positions = np.concatenate([np.arange(first), np.arange(last, force.size)])
     if outside.size == 0:
@@ -122,6 +126,18 @@ def double_impact(
             ratio,
         )
     return HitCheck(DOUBLE_IMPACT, True, f"single pulse (largest rebound {max(ratio, 0.0):.0%})", ratio)
+
+
+def _main_pulse(force: np.ndarray, i_peak: int, fall_fraction: float = FALL_FRACTION) -> tuple[int, int]:
+    """[first, last) samples of the pulse around ``i_peak``: down to, and including, the
+    first sample below ``fall_fraction`` of the peak on either side (the samples where
+    the force crossed it belong to the pulse's edges)."""
+    below = force < fall_fraction * force[i_peak]
+    after = np.flatnonzero(below[i_peak + 1 :])
+    before = np.flatnonzero(below[:i_peak])
+    end = i_peak + 1 + int(after[0]) if after.size else force.size  # first sample past the pulse
+    start = int(before[-1]) if before.size else -1  # last sample before the pulse
+    return max(start, 0), min(end + 1, force.size)
 
 
 def force_rolloff(
@@ -179,6 +195,50 @@ def too_weak(force_n: np.ndarray, range_n: float | None, min_fraction: float = W
         "" if passed else f" (below {min_fraction:.0%}: hit harder or lower the range)"
     )
     return HitCheck(TOO_WEAK, passed, detail, used)
+
+
+def _samples_at_extreme(record: np.ndarray) -> int:
+    """How many samples of ``record`` (real or complex) sit exactly at its largest
+    magnitude (0 for an all-zero record)."""
+    magnitude = np.abs(np.asarray(record))
+    if magnitude.size == 0 or not magnitude.max() > 0:
+        return 0
+    return int(np.count_nonzero(magnitude == magnitude.max()))
+
+
+def clipped(force_n: np.ndarray, response: np.ndarray, min_samples: int = CLIP_SAMPLES) -> HitCheck:
+    """A channel at its largest magnitude in ``min_samples`` or more samples: the converter
+    or the recorder cut the signal there, at each peak that went past the limit (a file's
+    records carry no overload flags). value: the most such samples of the two channels.
+    A clean record reaches its largest value once, or in two or three samples where
+    the converter's steps are coarse near a slow peak."""
+    counts = {name: _samples_at_extreme(r) for name, r in (("force", force_n), ("response", response))}
+    name, most = max(counts.items(), key=lambda item: item[1])
+    if most >= min_samples:
+        detail = f"the {name} reaches its largest value in {most} samples: cut off at a limit"
+        return HitCheck(CLIPPED, False, detail, float(most))
+    return HitCheck(CLIPPED, True, "no cut-off peaks", float(most))
+
+
+#: A force whose crest factor (peak over RMS over the record) is below this is no
+#: hammer hit (random or continuous excitation; white noise of 65,536 samples reaches
+#: about 4.7), and a double impact means nothing there. A hammer pulse of 15 samples in
+#: a record of 1,024 has about 12.
+IMPULSE_CREST = 7.0
+
+
+def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> list[HitCheck]:
+    """The checks a hit read from a file can have without the analyzer's settings and
+    flags: double impact (for a force that is a pulse at all) and clipped."""
+    force = np.abs(np.asarray(force_n))
+    rms = float(np.sqrt(np.mean(force**2))) if force.size else 0.0
+    crest = float(force.max()) / rms if rms > 0 else 0.0
+    if crest < IMPULSE_CREST:
+        detail = f"not checked: the force is no single pulse (crest factor {crest:.1f})"
+        impact = HitCheck(DOUBLE_IMPACT, True, detail, None)
+    else:
+        impact = double_impact(force_n, sample_rate_hz)
+    return [impact, clipped(force_n, response)]
 
 
 def run_checks(

@@ -20,6 +20,7 @@ from typing import IO, Any
 
 import numpy as np
 
+from analysis.hit_checks import file_checks
 from daq.formats.errors import FormatError
 from daq.store.model import Hits, MeasuredFrf, Spectra
 
@@ -139,7 +140,9 @@ def make_hits(
     timestamp_utc: str,
     rejected: dict[int, str] | None = None,
 ) -> Hits:
-    """Hits for imported records (n_hits, n_samples), model errors -> FormatError.
+    """Hits for imported records (n_hits, n_samples), model errors -> FormatError. Each hit
+    gets the checks a file allows (analysis/hit_checks.py file_checks: double impact,
+    clipped); a failed check does not reject it: the analysis says so in a caution.
 
     rejected : {hit index: reason} for hits the source file marks as rejected (our own
         exports do, so that export then import keeps every verdict); the others are accepted.
@@ -160,7 +163,10 @@ def make_hits(
             overload=np.zeros((n_hits, 2), dtype=bool),
             peak_force_n=np.max(np.abs(force), axis=1) if force.size else np.zeros(n_hits),
             timestamp_utc=[timestamp_utc] * n_hits,
-            checks=[{} for _ in range(n_hits)],
+            checks=[
+                {c.name: c.as_dict() for c in file_checks(force[k], response[k], sample_rate_hz)}
+                for k in range(n_hits)
+            ],
         )
     except ValueError as exc:
         raise FormatError(f"{show_path(path)}: {one_line(str(exc))}") from None

@@ -149,7 +149,36 @@ def input_cautions(run: Run, notes: dict[str, Any]) -> list[str]:
             "accelerance, (m/s^2)/N; if they are receptance (m/N) or mobility ((m/s)/N), import the "
             "file again with --frf-form"
         )
+    if (hits := _averaged_against_checks(run)) is not None:
+        out.append(hits)
     return out
+
+
+def _averaged_against_checks(run: Run) -> str | None:
+    """One caution naming the accepted hits whose checks failed (a double impact, a clipped
+    record: their FRFs are wrong and bias the average), or None. Hits counted from 1."""
+    from daq.workflows.run_views import accepted_against_checks, failed_check_names
+
+    against = accepted_against_checks(run)
+    if not against:
+        return None
+    checks = run.hits.checks
+    said = "; ".join(
+        f"hit {i + 1}: {name} ({checks[i][name].get('detail', 'failed')})"
+        for i in against
+        for name in failed_check_names(checks[i])
+    )
+    count = (
+        "1 hit in the average failed its checks"
+        if len(against) == 1
+        else (f"{len(against)} hits in the average failed their checks")
+    )
+    leave_out = (
+        "mark them in the file (a line '# rejected hit K: reason', K counted from 0) and import it again"
+        if run.kind == "imported"
+        else "take the test again without them"
+    )
+    return f"{count}, {said}: their FRFs are wrong and pull the modes and damping; {leave_out}"
 
 
 def cache_key(path: Path, options: AnalysisOptions) -> str:

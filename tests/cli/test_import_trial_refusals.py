@@ -459,3 +459,42 @@ def test_spaces_and_decimal_commas_with_a_whole_number_in_the_first_line(tmp_pat
     (run,) = runs_in(tmp_path / "hit_runs")
     stored = Store(tmp_path / "hit_runs").open(run).hits
     assert stored.response_m_s2[0, :6].tolist() == [0.5, 1.0, 1.5, 2.0, 2.5, 0.5]
+
+
+def _hits_csv(path, force, response, fs):
+    rows = ["hit,t,F,a"]
+    for k in range(force.shape[0]):
+        rows += [f"{k},{i / fs:.9g},{force[k, i]:.9g},{response[k, i]:.9g}" for i in range(force.shape[1])]
+    path.write_text("\n".join(rows) + "\n")
+
+
+def test_a_double_impact_and_a_clipped_hit_from_a_file_are_noted_and_cautioned(tmp_path):
+    from tests.analysis.impact_synth import impact_hits
+    from tests.cli_helpers import daq_json
+
+    fs = 2048.0
+    force, response = impact_hits([45.0, 132.0, 310.0], [0.015, 0.008, 0.02], [1.0, -0.6, 0.4], fs, 2.0, 3,
+                                  0.01, 2e-3, 7)  # fmt: skip
+    clean = tmp_path / "clean.csv"
+    _hits_csv(clean, force, response, fs)
+    result = daq_import(tmp_path / "clean_runs", clean)
+    assert result.returncode == 0, result.stderr
+    assert "failed the" not in result.stdout
+    (info,) = daq_json("analyze", tmp_path / "clean_runs", "latest")
+    assert not any("failed" in c for c in info["cautions"])
+    shift = round(0.055 * fs)
+    force[1] += 0.6 * np.concatenate([np.zeros(shift), force[1, :-shift]])
+    top = 0.3 * np.abs(response[2]).max()
+    response[2] = np.clip(response[2], -top, top)
+    bad = tmp_path / "bad.csv"
+    _hits_csv(bad, force, response, fs)
+    result = daq_import(tmp_path / "bad_runs", bad)
+    assert result.returncode == 0, result.stderr
+    said = "note: hit 2 failed the double impact check (second pulse at 60% of the peak, +55.2 ms from it)"
+    assert said in result.stdout, result.stdout.splitlines()
+    assert "note: hit 3 failed the clipped check (the response reaches its largest value in " in result.stdout
+    (info,) = daq_json("analyze", tmp_path / "bad_runs", "latest")
+    (caution,) = [c for c in info["cautions"] if "failed their checks" in c]
+    assert caution.startswith("2 hits in the average failed their checks, hit 2: double impact (")
+    assert "; hit 3: clipped (" in caution
+    assert caution.endswith("(a line '# rejected hit K: reason', K counted from 0) and import it again")

@@ -246,6 +246,8 @@ def import_file(
         typer.echo(f"note: {line}")  # what the file holds that the run leaves out
     if short := short_note(run):
         typer.echo(f"note: {short}")
+    for line in failed_hit_checks(run):
+        typer.echo(f"note: {line}")
     if earlier:
         more = f" (and {counted(len(earlier) - 1, 'earlier run')})" if len(earlier) > 1 else ""
         typer.echo(
@@ -338,6 +340,23 @@ def said_units(details: dict[str, Any]) -> list[str]:
     if forms:
         return [f"form: {', '.join(forms)} (from the UFF records' data types and units)"]
     return []
+
+
+def failed_hit_checks(run) -> list[str]:
+    """One line per hit whose checks failed (double impact, clipped), counted from 1:
+    kept and accepted, and `daq analyze` cautions about them."""
+    from daq.workflows.run_views import failed_check_names
+
+    if run.hits is None:
+        return []
+    out = []
+    for i, checks in enumerate(run.hits.checks):
+        for name in failed_check_names(checks):
+            out.append(
+                f"hit {i + 1} failed the {name} check ({checks[name].get('detail', '')}); it is kept "
+                "and averaged, and daq analyze cautions about it"
+            )
+    return out
 
 
 def guess_format(path: Path) -> str:

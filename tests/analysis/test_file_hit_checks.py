@@ -1,0 +1,70 @@
+"""The checks a hit read from a file gets (analysis/hit_checks.py file_checks): a double
+impact and a clipped channel are found, whichever way the force gauge was wired, and
+clean records, quantised as converters write them, pass."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from analysis.hit_checks import CLIP_SAMPLES, CLIPPED, DOUBLE_IMPACT, clipped, double_impact, file_checks
+from tests.analysis.impact_synth import impact_hits
+
+FS = 2048.0
+
+
+def _hit(seed: int) -> tuple[np.ndarray, np.ndarray]:
+    force, response = impact_hits([45.0, 132.0, 310.0], [0.015, 0.008, 0.02], [1.0, -0.6, 0.4], FS, 2.0, 1,
+                                  0.01, 2e-3, seed)  # fmt: skip
+    return force[0], response[0]
+
+
+def _quantised(x: np.ndarray, bits: int) -> np.ndarray:
+    lsb = 2 * np.abs(x).max() * 1.25 / 2**bits  # the range a fifth above the peak
+    return np.round(x / lsb) * lsb
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000), bits=st.sampled_from([12, 16, 24]), sign=st.sampled_from([1.0, -1.0]))
+def test_clean_hits_pass_however_quantised_and_wired(seed, bits, sign):
+    force, response = _hit(seed)
+    checks = {c.name: c for c in file_checks(sign * _quantised(force, bits), _quantised(response, bits), FS)}
+    assert checks[DOUBLE_IMPACT].passed, checks[DOUBLE_IMPACT].detail
+    assert checks[CLIPPED].passed, checks[CLIPPED].detail
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000), level=st.floats(0.2, 0.6), sign=st.sampled_from([1.0, -1.0]))
+def test_a_clipped_response_is_found(seed, level, sign):
+    """Cut at 60 % of its peak or lower; a cut that touches 2 or 3 samples is not told
+    from a peak the converter's steps flatten."""
+    force, response = _hit(seed)
+    top = level * np.abs(response).max()
+    check = clipped(sign * force, np.clip(response, -top, top))
+    assert not check.passed
+    assert check.value >= CLIP_SAMPLES
+    assert check.detail.startswith("the response reaches its largest value in ")
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000), delay_ms=st.floats(20.0, 200.0), share=st.floats(0.3, 0.9),
+       sign=st.sampled_from([1.0, -1.0]))  # fmt: skip
+def test_a_second_tap_is_found_whichever_way_the_gauge_was_wired(seed, delay_ms, share, sign):
+    force, _ = _hit(seed)
+    shift = round(delay_ms * 1e-3 * FS)
+    second = force + share * np.concatenate([np.zeros(shift), force[:-shift]])
+    check = double_impact(sign * second, FS)
+    assert not check.passed
+    assert abs(check.value - share) < 0.1
+    assert double_impact(sign * force, FS).passed
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.sampled_from([64, 1024, 65536]))
+def test_a_random_force_is_not_called_a_double_impact(seed, n):
+    """Random excitation (a shaker's noise) is no hammer hit: not checked for a second tap."""
+    rng = np.random.default_rng(seed)
+    (impact, _) = file_checks(rng.normal(size=n), rng.normal(size=n), FS)
+    assert impact.passed
+    assert impact.detail.startswith("not checked: the force is no single pulse")
