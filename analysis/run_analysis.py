@@ -280,15 +280,28 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band, noise=
             )
         )
     if options.frequencies_hz is not None:
+        answered: dict[int, float] = {}  # mode index -> the frequency asked that it answers
         for f_asked in options.frequencies_hz:
             near = [
-                m for m in modes if abs(m.frequency_hz - f_asked) <= FREQUENCY_OF_INTEREST_TOLERANCE * f_asked
+                k
+                for k, m in enumerate(modes)
+                if abs(m.frequency_hz - f_asked) <= FREQUENCY_OF_INTEREST_TOLERANCE * f_asked
             ]
             if not near:
                 cautions.append(
                     f"no mode found within {100 * FREQUENCY_OF_INTEREST_TOLERANCE:g} % of {f_asked:g} Hz: "
                     "look at the stability diagram (daq report), or give a --band around it"
                 )
+                continue
+            k = min(near, key=lambda k: abs(modes[k].frequency_hz - f_asked))
+            if k in answered:
+                same = modes[k].frequency_hz
+                cautions.append(
+                    f"{f_asked:g} Hz and {answered[k]:g} Hz found the same mode, {same:.6g} Hz: no second "
+                    f"mode stands near {f_asked:g} Hz; look at the stability diagram (daq report)"
+                )
+            else:
+                answered[k] = f_asked
     return RunAnalysis(
         frequency_hz=frequency_hz, frf=frf, coherence=coherence, source=source, estimator=options.estimator,
         n_averages=1, added_decay_1_s=float(decay), modal=modal, modes=modes, band=band, cautions=cautions,
@@ -340,6 +353,13 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
             f"the ± come from the spread over {n} hits: so few that the spread is itself uncertain, and "
             f"the truth may lie within ±2 u only about {FEW_HITS_COVERAGE[n]} % of the time, not 95 %; take "
             "5 or more hits"
+        )
+    vague = [m for m in result.modes if np.isfinite(m.damping_u) and m.damping_u > m.damping_ratio]
+    for m in vague:
+        out.append(
+            f"the damping of the mode at {m.frequency_hz:.6g} Hz is not fixed by the data: its ± "
+            f"({100 * m.damping_u:.2g} %) is larger than the value ({100 * m.damping_ratio:.2g} %); a finer "
+            "frequency step, more hits or a --band around the mode may fix it"
         )
     if band is not None:
         margin = EDGE_FRACTION * (band.high_hz - band.low_hz)

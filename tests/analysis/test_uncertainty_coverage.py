@@ -80,3 +80,30 @@ def test_a_spread_over_two_or_three_hits_says_how_little_its_u_covers(hits, shar
             f"the ± come from the spread over {hits} hits: so few that the spread is itself uncertain, and "
             f"the truth may lie within ±2 u only about {share} % of the time, not 95 %; take 5 or more hits"
         ]
+
+
+def test_two_frequencies_asked_for_that_find_one_mode_are_said():
+    """--frequencies 23,24 on a run with one mode near both: one mode, and a caution
+    saying that 24 Hz found the mode 23 Hz found."""
+    from analysis.run_analysis import AnalysisOptions
+
+    uniform = WindowSpec("uniform")
+    force, response = impact_hits(FN, ZETA, AMP, 1024.0, 4.0, 5, 0.02, 2e-3, 100)
+    options = AnalysisOptions(frequencies_hz=(23.0, 24.0))
+    result = analyze_hits(force, response, 1024.0, np.ones(5, bool), uniform, uniform, options=options)
+    assert len(result.modes) == 1
+    (said,) = [c for c in result.cautions if "found the same mode" in c]
+    assert said.startswith(f"24 Hz and 23 Hz found the same mode, {result.modes[0].frequency_hz:.6g} Hz: ")
+
+
+def test_a_damping_whose_u_exceeds_it_is_said():
+    from analysis.run_analysis import _cautions
+
+    uniform = WindowSpec("uniform")
+    force, response = impact_hits(FN, ZETA, AMP, 1024.0, 4.0, 5, 0.02, 2e-3, 100)
+    result = analyze_hits(force, response, 1024.0, np.ones(5, bool), uniform, uniform)
+    assert not any("is not fixed by the data" in c for c in result.cautions)
+    mode = result.modes[0]
+    mode.damping_u = 2 * mode.damping_ratio
+    (said,) = [c for c in _cautions(result) if "is not fixed by the data" in c]
+    assert said.startswith(f"the damping of the mode at {mode.frequency_hz:.6g} Hz is not fixed by the data")
