@@ -140,6 +140,11 @@ def _compact(value: Any, limit: int = 240) -> str:
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
+def hit_time(run: Any, i: int) -> str:
+    """Hit ``i``'s time as the report shows it: a run read from a file records none."""
+    return "not recorded" if run.kind == "imported" else str(run.hits.timestamp_utc[i])
+
+
 def accepted_against_checks(run: Any) -> list[str]:
     """One line per hit accepted although a check failed (hits counted from 1), from
     daq.workflows.run_views.accepted_against_checks, as `daq runs show` marks them."""
@@ -498,9 +503,7 @@ def sections(
         rows, classes = [], []
         for i in range(run.hits.n_hits):
             verdict, cls = hit_verdict(run, i)
-            rows.append(
-                [str(i + 1), str(run.hits.timestamp_utc[i]), plain(run.hits.peak_force_n[i], ".3g"), verdict]
-            )
+            rows.append([str(i + 1), hit_time(run, i), plain(run.hits.peak_force_n[i], ".3g"), verdict])
             classes.append(cls)
         hits = Section(
             "Hits",

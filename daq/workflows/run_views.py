@@ -114,6 +114,7 @@ def run_dict(run, path: Path) -> dict[str, Any]:
                     "overload_force": bool(hits.overload[i, 0]),
                     "overload_response": bool(hits.overload[i, 1]),
                     "timestamp_utc": str(hits.timestamp_utc[i]),
+                    "time_recorded": run.kind != "imported",
                 }
                 for i in range(n_hits)
             ],

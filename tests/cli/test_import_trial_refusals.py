@@ -498,3 +498,21 @@ def test_a_double_impact_and_a_clipped_hit_from_a_file_are_noted_and_cautioned(t
     assert caution.startswith("2 hits in the average failed their checks, hit 2: double impact (")
     assert "; hit 3: clipped (" in caution
     assert caution.endswith("(a line '# rejected hit K: reason', K counted from 0) and import it again")
+
+
+def test_hits_from_a_file_show_no_invented_time(tmp_path):
+    """The store keeps the file's modification time for every hit; runs show says the
+    time was not recorded rather than print one instant for all."""
+    path = tmp_path / "hits.csv"
+    rows = time_rows(64).tolist()
+    path.write_text("hit,time,force,response\n" + "".join(f"{k},{t!r},{f!r},{a!r}\n" for k in (0, 1)
+                                                          for t, f, a in rows))  # fmt: skip
+    store = tmp_path / "runs"
+    assert daq_import(store, path).returncode == 0
+    shown = invoke_daq("runs", "show", "latest", "--store", str(store))
+    assert shown.returncode == 0, shown.stderr
+    lines = [line for line in shown.stdout.splitlines() if "hit   " in line]
+    assert len(lines) == 2
+    assert all("time not recorded" in line for line in lines)
+    as_json = invoke_daq("runs", "show", "latest", "--store", str(store), "--json")
+    assert '"time_recorded": false' in as_json.stdout

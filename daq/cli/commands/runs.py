@@ -181,6 +181,11 @@ def _one_line(value: Any) -> str:
     return " ".join(text.split())
 
 
+#: Shown in place of a hit's time for a run read from a file, which records none (the
+#: store keeps the file's modification time there).
+HIT_TIME_UNKNOWN = "time not recorded".ljust(24)
+
+
 def _failed_text(names: list[str]) -> str:
     """The failed checks in words: "the double impact check failed", "the a and b checks failed"."""
     names = [_one_line(n) for n in names]
@@ -270,11 +275,8 @@ def _print_run(d: dict[str, Any], store: str) -> None:
             if h.get("accepted_against_checks"):
                 verdict = f"accepted although {_failed_text(h['failed_checks'])}"
             extra = f", OVERLOAD {'+'.join(overload)}" if overload else ""
-            field(
-                "",
-                f"hit {h['number']:>3}  {h['timestamp_utc']}  "
-                f"peak {h['peak_force_n']:.4g} N{extra}  {verdict}",
-            )
+            when = h["timestamp_utc"] if h.get("time_recorded", True) else HIT_TIME_UNKNOWN
+            field("", f"hit {h['number']:>3}  {when}  peak {h['peak_force_n']:.4g} N{extra}  {verdict}")
         against = [h for h in hits["hits"] if h.get("accepted_against_checks")]
         for h in against:
             field("caution", f"hit {h['number']}: accepted although {_failed_text(h['failed_checks'])}")
