@@ -102,6 +102,12 @@ def analyze(run: Run, options: AnalysisOptions) -> tuple[RunAnalysis, dict[str, 
             # identify the same modes (the residual terms differ by form).
             frf = convert_form(frf, frfs.frequency_hz, "accelerance", form)
         result = analyze_frfs(frfs.frequency_hz, frf, frfs.coherence, source, options, decay)
+        if options.estimator != AnalysisOptions.estimator:
+            result.cautions.insert(
+                0,
+                f"--estimator {options.estimator} was not used: the run holds FRFs, not hits, and they "
+                "are analysed as they are",
+            )
         notes["windows"] = {"from": origin}
         notes["form"] = {"stored": form, "analysed": "accelerance"}
     elif run.spectra is not None and run.hits is None:

@@ -516,3 +516,14 @@ def test_hits_from_a_file_show_no_invented_time(tmp_path):
     assert all("time not recorded" in line for line in lines)
     as_json = invoke_daq("runs", "show", "latest", "--store", str(store), "--json")
     assert '"time_recorded": false' in as_json.stdout
+
+
+def test_an_estimator_given_for_a_run_of_frfs_is_said_to_be_unused(tmp_path):
+    f = np.arange(1.0, 200.0)
+    h = 1.0 / (50.0**2 - f**2 + 2j * 0.02 * 50.0 * f)
+    path = table(tmp_path / "frf.txt", np.column_stack([f, h.real, h.imag]), header="freq\tre\tim")
+    store = tmp_path / "runs"
+    assert daq_import(store, path).returncode == 0
+    result = invoke_daq("analyze", "latest", "--store", str(store), "--estimator", "h2")
+    assert result.returncode == 0, result.stderr
+    assert "caution: --estimator h2 was not used: the run holds FRFs, not hits" in result.stdout
