@@ -58,7 +58,7 @@ _REJECTED = re.compile(r"rejected hit ([0-9]{1,6}):(.*)")
 # "Force [N]", "acc (g)", "Time (s)", "a / mV": a name and the unit in brackets.
 _HEADER_UNIT = re.compile(r"(.*?)\s*(?:\[([^\]]*)\]|\(([^)]*)\))\s*")
 _DECIMAL_COMMA = re.compile(r"[-+]?[0-9]*,[0-9]+(?:[eE][-+]?[0-9]+)?")
-_THOUSANDS_POINT = re.compile(r"[-+]?[0-9]{1,3}(?:\.[0-9]{3})+")
+_THOUSANDS_POINT = re.compile(r"[-+]?[1-9][0-9]{0,2}(?:\.[0-9]{3})+")
 _POINT_NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 
 

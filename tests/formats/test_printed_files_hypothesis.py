@@ -179,6 +179,15 @@ def test_decimal_points_that_cannot_be_thousands_points_mix_with_decimal_commas(
     assert hits.response_m_s2[0].tolist() == [i + 0.25 for i in range(n)]
 
 
+def test_a_point_after_a_leading_zero_is_no_thousands_point():
+    """ "0.125" (a time column printed to milliseconds) beside decimal commas: nobody
+    writes 125 as 0.125, so it is a decimal point and the file reads."""
+    rows = ["t (ms)\tF\ta"] + [f"{i * 0.125:.3f}\t0,5\t{i},25" for i in range(8)]
+    hits = read_csv(put("\n".join(rows) + "\n", "ms.txt")).hits
+    assert hits.response_m_s2[0].tolist() == [i + 0.25 for i in range(8)]
+    assert hits.sample_rate_hz == pytest.approx(8000.0)
+
+
 UNITS = {
     "force": [("N", 1.0), ("kN", 1000.0), ("lbf", 4.4482216152605)],
     "response": [("m/s^2", 1.0), ("g", 9.80665), ("mm/s^2", 1e-3), ("m/s²", 1.0)],
