@@ -229,10 +229,14 @@ IMPULSE_CREST = 7.0
 
 def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> list[HitCheck]:
     """The checks a hit read from a file can have without the analyzer's settings and
-    flags: double impact (for a force that is a pulse at all) and clipped."""
+    flags: double impact (for a force that is a pulse at all) and clipped; none for a
+    record holding a non-finite value (the store refuses those)."""
     force = np.abs(np.asarray(force_n))
-    rms = float(np.sqrt(np.mean(force**2))) if force.size else 0.0
-    crest = float(force.max()) / rms if rms > 0 else 0.0
+    if force.size == 0 or not (np.all(np.isfinite(force)) and np.all(np.isfinite(response))):
+        return []
+    peak = float(force.max())
+    # Scaled by the peak first: a file's values near 1e200 must not overflow the square.
+    crest = 1.0 / float(np.sqrt(np.mean((force / peak) ** 2))) if peak > 0 else 0.0
     if crest < IMPULSE_CREST:
         detail = f"not checked: the force is no single pulse (crest factor {crest:.1f})"
         impact = HitCheck(DOUBLE_IMPACT, True, detail, None)

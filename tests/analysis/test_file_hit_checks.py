@@ -68,3 +68,14 @@ def test_a_random_force_is_not_called_a_double_impact(seed, n):
     (impact, _) = file_checks(rng.normal(size=n), rng.normal(size=n), FS)
     assert impact.passed
     assert impact.detail.startswith("not checked: the force is no single pulse")
+
+
+def test_huge_or_non_finite_records_neither_overflow_nor_warn():
+    """A file's values near 1e200 (the UFF splice test found them) are checked without an
+    overflow; a record with NaN or inf gets no checks (the store refuses it anyway)."""
+    force, response = _hit(1)
+    checks = file_checks(force * 1e200, response * 1e200, FS)
+    assert [c.name for c in checks] == [DOUBLE_IMPACT, CLIPPED]
+    assert all(c.passed for c in checks)
+    assert file_checks(np.where(np.arange(force.size) == 5, np.nan, force), response, FS) == []
+    assert file_checks(force, np.where(np.arange(response.size) == 5, np.inf, response), FS) == []
