@@ -62,6 +62,12 @@ def parse_unit(unit: str, quantity: str) -> float:
         return table[text]
     if "@" in text:
         return _voltage_factor(text, quantity)
+    if text in _VOLTS:
+        example = accepted_forms(quantity).split("such as ")[-1]
+        raise FormatError(
+            f"{quantity} unit {_show(unit)} is a voltage: give the sensor's sensitivity after '@', "
+            f"e.g. {text}{example[example.index('@') :]}"
+        )
     raise FormatError(f"unknown {quantity} unit {_show(unit)}: use {accepted_forms(quantity)}")
 
 

@@ -75,3 +75,13 @@ def test_bad_units_are_one_line_user_errors(unit, quantity):
 def test_unknown_unit_lists_accepted_forms():
     with pytest.raises(FormatError, match=r"N, kN, lbf.*mV@"):
         parse_unit("dyn", "force")
+
+
+@pytest.mark.parametrize(
+    ("unit", "quantity", "shown"), [("mV", "force", "mV@2.25mV/N"), (" V", "response", "V@10.2mV/g")]
+)
+def test_a_bare_voltage_asks_for_the_sensitivity_not_unknown(unit, quantity, shown):
+    with pytest.raises(FormatError) as info:
+        parse_unit(unit, quantity)
+    assert "is a voltage" in str(info.value) and shown in str(info.value)
+    assert "unknown" not in str(info.value)
