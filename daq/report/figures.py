@@ -279,7 +279,9 @@ def draw_frf(result: dict[str, Any]) -> Any:
 def _form_shown(summary: dict[str, Any]) -> str:
     """The FRF's form as drawn: accelerance, said converted when the run stored another."""
     stored = (summary.get("form") or {}).get("stored", "accelerance")
-    return "accelerance" if stored == "accelerance" else f"accelerance, converted from the {stored} stored"
+    if stored in ("accelerance", "time records"):
+        return "accelerance"
+    return f"accelerance, converted from the {stored} stored"
 
 
 def _modes(n: int) -> str:

@@ -91,6 +91,8 @@ def analyze(run: Run, options: AnalysisOptions) -> tuple[RunAnalysis, dict[str, 
         )  # fmt: skip
         windows = {"force": asdict(force_window), "response": asdict(response_window)}
         notes["windows"] = {**windows, "from": origin}
+        # H1 of acceleration over force: accelerance, as made, with nothing converted.
+        notes["form"] = {"stored": "time records", "analysed": "accelerance"}
     elif run.measured_frfs is not None or run.analyzer is not None:
         source = "measured_frf" if run.measured_frfs is not None else "analyzer"
         frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer

@@ -115,6 +115,9 @@ def test_json_estimator_agrees_with_its_options(runs):
     (hit,) = json.loads(daq_ok("analyze", ids["hit"], "--json", "--store", store).stdout)
     assert hit["source"] == "hits"
     assert hit["estimator"] == hit["options"]["estimator"] == "h1"
+    # Both kinds say what was analysed: hits are made into accelerance, nothing converted.
+    assert table["form"]["analysed"] == "accelerance"
+    assert hit["form"] == {"stored": "time records", "analysed": "accelerance"}
     # The stored result keeps what was asked: it is part of the cache key.
     stored = Store(store).read_result(ids["table"], "analysis")["summary"]
     assert stored["options"]["estimator"] == "h1"

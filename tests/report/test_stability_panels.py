@@ -101,7 +101,11 @@ def test_the_diagram_spans_the_band_analysed_not_the_whole_record(analysed):
 
 @pytest.mark.parametrize(
     ("stored", "said"),
-    [("receptance", "accelerance, converted from the receptance stored"), ("accelerance", "accelerance")],
+    [
+        ("receptance", "accelerance, converted from the receptance stored"),
+        ("accelerance", "accelerance"),
+        ("time records", "accelerance"),
+    ],
 )
 def test_the_frf_figure_says_a_stored_form_was_converted(analysed, stored, said):
     _, _, payload = analysed
