@@ -83,5 +83,6 @@ def test_unknown_unit_lists_accepted_forms():
 def test_a_bare_voltage_asks_for_the_sensitivity_not_unknown(unit, quantity, shown):
     with pytest.raises(FormatError) as info:
         parse_unit(unit, quantity)
-    assert "is a voltage" in str(info.value) and shown in str(info.value)
+    assert "is a voltage" in str(info.value)
+    assert shown in str(info.value)
     assert "unknown" not in str(info.value)
