@@ -75,7 +75,7 @@ def choose_band(
             below = np.flatnonzero(smooth < ref * 10 ** (-FORCE_DROP_DB / 10))
             if below.size:
                 high = int(lines[max(below[0] - 1, 0)])
-                why.append(f"{_FORCE_WITHIN} up to {f[high]:.6g} Hz")
+                why.append(f"{_FORCE_WITHIN} up to {edge_text(f[high])} Hz")
             else:
                 why.append(f"{_FORCE_WITHIN} over every line")
     coherence_ok = True
@@ -92,14 +92,21 @@ def choose_band(
             c_low, c_high = int(lines[good[0]]), int(lines[good[-1]])
             if c_low > low:
                 low = c_low
-                why.append(f"the coherence reaches {MIN_COHERENCE:g} from {f[low]:.6g} Hz")
+                why.append(f"the coherence reaches {MIN_COHERENCE:g} from {edge_text(f[low])} Hz")
             if c_high < high:
                 high = c_high
-                why.append(f"it stays usable up to {f[high]:.6g} Hz")
+                why.append(f"it stays usable up to {edge_text(f[high])} Hz")
     if high - low + 1 < MIN_LINES:
+        suggested = f"{edge_text(f[low])}-{edge_text(f[high])} Hz"
         return BandChoice(float(f[first]), float(f[last]),
-                          f"every line above 0 Hz: the band the data suggest ({f[low]:.6g}-{f[high]:.6g} Hz) "
+                          f"every line above 0 Hz: the band the data suggest ({suggested}) "
                           f"holds fewer than {MIN_LINES} lines", coherence_ok)  # fmt: skip
     if not why:
         why.append("nothing in the run limits it (no force spectrum, no coherence)")
     return BandChoice(float(f[low]), float(f[high]), "; ".join(why), coherence_ok)
+
+
+def edge_text(value: float) -> str:
+    """A band edge as a person reads it: four significant digits, never an exponent
+    (1.75 Hz, not the line's 1.75021 Hz; 12800 Hz, not 1.28e+04)."""
+    return f"{value:.4g}" if abs(value) < 1e4 else f"{value:.0f}"

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from analysis.band_choice import BandChoice, choose_band
+from analysis.band_choice import BandChoice, choose_band, edge_text
 from analysis.modal_id import ModalResult, identify_modes
 from analysis.modal_id.lscf import lscf_poles
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
@@ -192,7 +192,11 @@ def _band(frequency_hz, options: AnalysisOptions, g_ff, coherence) -> BandChoice
                     f"band {options.band_hz[0]:g}-{options.band_hz[1]:g} Hz holds no line of the run "
                     f"({lines[0]:g}-{lines[-1]:g} Hz)"
                 )
-            return BandChoice(low, high, f"given with --band, cut to the run's lines ({low:g}-{high:g} Hz)")
+            return BandChoice(
+                low,
+                high,
+                f"given with --band, cut to the run's lines ({edge_text(low)}-{edge_text(high)} Hz)",
+            )
         return BandChoice(float(low), float(high), "given with --band")
     return choose_band(frequency_hz, g_ff, coherence)
 
@@ -212,8 +216,8 @@ def _lines(frequency_hz: np.ndarray, band: BandChoice) -> np.ndarray:
         )
     if keep.sum() < MIN_LINES:
         raise ValueError(
-            f"only {int(keep.sum())} lines in the band {band.low_hz:.6g}-{band.high_hz:.6g} Hz and an "
-            f"analysis needs {MIN_LINES}: widen it"
+            f"only {int(keep.sum())} lines in the band {edge_text(band.low_hz)}-{edge_text(band.high_hz)} Hz "
+            f"and an analysis needs {MIN_LINES}: widen it"
         )
     return keep
 

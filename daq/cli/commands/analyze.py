@@ -218,7 +218,8 @@ def _print(info: dict) -> None:
     )
     band = info.get("band")
     if band:
-        typer.echo(f"  band {span(band['low_hz'], band['high_hz'])}: {band['reason']}")
+        # Four digits: the edges are lines (1.75021 Hz), the band is what a reader wants.
+        typer.echo(f"  band {span(band['low_hz'], band['high_hz'], '.4g')}: {band['reason']}")
     zones = info.get("zones") or []
     if len(zones) > 1:
         low, high = min(z["max_order"] for z in zones), max(z["max_order"] for z in zones)

@@ -8,7 +8,7 @@ import itertools
 import numpy as np
 import pytest
 
-from analysis.band_choice import FORCE_DROP_DB, choose_band
+from analysis.band_choice import FORCE_DROP_DB, choose_band, edge_text
 from analysis.modal_id import classify_order, identify_modes
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.stability import frequency_damping
@@ -66,6 +66,17 @@ def test_band_follows_the_force_spectrum_and_the_coherence():
     assert "force spectrum" in band.reason
     assert "coherence" in band.reason
     assert band.coherence_ok
+
+
+def test_band_edges_are_said_to_four_digits_without_an_exponent():
+    # Lines of a 1/1024 s step rounded to 0.000977 s: 1.74922 Hz, said as 1.749 Hz.
+    f = np.arange(0, 8192) / (8192 * 0.000977)
+    coherence = np.where(f < 1.7, 0.1, 0.9)
+    band = choose_band(f, np.ones(f.size), coherence)
+    assert band.low_hz == pytest.approx(1.74922, abs=1e-5)
+    assert "from 1.749 Hz" in band.reason, band.reason
+    assert edge_text(12800.0) == "12800"
+    assert edge_text(399.924) == "399.9"
 
 
 def test_band_without_usable_coherence_is_said():
