@@ -1,9 +1,9 @@
-"""SIGKILL a real `daq capture --sim` at 36 random moments (nine at a time into one
-store), then list the store once: no half run (every run verifies, no journal is
-left), and no capture lost a hit it had said was accepted (the capture says so only
-after the verdict is fsynced in its journal). Then a store on a small real
-filesystem: too small for the run is refused before the first hit, and a disk that
-fills during the capture keeps the journal and says where.
+"""SIGKILL a real `daq capture --sim` at 18 random moments (nine at a time into one
+store), aimed at each hit and the seal, then list the store once: no half run (every
+run verifies, no journal is left), and no capture lost a hit it had said was accepted
+(the capture says so only after the verdict is fsynced in its journal). Then a store
+on a small real filesystem: too small for the run is refused before the first hit, and
+a disk that fills during the capture keeps the journal and says where.
 """
 
 from __future__ import annotations
@@ -24,11 +24,22 @@ from daq.store import open_run, verify
 from tests.cli_helpers import DAQ
 from tests.workflows.capture_processes import capture_env, listed, start_capture, wait_for_accepted
 
-# 36 kills: 30 timed within the hits (below), 6 from the start. Measured: 19-21 of them
-# leave an incomplete run holding hits, as many as 54 kills timed up to 1.5 s after
-# "Hammer away" did (20; the other third landed after the capture had ended). Those
-# mid-capture kills are what can catch a hit said accepted but not kept.
-KILLS = 36
+# 18 kills: 15 aimed at the hits and the seal (below), 3 from the start. Blind moments
+# (U(0, 1 s) after "Hammer away") took 36 kills to leave about 20 incomplete runs holding
+# hits, a third landing after the capture had ended; aimed, each kill lands at a random
+# moment of the phase it is aimed at. Those mid-capture kills are what can catch a hit
+# said accepted but not kept.
+#: (what the capture prints as the phase starts, the longest it lasts here in s) per
+#: phase: each of the 4 hits at --time-scale 0.05 (0.2-0.3 s here), then the seal.
+PHASES = (
+    ("Hammer away", 0.3),  # hit 1 taken and judged
+    ("1/4 accepted", 0.25),  # hit 2, hit 1 said accepted
+    ("2/4 accepted", 0.25),
+    ("3/4 accepted", 0.25),
+    ("4/4 accepted", 0.05),  # the run being sealed
+)
+AIMED = 3  # kills per phase
+KILLS = AIMED * len(PHASES) + 3
 AT_ONCE = 9
 
 
@@ -47,13 +58,16 @@ def _kill_when(proc: subprocess.Popen, output: Path, ready: str | None, delay_s:
 @pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_sigkill_at_random_moments_never_loses_an_accepted_hit(tmp_path):
-    """Most kills land while hits are taken (a random moment up to 1 s after "Hammer
-    away": the 4 hits at --time-scale 0.05 and the seal take about 0.9 s here, longer
-    on a loaded machine), one in six anywhere from the start (start-up, connecting,
-    configuring)."""
+    """Most kills land while hits are taken, three at each hit and three at the seal (a
+    random moment of it: the 4 hits at --time-scale 0.05 and the seal take about 0.9 s
+    here, longer on a loaded machine), one in six anywhere from the start (start-up,
+    connecting, configuring)."""
     store = tmp_path / "runs"
     env = capture_env(tmp_path)
     rng = random.Random(20261124)
+    moments = [(mark, rng.uniform(0.0, span)) for mark, span in PHASES for _ in range(AIMED)]
+    moments += [(None, rng.uniform(0.0, 3.0)) for _ in range(KILLS - len(moments))]
+    rng.shuffle(moments)  # the phases mixed over the rounds
     outputs: dict[int, Path] = {}
     for first in range(0, KILLS, AT_ONCE):
         procs, killers = [], []
@@ -76,9 +90,7 @@ def test_sigkill_at_random_moments_never_loses_an_accepted_hit(tmp_path):
                     stdin=subprocess.DEVNULL, env=env, start_new_session=True,
                 )  # fmt: skip
             procs.append(proc)
-            ready, delay = (
-                ("Hammer away", rng.uniform(0.0, 1.0)) if seed % 6 else (None, rng.uniform(0.0, 3.0))
-            )
+            ready, delay = moments[seed]
             killers.append(threading.Thread(target=_kill_when, args=(proc, outputs[seed], ready, delay)))
         for killer in killers:
             killer.start()
