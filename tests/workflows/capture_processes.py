@@ -21,7 +21,9 @@ def capture_env(tmp_path: Path) -> dict[str, str]:
 
 
 def start_capture(store: Path, env: dict[str, str], *extra: str) -> subprocess.Popen:
-    command = ["capture", "--sim", "--hits", "10", "--yes", "--time-scale", "0.5", "--store", str(store)]
+    # Paced (--time-scale 0.1: a hit every 0.3-0.5 s) so that a test acts between hits;
+    # the 10 hits last 4 s, long after the two a test waits for.
+    command = ["capture", "--sim", "--hits", "10", "--yes", "--time-scale", "0.1", "--store", str(store)]
     return subprocess.Popen(
         [str(DAQ), *command, *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         stdin=subprocess.DEVNULL, env=env, text=True, bufsize=1, start_new_session=True,

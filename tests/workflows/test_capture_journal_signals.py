@@ -1,7 +1,7 @@
 """Real processes, real signals: SIGTERM, SIGHUP and SIGKILL of `daq capture` and of
 `daq serve` mid-capture lose no accepted hit (docs/capture.md, "No hit lost").
 
-Each capture runs at real-time pacing (--time-scale 0.5: a hit a second) and is
+Each capture runs paced (--time-scale 0.1: a hit every 0.3-0.5 s) and is
 signalled once two hits were accepted, which the capture says only after the verdict
 is fsynced in its journal. The next `daq runs list` must then show one verified
 incomplete run holding both.
@@ -96,7 +96,7 @@ def test_a_signalled_capture_keeps_every_accepted_hit(tmp_path, signum):
 def test_a_signalled_service_keeps_every_accepted_hit(tmp_path, signum):
     """`daq serve` mid-capture: SIGTERM and SIGHUP seal the capture as it stops; SIGKILL
     ends the process, and the journal gives the hits back at the next listing."""
-    with serving(tmp_path, "--sim", "--time-scale", "0.5") as served:
+    with serving(tmp_path, "--sim", "--time-scale", "0.1") as served:
         reply = served.post("/api/capture", {"hits": 10, "auto": True})
         assert reply.status_code == 202, reply.text
         run_id = reply.json()["run_id"]
