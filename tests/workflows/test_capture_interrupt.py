@@ -26,8 +26,8 @@ def test_ctrl_c_keeps_the_hits_so_far_as_an_incomplete_run(tmp_path, second_pres
     store = tmp_path / "runs"
     env = {**os.environ, **ENV, "DAQ_LOCK_DIR": str(tmp_path / "locks"), "DAQ_CONFIG": str(tmp_path / "none")}
     env.pop("DAQ_DEBUG", None)
-    # Real-time pacing (time scale 0.5) so that hits arrive while we watch.
-    command = ["capture", "--sim", "--yes", "--hits", "50", "--time-scale", "0.5", "--store", str(store)]
+    # Paced (time scale 0.1: a hit every 0.3-0.5 s) so that hits arrive while we watch.
+    command = ["capture", "--sim", "--yes", "--hits", "50", "--time-scale", "0.1", "--store", str(store)]
     # A shell starts background jobs with SIGINT ignored and children inherit that;
     # restore the default so that this test works however pytest itself was started.
     proc = subprocess.Popen(
