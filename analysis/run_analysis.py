@@ -16,6 +16,13 @@ import numpy as np
 from analysis.band_choice import BandChoice, choose_band, edge_text
 from analysis.modal_id import ModalResult, identify_modes
 from analysis.modal_id.lscf import lscf_poles
+from analysis.pretrigger import (
+    BIAS_LIMIT,
+    MIN_PRETRIGGER_SAMPLES,
+    cut_at_impact,
+    impact_starts,
+    pretrigger_bias,
+)
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
 from analysis.windows import WindowSpec, added_decay_rate, correct_pole
 
@@ -94,6 +101,8 @@ class RunAnalysis:
     """frequency_hz : (n_lines,). frf : (n_frf, n_lines) complex accelerance, (m/s^2)/N.
     coherence : (n_frf, n_lines) or None. source : "hits", "measured_frf" or "analyzer".
     added_decay_1_s : the exponential window's decay rate removed from every pole, 1/s.
+    pretrigger_cut_s : the pre-trigger (median over hits) cut off before the analysis, s;
+        0 when the records were analysed whole (analysis.pretrigger).
     band : the band analysed and why (given by the user, or chosen from the data).
     cautions : one sentence each: what in the result may mislead, and what to try.
     """
@@ -109,6 +118,7 @@ class RunAnalysis:
     modes: list[ModeEstimate]
     band: BandChoice | None = None
     cautions: list[str] = field(default_factory=list)
+    pretrigger_cut_s: float = 0.0
 
 
 def analyze_hits(
@@ -121,11 +131,48 @@ def analyze_hits(
     center_hz: float = 0.0,
     options: AnalysisOptions | None = None,
 ) -> RunAnalysis:
-    """Analyse time records (n_hits, n_samples), N and m/s^2, over the accepted hits."""
+    """Analyse time records (n_hits, n_samples), N and m/s^2, over the accepted hits.
+
+    Records without windows whose pre-trigger would bias a mode that has not died away by
+    the record's end (analysis.pretrigger) are analysed again, cut to start at the impact;
+    ``pretrigger_cut_s`` says so.
+    """
     options = options or AnalysisOptions()
     accepted = np.asarray(accepted, dtype=bool)
     if not accepted.any():
         raise ValueError("no accepted hit to analyse")
+    result = _analyze_records(
+        force_n, response_m_s2, sample_rate_hz, accepted, force_window, response_window, center_hz, options
+    )
+    unwindowed = force_window.kind == response_window.kind == "uniform"
+    if not (unwindowed and center_hz == 0 and result.modes and np.isrealobj(force_n)):
+        return result
+    force, response = np.atleast_2d(force_n)[accepted], np.atleast_2d(response_m_s2)[accepted]
+    starts = impact_starts(force)
+    n_left = force.shape[1] - int(starts.max())
+    if starts.max() < MIN_PRETRIGGER_SAMPLES or n_left < force.shape[1] // 2:
+        return result
+    pretrigger_s = float(np.median(starts)) / sample_rate_hz
+    bias = pretrigger_bias(
+        np.array([m.frequency_hz for m in result.modes]),
+        np.array([m.damping_ratio for m in result.modes]),
+        pretrigger_s,
+        force.shape[1] / sample_rate_hz,
+    )
+    if bias.max() <= BIAS_LIMIT:
+        return result
+    force, response = cut_at_impact(force, response, starts)
+    cut = _analyze_records(
+        force, response, sample_rate_hz, np.ones(force.shape[0], dtype=bool), force_window, response_window,
+        center_hz, options,
+    )  # fmt: skip
+    cut.pretrigger_cut_s = pretrigger_s
+    return cut
+
+
+def _analyze_records(
+    force_n, response_m_s2, sample_rate_hz, accepted, force_window, response_window, center_hz, options
+) -> RunAnalysis:
     spectra = linear_spectra(
         force_n[accepted], response_m_s2[accepted], sample_rate_hz, force_window, response_window, center_hz
     )

@@ -22,7 +22,7 @@ from analysis.hit_checks import BAND_FRACTION, MAX_DROP_DB
 from daq.report.figures import QUALITY_HITS, psi_unit
 from daq.report.numbers import plain, span, with_uncertainty
 from daq.workflows.run_views import accepted_against_checks as _against
-from daq.workflows.run_views import failed_check_names
+from daq.workflows.run_views import failed_check_names, pretrigger_text
 
 STYLE = """
 body { font: 14px/1.45 system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
@@ -535,8 +535,10 @@ def sections(
         if decay > 0
         else ". "
     )
+    cut = s.get("pretrigger_cut_s") or 0.0
+    cut_text = f"{pretrigger_text(cut)[0].upper()}{pretrigger_text(cut)[1:]}. " if cut > 0 else ""
     note = (
-        f"From {source}.{band_text} Windows: {windows}{removed}"
+        f"From {source}.{band_text} Windows: {windows}{removed}{cut_text}"
         + (f"± is the standard uncertainty of the value, from {', '.join(u_from)}. " if u_from else "")
         + (
             f"Synthesis error {plain(100 * s['synthesis_error'], '.3g')} %."

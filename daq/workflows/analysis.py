@@ -28,8 +28,9 @@ from daq.workflows.outcome import RunOutcome, failure_reason
 
 RESULT_NAME = "analysis"
 #: Bumped when the analysis changes what it computes from the same run and options
-#: (3: both LSCF normalisations, the spurious test's second way in, input cautions).
-ANALYSIS_VERSION = 3
+#: (3: both LSCF normalisations, the spurious test's second way in, input cautions;
+#: 4: records without windows cut at the impact where their pre-trigger biases a pole).
+ANALYSIS_VERSION = 4
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
@@ -207,6 +208,7 @@ def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: Analy
         "estimator": result.estimator if result.source == "hits" else None,
         "n_averages": result.n_averages,
         "added_decay_1_s": result.added_decay_1_s,
+        "pretrigger_cut_s": result.pretrigger_cut_s,
         "band": _band(result),
         "zones": [
             {"low_hz": z.low_hz, "high_hz": z.high_hz, "max_order": z.max_order, "basis": z.basis}

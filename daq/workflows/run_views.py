@@ -168,3 +168,11 @@ def spectra_dict(spectra) -> dict[str, Any] | None:
         "complex": bool(spectra.values.dtype.kind == "c"),
         "kinds": list(spectra.kinds), "units": list(spectra.units), "labels": list(spectra.labels),
     }  # fmt: skip
+
+
+def pretrigger_text(cut_s: float) -> str:
+    """The line saying an analysis cut the hits at the impact (analysis.pretrigger)."""
+    return (
+        f"hits cut at the impact: {cut_s:.4g} s of pre-trigger left out, because the response had not "
+        "died away by the record's end and a pre-trigger then biases the poles (docs/analysis.md)"
+    )

@@ -9,10 +9,20 @@ import numpy as np
 
 
 def impact_hits(
-    fn_hz, zeta, amp, fs_hz: float, duration_s: float, n_hits: int, noise: float, pulse_s: float, seed: int
+    fn_hz,
+    zeta,
+    amp,
+    fs_hz: float,
+    duration_s: float,
+    n_hits: int,
+    noise: float,
+    pulse_s: float,
+    seed: int,
+    pretrigger_s: float = 0.002,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(force N, acceleration m/s^2), each (n_hits, n_samples). noise: standard deviation of
-    the response noise relative to the response's; the force gets a tenth of that."""
+    the response noise relative to the response's; the force gets a tenth of that. Each
+    pulse starts pretrigger_s (plus up to 0.5 ms) into its record."""
     rng = np.random.default_rng(seed)
     n = round(fs_hz * duration_s)
     t = np.arange(n) / fs_hz
@@ -24,7 +34,7 @@ def impact_hits(
     response = np.zeros((n_hits, n))
     for k in range(n_hits):
         gain = 100 * (1 + 0.2 * rng.standard_normal())
-        t0 = 0.002 + 0.0005 * rng.random()
+        t0 = pretrigger_s + 0.0005 * rng.random()
         pulse = np.where((t >= t0) & (t < t0 + pulse_s), np.sin(np.pi * (t - t0) / pulse_s), 0.0) * gain
         response[k] = np.fft.irfft(np.fft.rfft(pulse, m) * h, m)[:n]
         response[k] += noise * np.std(response[k]) * rng.standard_normal(n)

@@ -220,6 +220,10 @@ def _print(info: dict) -> None:
     if band:
         # Four digits: the edges are lines (1.75021 Hz), the band is what a reader wants.
         typer.echo(f"  band {span(band['low_hz'], band['high_hz'], '.4g')}: {band['reason']}")
+    if info.get("pretrigger_cut_s"):
+        from daq.workflows.run_views import pretrigger_text
+
+        typer.echo(f"  {pretrigger_text(info['pretrigger_cut_s'])}")
     zones = info.get("zones") or []
     if len(zones) > 1:
         low, high = min(z["max_order"] for z in zones), max(z["max_order"] for z in zones)
