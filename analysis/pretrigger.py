@@ -72,3 +72,43 @@ def cut_at_impact(
     n = force.shape[1] - int(np.max(starts))
     rows = np.asarray(starts, dtype=int)[:, np.newaxis] + np.arange(n)
     return np.take_along_axis(force, rows, axis=1), np.take_along_axis(resp, rows, axis=1)
+
+
+#: The first half of the pre-trigger must hold at least this many samples to read each
+#: channel's noise from.
+MIN_NOISE_SAMPLES = 8
+
+
+def single_hit_noise(
+    force_n: np.ndarray,
+    response: np.ndarray,
+    force_dft: np.ndarray,
+    frf: np.ndarray,
+    w_force: np.ndarray,
+    w_response: np.ndarray,
+) -> np.ndarray | None:
+    """(n_lines,) the standard deviation of the noise of one hit's FRF at each line, from
+    each channel's noise read in the first half of its pre-trigger; None when that half
+    is shorter than MIN_NOISE_SAMPLES.
+
+    force_n, response: (n_samples,) the hit's records; force_dft: (n_lines,) the DFT of
+    the windowed force on the FRF's lines; frf: (n_lines,) X / F there; w_force,
+    w_response: (n_samples,) the windows. White noise of standard deviation s in a
+    channel under a window w puts s^2 sum(w^2) on every line of its DFT, whatever the
+    window does to its correlation between lines, so that H = X / F carries
+    (s_x^2 sum(w_x^2) + |H|^2 s_f^2 sum(w_f^2)) / |F|^2. Why not the FRF's second
+    differences: a force window keeps a short stretch of the force's noise, smooth over
+    many lines, which the differences between lines do not see.
+    """
+    # The first half only: an analyzer's decimating filters ring ahead of the pulse (the
+    # simulated 35660A's response rises 30 times above its noise in the 16 samples before it).
+    quiet = int(impact_starts(np.asarray(force_n)[np.newaxis, :])[0]) // 2
+    if quiet < MIN_NOISE_SAMPLES:
+        return None
+    s_f = float(np.std(force_n[:quiet]))
+    s_x = float(np.std(response[:quiet]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        var = (s_x**2 * np.sum(w_response**2) + np.abs(frf) ** 2 * s_f**2 * np.sum(w_force**2)) / np.abs(
+            force_dft
+        ) ** 2
+    return np.where(np.isfinite(var), np.sqrt(var), np.nan)

@@ -22,9 +22,10 @@ from analysis.pretrigger import (
     cut_at_impact,
     impact_starts,
     pretrigger_bias,
+    single_hit_noise,
 )
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
-from analysis.windows import WindowSpec, added_decay_rate, correct_pole
+from analysis.windows import WindowSpec, added_decay_rate, correct_pole, window
 
 ESTIMATORS = ("h1", "h2", "hv")
 #: A mode of one hit is the run's mode when its frequency is this close (relative).
@@ -187,6 +188,15 @@ def _analyze_records(
     )
     hit_frfs = per_hit_frf(spectra) if estimate.n_averages >= 2 else None
     noise = None if hit_frfs is None else _noise_of_mean(hit_frfs)
+    windowed = force_window.kind != "uniform" or response_window.kind != "uniform"
+    if hit_frfs is None and windowed and center_hz == 0:
+        # One windowed hit: no scatter, and the FRF's second differences read the noise
+        # a window smooths over the lines too low; its pre-trigger tells it, if it has one.
+        n = force_n.shape[-1]
+        noise = single_hit_noise(
+            force_n[accepted][0], response_m_s2[accepted][0], spectra.force[0] / spectra.force_scale,
+            frf[0], window(force_window, n, sample_rate_hz), window(response_window, n, sample_rate_hz),
+        )  # fmt: skip
     result = _identify(estimate.frequency_hz, frf, coherence, "hits", options, decay, band, noise)
     result.n_averages = estimate.n_averages
     if estimate.n_averages == 1:
