@@ -21,19 +21,29 @@ def _idle(served, timeout_s: float = 60.0) -> None:
     wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", timeout_s, "idle")
 
 
-def test_a_capture_names_a_stored_setup_never_a_server_file(tmp_path):
-    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served:
-        refused = "setup: give the name of a stored setup (GET /api/setups)"
-        for given in ("/etc/passwd.toml", "/etc/passwd", "../setups/x", "x.toml", "./default", "a/b"):
-            for route in ("/api/capture", "/api/capture/practice"):
-                answer = served.post(route, {"hits": 1, "setup": given})
-                assert answer.status_code == 422, (given, route, answer.text)
-                assert answer.json() == {"detail": refused}, (given, route)
-        # A stored name that is not there is still told as such (no path in it).
-        unknown = served.post("/api/capture", {"hits": 1, "setup": "nope"}).json()["detail"]
-        assert unknown.startswith("setup: no setup 'nope'")
-        assert str(served.store) not in unknown
-        assert served.get("/api/capture").json()["state"] == "idle"
+@pytest.fixture(scope="module")
+def refusing(tmp_path_factory):
+    """One service for the tests below whose requests are refused, or touch only setups
+    of their own names (bench, brand-new, x): none starts a capture or practice hits, so
+    each finds the service idle with no hit taken, as a fresh one. A service per test
+    cost each of them a start (4-5 s) for a few requests."""
+    with serving(tmp_path_factory.mktemp("refusing"), "--sim", "--seed", "1", "--time-scale", "0") as served:
+        yield served
+
+
+def test_a_capture_names_a_stored_setup_never_a_server_file(refusing):
+    served = refusing
+    refused = "setup: give the name of a stored setup (GET /api/setups)"
+    for given in ("/etc/passwd.toml", "/etc/passwd", "../setups/x", "x.toml", "./default", "a/b"):
+        for route in ("/api/capture", "/api/capture/practice"):
+            answer = served.post(route, {"hits": 1, "setup": given})
+            assert answer.status_code == 422, (given, route, answer.text)
+            assert answer.json() == {"detail": refused}, (given, route)
+    # A stored name that is not there is still told as such (no path in it).
+    unknown = served.post("/api/capture", {"hits": 1, "setup": "nope"}).json()["detail"]
+    assert unknown.startswith("setup: no setup 'nope'")
+    assert str(served.store) not in unknown
+    assert served.get("/api/capture").json()["state"] == "idle"
 
 
 def test_the_services_own_setup_file_from_the_command_line_stays_usable(tmp_path):
@@ -96,8 +106,9 @@ def test_a_start_while_practice_hits_are_taken_says_to_stop_them(tmp_path):
         _idle(served)
 
 
-def test_a_stale_setup_version_says_to_load_it_again(tmp_path):
-    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served, served.client() as c:
+def test_a_stale_setup_version_says_to_load_it_again(refusing):
+    served = refusing
+    with served.client() as c:
         assert c.put("/api/setups/bench", json={"setup": BENCH, "version": 0}).status_code == 200
         assert c.put("/api/setups/bench", json={"setup": BENCH, "version": 1}).status_code == 200
         for given in (5, 1):  # one that never existed, one saved over
@@ -121,9 +132,10 @@ def test_a_stale_setup_version_says_to_load_it_again(tmp_path):
         }
 
 
-def test_a_body_that_is_not_a_json_object_says_so(tmp_path):
+def test_a_body_that_is_not_a_json_object_says_so(refusing):
     expected = {"detail": "body: must be a JSON object (Content-Type: application/json)"}
-    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served, served.client() as c:
+    served = refusing
+    with served.client() as c:
         form = c.post(
             "/api/capture", content=b"a=b", headers={"Content-Type": "application/x-www-form-urlencoded"}
         )
@@ -145,36 +157,36 @@ def test_a_body_that_is_not_a_json_object_says_so(tmp_path):
         assert wrong.json()["detail"].startswith("hits: ")
 
 
-def test_a_setups_older_version_is_served(tmp_path):
-    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served:
-        with served.client() as c:
-            assert c.put("/api/setups/x", json={"setup": BENCH, "version": 0}).status_code == 200
-            second = {**BENCH, "span_hz": 200.0}
-            assert c.put("/api/setups/x", json={"setup": second, "version": 1}).status_code == 200
-        first = served.get("/api/setups/x", params={"version": 1})
-        assert first.status_code == 200, first.text
-        assert (first.json()["version"], first.json()["setup"]["span_hz"]) == (1, 400.0)
-        assert first.json()["settings"]["span_hz"] == 400.0
-        current = served.get("/api/setups/x", params={"version": 2}).json()
-        assert (current["version"], current["setup"]["span_hz"]) == (2, 200.0)
-        assert served.get("/api/setups/x").json()["version"] == 2
-        missing = served.get("/api/setups/x", params={"version": 9})
-        assert (missing.status_code, missing.json()) == (404, {"detail": "setup x has no version 9"})
-        assert served.get("/api/setups/default", params={"version": 0}).json()["version"] == 0
-        none = served.get("/api/setups/default", params={"version": 3})
-        assert (none.status_code, none.json()) == (404, {"detail": "setup default has no version 3"})
-        bad = served.get("/api/setups/x", params={"version": "-1"})
-        assert bad.status_code == 422
-        assert bad.json()["detail"].startswith("query.version: ")
-        assert served.get("/api/setups/nope", params={"version": 1}).status_code == 404
+def test_a_setups_older_version_is_served(refusing):
+    served = refusing
+    with served.client() as c:
+        assert c.put("/api/setups/x", json={"setup": BENCH, "version": 0}).status_code == 200
+        second = {**BENCH, "span_hz": 200.0}
+        assert c.put("/api/setups/x", json={"setup": second, "version": 1}).status_code == 200
+    first = served.get("/api/setups/x", params={"version": 1})
+    assert first.status_code == 200, first.text
+    assert (first.json()["version"], first.json()["setup"]["span_hz"]) == (1, 400.0)
+    assert first.json()["settings"]["span_hz"] == 400.0
+    current = served.get("/api/setups/x", params={"version": 2}).json()
+    assert (current["version"], current["setup"]["span_hz"]) == (2, 200.0)
+    assert served.get("/api/setups/x").json()["version"] == 2
+    missing = served.get("/api/setups/x", params={"version": 9})
+    assert (missing.status_code, missing.json()) == (404, {"detail": "setup x has no version 9"})
+    assert served.get("/api/setups/default", params={"version": 0}).json()["version"] == 0
+    none = served.get("/api/setups/default", params={"version": 3})
+    assert (none.status_code, none.json()) == (404, {"detail": "setup default has no version 3"})
+    bad = served.get("/api/setups/x", params={"version": "-1"})
+    assert bad.status_code == 422
+    assert bad.json()["detail"].startswith("query.version: ")
+    assert served.get("/api/setups/nope", params={"version": 1}).status_code == 404
 
 
-def test_a_negative_hit_index_is_refused_as_such(tmp_path):
-    with serving(tmp_path, "--sim", "--seed", "1", "--time-scale", "0") as served:
-        negative = served.get("/api/capture/hits/-1")
-        assert negative.status_code == 422
-        assert negative.json() == {"detail": "index: must be 0 or more (hits count from 0 in the API)"}
-        assert served.get("/api/capture/hits/0").status_code == 404
+def test_a_negative_hit_index_is_refused_as_such(refusing):
+    served = refusing
+    negative = served.get("/api/capture/hits/-1")
+    assert negative.status_code == 422
+    assert negative.json() == {"detail": "index: must be 0 or more (hits count from 0 in the API)"}
+    assert served.get("/api/capture/hits/0").status_code == 404
 
 
 def test_the_snapshot_names_the_setup_the_next_capture_uses(tmp_path):
