@@ -84,29 +84,38 @@ def assert_nothing_started(served: Served, events: EventReader) -> None:
     assert first_event(served).data == {"last_id": 0}  # the hub numbered no event
 
 
-def test_posts_without_a_valid_token_get_401_and_start_nothing(tmp_path):
-    with serving(tmp_path, "--sim") as served:
-        events = EventReader(served)
-        with httpx.Client(base_url=served.url, timeout=30) as client:
-            for route, body in POST_ROUTES.items():
-                for what, headers in bad_credentials(served.token).items():
-                    answer = client.post(route, json=body, headers=headers)
-                    assert_refused_401(answer, f"POST {route} with {what}")
-                # ?token= is for GETs (EventSource, download links): a POST needs the header.
-                answer = client.post(route, json=body, params={"token": served.token})
-                assert_refused_401(answer, f"POST {route} with the token in the query")
-        assert_nothing_started(served, events)
+@pytest.fixture(scope="module")
+def idle_service(tmp_path_factory):
+    """One service for the tests whose every request is refused: each checks that
+    nothing started (no capture, no run, no event numbered), so each finds it as a
+    fresh one. A service per test cost each of them a start (4-5 s)."""
+    with serving(tmp_path_factory.mktemp("refusing"), "--sim", "--workers", "1") as served:
+        yield served
 
-        # The same requests with the token pass the check (and find nothing to act on).
-        with served.client() as client:
-            for route in ("/api/capture/decision", "/api/capture/stop", "/api/capture/abort"):
-                answer = client.post(route, json=POST_ROUTES[route])
-                assert answer.status_code == 409, (route, answer.text)
-        lower = {"Authorization": f"bearer {served.token}"}  # the scheme is case-insensitive
-        with httpx.Client(base_url=served.url, headers=lower, timeout=30) as client:
-            assert client.post("/api/capture/stop").status_code == 409
-        assert_nothing_started(served, events)
-        events.close()
+
+def test_posts_without_a_valid_token_get_401_and_start_nothing(idle_service):
+    served = idle_service
+    events = EventReader(served)
+    with httpx.Client(base_url=served.url, timeout=30) as client:
+        for route, body in POST_ROUTES.items():
+            for what, headers in bad_credentials(served.token).items():
+                answer = client.post(route, json=body, headers=headers)
+                assert_refused_401(answer, f"POST {route} with {what}")
+            # ?token= is for GETs (EventSource, download links): a POST needs the header.
+            answer = client.post(route, json=body, params={"token": served.token})
+            assert_refused_401(answer, f"POST {route} with the token in the query")
+    assert_nothing_started(served, events)
+
+    # The same requests with the token pass the check (and find nothing to act on).
+    with served.client() as client:
+        for route in ("/api/capture/decision", "/api/capture/stop", "/api/capture/abort"):
+            answer = client.post(route, json=POST_ROUTES[route])
+            assert answer.status_code == 409, (route, answer.text)
+    lower = {"Authorization": f"bearer {served.token}"}  # the scheme is case-insensitive
+    with httpx.Client(base_url=served.url, headers=lower, timeout=30) as client:
+        assert client.post("/api/capture/stop").status_code == 409
+    assert_nothing_started(served, events)
+    events.close()
 
 
 def test_a_running_capture_cannot_be_decided_stopped_or_aborted_without_the_token(tmp_path):
@@ -222,103 +231,103 @@ def test_odd_run_ids_and_path_traversal_get_404_and_never_a_file(tmp_path):
         )
 
 
-def test_oversized_chunked_and_malformed_bodies_get_a_clear_4xx_and_start_nothing(tmp_path):
-    with serving(tmp_path, "--sim") as served:
-        events = EventReader(served)
-        auth = f"Authorization: Bearer {served.token}"
-        with served.client() as client:
-            for route in POST_ROUTES:
-                # Over 64 KiB: 413.
-                big = client.post(route, content=b" " * (64 * 1024 + 1), headers={"Content-Type": "x/json"})
-                assert big.status_code == 413, (route, big.text)
-                assert "65536" in big.json()["detail"]
-                # No Content-Length (chunked): 411.
-                chunked = client.post(route, content=iter([b'{"hits": 2,', b' "auto": true}']))
-                assert chunked.status_code == 411, (route, chunked.text)
-                assert "Content-Length" in chunked.json()["detail"]
-
-        # 413 before the body is read: 100 MB announced, 4 KiB sent, the answer comes anyway
-        # (were the service waiting for the rest, the read would time out).
+def test_oversized_chunked_and_malformed_bodies_get_a_clear_4xx_and_start_nothing(idle_service):
+    served = idle_service
+    events = EventReader(served)
+    auth = f"Authorization: Bearer {served.token}"
+    with served.client() as client:
         for route in POST_ROUTES:
-            head = f"POST {route} HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}\r\nContent-Length: 100000000"
-            answer = raw_request(served.url, head, b"{" * 4096, timeout_s=10)
-            assert answer.status == 413, (route, answer.status, answer.body)
-        head = f"POST /api/capture HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}\r\nTransfer-Encoding: chunked"
-        answer = raw_request(served.url, head, b'b\r\n{"hits": 2}\r\n0\r\n\r\n')
-        assert answer.status == 411, answer.body
+            # Over 64 KiB: 413.
+            big = client.post(route, content=b" " * (64 * 1024 + 1), headers={"Content-Type": "x/json"})
+            assert big.status_code == 413, (route, big.text)
+            assert "65536" in big.json()["detail"]
+            # No Content-Length (chunked): 411.
+            chunked = client.post(route, content=iter([b'{"hits": 2,', b' "auto": true}']))
+            assert chunked.status_code == 411, (route, chunked.text)
+            assert "Content-Length" in chunked.json()["detail"]
 
-        # Exactly 64 KiB is read and judged on its content (a note too long): 422, not 413.
-        frame = {"hits": 2, "note": ""}
-        filler = 64 * 1024 - len(json.dumps(frame).encode())
-        edge = json.dumps({"hits": 2, "note": "x" * filler}).encode()
-        assert len(edge) == 64 * 1024
-        with served.client() as client:
-            answer = client.post("/api/capture", content=edge, headers={"Content-Type": "application/json"})
-        assert answer.status_code == 422, answer.text
-        assert answer.json()["detail"].startswith("note:"), answer.text
+    # 413 before the body is read: 100 MB announced, 4 KiB sent, the answer comes anyway
+    # (were the service waiting for the rest, the read would time out).
+    for route in POST_ROUTES:
+        head = f"POST {route} HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}\r\nContent-Length: 100000000"
+        answer = raw_request(served.url, head, b"{" * 4096, timeout_s=10)
+        assert answer.status == 413, (route, answer.status, answer.body)
+    head = f"POST /api/capture HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}\r\nTransfer-Encoding: chunked"
+    answer = raw_request(served.url, head, b'b\r\n{"hits": 2}\r\n0\r\n\r\n')
+    assert answer.status == 411, answer.body
 
-        malformed = {
-            "/api/capture": [
-                b"{",
-                b"not json",
-                b"",
-                b"[]",
-                b"null",
-                b"5",
-                b'"hits"',
-                b"\xff\xfe{}",
-                b'{"hits": 2}{"hits": 3}',
-                b'{"hits": 0}',
-                b'{"hits": 1000}',
-                b'{"hits": -3}',
-                b'{"hits": "five"}',
-                b'{"hits": "5"}',
-                b'{"hits": true}',
-                b'{"hits": 2.5}',
-                b'{"hits": NaN}',
-                b'{"hits": 1e400}',
-                b'{"hits": [2]}',
-                b'{"hits": 2, "extra": 1}',
-                b'{"hits": 2, "auto": "yes"}',
-                b'{"hits": 2, "auto": 1}',
-                b'{"hits": 2, "operator": 5}',
-                json.dumps({"hits": 2, "operator": "o" * 201}).encode(),
-                json.dumps({"hits": 2, "note": "n" * 2001}).encode(),
-            ],
-            "/api/capture/decision": [
-                b"{",
-                b"{}",
-                b'{"index": 0}',
-                b'{"accept": true}',
-                b'{"index": -1, "accept": true}',
-                b'{"index": "0", "accept": true}',
-                b'{"index": 0, "accept": "yes"}',
-                b'{"index": 0, "accept": true, "extra": 1}',
-                json.dumps({"index": 0, "accept": False, "reason": "r" * 501}).encode(),
-            ],
-        }
-        with served.client() as client:
-            for route, bodies in malformed.items():
-                for body in bodies:
-                    answer = client.post(route, content=body, headers={"Content-Type": "application/json"})
-                    assert answer.status_code == 422, (route, body[:60], answer.status_code, answer.text)
-                    detail = answer.json()["detail"]
-                    assert isinstance(detail, str), (route, body[:60], detail)
-                    assert "\n" not in detail, (route, body[:60], detail)
-                    assert 0 < len(detail) < 300, (route, body[:60], detail)
-            # Nested too deep for the JSON parser: still a 4xx, never a 500.
-            deep = b"[" * 30000 + b"]" * 30000
-            answer = client.post("/api/capture", content=deep, headers={"Content-Type": "application/json"})
-            assert answer.status_code in (400, 422), answer.text
-            # A form post (what a page of another site could send without scripts): refused.
-            form = client.post("/api/capture", content=b'{"hits": 2}', headers={"Content-Type": "text/plain"})
-            assert form.status_code == 422, form.text
-        # Lengths the HTTP layer cannot parse: 400 from the server itself.
-        for length in ("-1", "abc", "1, 2", "+5"):
-            head = f"POST /api/capture HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}\r\nContent-Length: {length}"
-            assert raw_request(served.url, head, b"{}").status == 400, length
-        assert_nothing_started(served, events)
-        events.close()
+    # Exactly 64 KiB is read and judged on its content (a note too long): 422, not 413.
+    frame = {"hits": 2, "note": ""}
+    filler = 64 * 1024 - len(json.dumps(frame).encode())
+    edge = json.dumps({"hits": 2, "note": "x" * filler}).encode()
+    assert len(edge) == 64 * 1024
+    with served.client() as client:
+        answer = client.post("/api/capture", content=edge, headers={"Content-Type": "application/json"})
+    assert answer.status_code == 422, answer.text
+    assert answer.json()["detail"].startswith("note:"), answer.text
+
+    malformed = {
+        "/api/capture": [
+            b"{",
+            b"not json",
+            b"",
+            b"[]",
+            b"null",
+            b"5",
+            b'"hits"',
+            b"\xff\xfe{}",
+            b'{"hits": 2}{"hits": 3}',
+            b'{"hits": 0}',
+            b'{"hits": 1000}',
+            b'{"hits": -3}',
+            b'{"hits": "five"}',
+            b'{"hits": "5"}',
+            b'{"hits": true}',
+            b'{"hits": 2.5}',
+            b'{"hits": NaN}',
+            b'{"hits": 1e400}',
+            b'{"hits": [2]}',
+            b'{"hits": 2, "extra": 1}',
+            b'{"hits": 2, "auto": "yes"}',
+            b'{"hits": 2, "auto": 1}',
+            b'{"hits": 2, "operator": 5}',
+            json.dumps({"hits": 2, "operator": "o" * 201}).encode(),
+            json.dumps({"hits": 2, "note": "n" * 2001}).encode(),
+        ],
+        "/api/capture/decision": [
+            b"{",
+            b"{}",
+            b'{"index": 0}',
+            b'{"accept": true}',
+            b'{"index": -1, "accept": true}',
+            b'{"index": "0", "accept": true}',
+            b'{"index": 0, "accept": "yes"}',
+            b'{"index": 0, "accept": true, "extra": 1}',
+            json.dumps({"index": 0, "accept": False, "reason": "r" * 501}).encode(),
+        ],
+    }
+    with served.client() as client:
+        for route, bodies in malformed.items():
+            for body in bodies:
+                answer = client.post(route, content=body, headers={"Content-Type": "application/json"})
+                assert answer.status_code == 422, (route, body[:60], answer.status_code, answer.text)
+                detail = answer.json()["detail"]
+                assert isinstance(detail, str), (route, body[:60], detail)
+                assert "\n" not in detail, (route, body[:60], detail)
+                assert 0 < len(detail) < 300, (route, body[:60], detail)
+        # Nested too deep for the JSON parser: still a 4xx, never a 500.
+        deep = b"[" * 30000 + b"]" * 30000
+        answer = client.post("/api/capture", content=deep, headers={"Content-Type": "application/json"})
+        assert answer.status_code in (400, 422), answer.text
+        # A form post (what a page of another site could send without scripts): refused.
+        form = client.post("/api/capture", content=b'{"hits": 2}', headers={"Content-Type": "text/plain"})
+        assert form.status_code == 422, form.text
+    # Lengths the HTTP layer cannot parse: 400 from the server itself.
+    for length in ("-1", "abc", "1, 2", "+5"):
+        head = f"POST /api/capture HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}\r\nContent-Length: {length}"
+        assert raw_request(served.url, head, b"{}").status == 400, length
+    assert_nothing_started(served, events)
+    events.close()
 
 
 def test_beyond_loopback_every_read_needs_the_token_but_the_pages_do_not(tmp_path):
@@ -423,29 +432,29 @@ def test_the_token_file_is_private_and_an_unsafe_one_is_refused(tmp_path):
     assert junk.read_text() == "not a token\n"
 
 
-def test_loopback_refuses_foreign_host_names_and_401_comes_before_the_body(tmp_path):
-    with serving(tmp_path, "--sim", "--workers", "1") as served:
-        # DNS rebinding: a page elsewhere whose name now resolves to 127.0.0.1 sends its
-        # own name as Host; reads need no token on loopback, so such requests are refused.
-        for host in ("evil.example:8000", "evil.example", "192.168.1.20"):
-            answer = raw_request(served.url, f"GET /api/runs HTTP/1.1\r\nHost: {host}")
-            assert answer.status == 400, (host, answer.status)
-        port = served.url.rsplit(":", 1)[1]
-        for host in (f"127.0.0.1:{port}", f"localhost:{port}", f"[::1]:{port}", "LOCALHOST"):
-            assert raw_request(served.url, f"GET /api/runs HTTP/1.1\r\nHost: {host}").status == 200
-        # Without the token nothing is learnt from the body: 401 for malformed JSON too,
-        # with the scheme the client should use.
-        garbage = {"content": b"{not json", "headers": {"Content-Type": "application/json"}}
-        with served.client(token=False) as client:
-            answer = client.post("/api/capture", **garbage)
-        assert answer.status_code == 401
-        assert answer.headers["www-authenticate"].startswith("Bearer")
-        # With it, malformed JSON is named as such.
-        with served.client() as client:
-            answer = client.post("/api/capture", **garbage)
-        assert answer.status_code == 422
-        assert answer.json()["detail"] == "body: not valid JSON"
-        # A POST with no body at all (curl -X POST) is an empty body, not a refused one.
-        auth = f"Authorization: Bearer {served.token}"
-        stop = raw_request(served.url, f"POST /api/capture/stop HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}")
-        assert stop.status == 409  # nothing runs: the request itself was accepted
+def test_loopback_refuses_foreign_host_names_and_401_comes_before_the_body(idle_service):
+    served = idle_service
+    # DNS rebinding: a page elsewhere whose name now resolves to 127.0.0.1 sends its
+    # own name as Host; reads need no token on loopback, so such requests are refused.
+    for host in ("evil.example:8000", "evil.example", "192.168.1.20"):
+        answer = raw_request(served.url, f"GET /api/runs HTTP/1.1\r\nHost: {host}")
+        assert answer.status == 400, (host, answer.status)
+    port = served.url.rsplit(":", 1)[1]
+    for host in (f"127.0.0.1:{port}", f"localhost:{port}", f"[::1]:{port}", "LOCALHOST"):
+        assert raw_request(served.url, f"GET /api/runs HTTP/1.1\r\nHost: {host}").status == 200
+    # Without the token nothing is learnt from the body: 401 for malformed JSON too,
+    # with the scheme the client should use.
+    garbage = {"content": b"{not json", "headers": {"Content-Type": "application/json"}}
+    with served.client(token=False) as client:
+        answer = client.post("/api/capture", **garbage)
+    assert answer.status_code == 401
+    assert answer.headers["www-authenticate"].startswith("Bearer")
+    # With it, malformed JSON is named as such.
+    with served.client() as client:
+        answer = client.post("/api/capture", **garbage)
+    assert answer.status_code == 422
+    assert answer.json()["detail"] == "body: not valid JSON"
+    # A POST with no body at all (curl -X POST) is an empty body, not a refused one.
+    auth = f"Authorization: Bearer {served.token}"
+    stop = raw_request(served.url, f"POST /api/capture/stop HTTP/1.1\r\nHost: 127.0.0.1\r\n{auth}")
+    assert stop.status == 409  # nothing runs: the request itself was accepted
