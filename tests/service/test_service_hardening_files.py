@@ -23,7 +23,14 @@ from tests.service.service_helpers import service_env, serving
 pytestmark = pytest.mark.slow
 
 SOUND = "20261123T101503.123Z-0000aaaa"
-LINKED = "20261124T235959.000Z-deadbeef"
+#: What each test puts beside the sound run, named as a run: a name of its own, so that
+#: nothing the shared service learnt of one test's entry can answer for another's.
+LINKED = {
+    "a secret file": "20261124T235959.000Z-deadbeef",
+    "the token file": "20261124T235958.000Z-deadbee1",
+    "a hard link": "20261124T235957.000Z-deadbee2",
+    "a FIFO": "20261124T235956.000Z-deadbee3",
+}
 SECRET = "the secret outside the store"
 
 RUN_ROUTES = (
@@ -44,6 +51,26 @@ def _store_with_a_sound_run(tmp_path):
     return store
 
 
+@pytest.fixture(scope="module")
+def sound_service(tmp_path_factory):
+    """One service on a store of one sound run for the tests below (a service per test
+    cost each a start, 4-5 s); each takes away what it put beside the run."""
+    root = tmp_path_factory.mktemp("sound")
+    store = _store_with_a_sound_run(root)
+    with serving(root, "--sim", "--workers", "1", store=store) as served:
+        yield served
+
+
+@pytest.fixture
+def served(sound_service):
+    """The shared service, its store holding the sound run alone again after the test."""
+    yield sound_service
+    for name in LINKED.values():
+        path = sound_service.store / f"{name}.h5"
+        if os.path.lexists(path):
+            path.unlink()
+
+
 def _assert_refused(client: httpx.Client, run_id: str, secrets: list[str], store) -> None:
     for route in RUN_ROUTES:
         for name in (run_id, run_id[:16]):  # the whole id, and a prefix of it
@@ -58,56 +85,46 @@ def _assert_refused(client: httpx.Client, run_id: str, secrets: list[str], store
 
 
 @pytest.mark.parametrize("target", ["a secret file", "the token file"])
-def test_a_symlink_in_the_store_serves_nothing(tmp_path, target):
-    store = _store_with_a_sound_run(tmp_path)
+def test_a_symlink_in_the_store_serves_nothing(served, tmp_path, target):
+    store = served.store
     secret = tmp_path / "secret.txt"
     secret.write_text(SECRET + "\n")
-    env = service_env(tmp_path)
-    with serving(tmp_path, "--sim", "--workers", "1", store=store) as served:
-        pointed = secret if target == "a secret file" else env["DAQ_TOKEN_FILE"]
-        os.symlink(pointed, store / f"{LINKED}.h5")
-        with served.client(token=False, timeout=15) as anonymous:
-            _assert_refused(anonymous, LINKED, [SECRET, served.token], store)
-            # The sound run is served as before.
-            file = anonymous.get(f"/api/runs/{SOUND}/file")
-            assert file.status_code == 200, file.text
-            assert file.content.startswith(b"\x89HDF"), file.content[:20]
+    pointed = secret if target == "a secret file" else served.env["DAQ_TOKEN_FILE"]
+    os.symlink(pointed, store / f"{LINKED[target]}.h5")
+    with served.client(token=False, timeout=15) as anonymous:
+        _assert_refused(anonymous, LINKED[target], [SECRET, served.token], store)
+        # The sound run is served as before.
+        file = anonymous.get(f"/api/runs/{SOUND}/file")
+        assert file.status_code == 200, file.text
+        assert file.content.startswith(b"\x89HDF"), file.content[:20]
 
 
-def test_a_hard_link_to_the_token_file_is_not_served(tmp_path):
-    store = _store_with_a_sound_run(tmp_path)
-    env = service_env(tmp_path)
-    with serving(tmp_path, "--sim", "--workers", "1", store=store) as served:
-        os.link(env["DAQ_TOKEN_FILE"], store / f"{LINKED}.h5")
-        with served.client(token=False, timeout=15) as anonymous:
-            response = anonymous.get(f"/api/runs/{LINKED}/file")
-            assert response.status_code == 404, response.text
-            assert served.token not in response.text
+def test_a_hard_link_to_the_token_file_is_not_served(served):
+    os.link(served.env["DAQ_TOKEN_FILE"], served.store / f"{LINKED['a hard link']}.h5")
+    with served.client(token=False, timeout=15) as anonymous:
+        response = anonymous.get(f"/api/runs/{LINKED['a hard link']}/file")
+        assert response.status_code == 404, response.text
+        assert served.token not in response.text
 
 
-def test_a_fifo_named_as_a_run_hangs_nothing(tmp_path):
+def test_a_fifo_named_as_a_run_hangs_nothing(served):
     """Opening a FIFO waits for a writer for ever: the listing and every route of the
     run answer at once, and the service stays responsive."""
-    store = _store_with_a_sound_run(tmp_path)
-    with serving(tmp_path, "--sim", "--workers", "1", store=store) as served:
-        os.mkfifo(store / f"{LINKED}.h5")
-        with served.client(token=False, timeout=10) as anonymous:
-            _assert_refused(anonymous, LINKED, [], store)
-            assert anonymous.get("/api/health").status_code == 200
+    os.mkfifo(served.store / f"{LINKED['a FIFO']}.h5")
+    with served.client(token=False, timeout=10) as anonymous:
+        _assert_refused(anonymous, LINKED["a FIFO"], [], served.store)
+        assert anonymous.get("/api/health").status_code == 200
 
 
-def test_404_bodies_do_not_name_the_store_folder(tmp_path):
-    store = _store_with_a_sound_run(tmp_path)
-    with (
-        serving(tmp_path, "--sim", "--workers", "1", store=store) as served,
-        served.client(token=False, timeout=15) as anonymous,
-    ):
+def test_404_bodies_do_not_name_the_store_folder(served):
+    root = served.store.parent
+    with served.client(token=False, timeout=15) as anonymous:
         for name in ("2099", "20261125", "1"):
             for route in RUN_ROUTES:
                 response = anonymous.get(route.format(name))
                 assert response.status_code == 404, (route, name, response.text)
-                assert str(store) not in response.text, (route, name, response.text)
-                assert str(tmp_path) not in response.text, (route, name, response.text)
+                assert str(served.store) not in response.text, (route, name, response.text)
+                assert str(root) not in response.text, (route, name, response.text)
 
 
 def test_a_token_file_too_large_to_hold_a_token_is_refused_with_one_line(tmp_path):
