@@ -83,7 +83,9 @@ def _kill_in(proc: subprocess.Popen, output: Path, mark: str | None, delay_s: fl
     """SIGKILL ``proc`` ``delay_s`` after its output shows ``mark``; whether it was alive."""
     deadline = time.monotonic() + 60
     while mark is not None and mark not in output.read_text():
-        assert proc.poll() is None, f"the capture ended before {mark!r}: {output.read_text()}"
+        if proc.poll() is not None:  # ended: its output is whole now
+            assert mark in output.read_text(), f"the capture ended before {mark!r}: {output.read_text()}"
+            break
         assert time.monotonic() < deadline, f"no {mark!r} within 60 s: {output.read_text()}"
         time.sleep(0.002)
     time.sleep(delay_s)
