@@ -5,14 +5,22 @@ the record's first sample and is cut off at its end keeps an exact pole: its cut
 part only scales the residue. A mode that starts t0 into the record (a pre-trigger) and
 is cut off at T is multiplied, line by line, by
 
-    D(f) = 1 - r exp(i 2 pi f t0),   r = exp(-sigma (T - t0)),   sigma = zeta 2 pi fn,
+    D(f) = 1 - r exp(j (omega_d (T - t0) + 2 pi f t0)),   r = exp(-sigma (T - t0)),
 
-which turns across the mode's half-power band (2 sigma wide in rad/s) by about
-2 sigma t0: its pole moves. A file with 0.2 s of pre-trigger in 0.5 s records, a 45 Hz
-mode at 1.5 % (r = 0.28, sigma t0 = 0.85), read 1.89 +- 0.04 % from 3 hits: 9 u off,
-the same in every hit, so no spread over hits shows it. Cut at the impact, the same hits
-read 1.507 +- 0.014 %. An analyzer's exponential window makes r negligible, which is why
-this only matters for records without windows (files that say none).
+sigma = zeta 2 pi fn. Across the mode's half-power band (2 sigma wide in rad/s) D
+changes by about 2 r sigma t0, relative to |D| = |1 - r exp(j omega_d T)| at the mode
+(small for a lightly damped mode on a line, f T whole, where r is near 1). The FRF's
+own pole stays where it is (D has no pole); the pole a fit reads moves. A file with
+0.2 s of pre-trigger in 0.5 s records, a 45 Hz mode at 1.5 % (r = 0.28, sigma t0 =
+0.85), read 1.89 +- 0.04 % from 3 hits: 9 u off, the same in every hit when the hits
+share their pre-trigger, so no spread over hits shows it. Cut at the impact, the same
+hits read 1.507 +- 0.014 %. An analyzer's exponential window makes r negligible, which
+is why this only matters for records without windows (files that say none).
+
+How large the bias is in a given case (noise, neighbours, the line grid) the measure
+above ranks only roughly, so it only screens: where it is above SCREEN_LIMIT the hits
+are analysed both ways, and the cut result is kept where such a mode moved by more than
+MOVED_BY_U of its standard uncertainty (analysis/run_analysis.py).
 
 Pure numpy; time records (n_hits, n_samples) at baseband.
 """
@@ -24,13 +32,22 @@ import numpy as np
 #: The pulse starts where the force first rises above this fraction of its peak, going
 #: back from the peak (above the noise of a hammer's force channel).
 START_FRACTION = 0.05
+#: An earlier excursion above this fraction of the peak is an earlier tap of the same hit
+#: (a double tap whose second tap is the larger; hit_checks' RISE_FRACTION): the start
+#: is that tap's.
+EARLIER_TAP_FRACTION = 0.20
 #: Samples kept before that start, so the cut takes nothing of the pulse's rise.
 MARGIN_SAMPLES = 2
 #: A pre-trigger shorter than this many samples is left alone.
 MIN_PRETRIGGER_SAMPLES = 8
-#: Cut when some mode's bias measure r * min(sigma t0, 1) exceeds this: a 1 % turn of D
-#: across the half-power band.
-BIAS_LIMIT = 0.01
+#: Analyse the cut records too when some mode's measure (pretrigger_bias) exceeds this.
+SCREEN_LIMIT = 1e-3
+#: Keep the cut records' result when a screened mode's frequency or damping moved by more
+#: than this many of its standard uncertainties (the cut's): cutting moves the lines, and
+#: that alone moves modes by up to a u or two.
+MOVED_BY_U = 3.0
+#: A cut must leave at least this fraction of the record.
+MIN_KEPT_FRACTION = 0.25
 
 
 def impact_starts(force_n: np.ndarray) -> np.ndarray:
@@ -44,7 +61,9 @@ def impact_starts(force_n: np.ndarray) -> np.ndarray:
     peak = np.argmax(dev, axis=1)
     starts = np.empty(force.shape[0], dtype=int)
     for k, p in enumerate(peak):
-        below = np.flatnonzero(dev[k, : p + 1] < START_FRACTION * dev[k, p])
+        earlier = np.flatnonzero(dev[k, :p] > EARLIER_TAP_FRACTION * dev[k, p])
+        first = int(earlier[0]) if earlier.size else int(p)
+        below = np.flatnonzero(dev[k, : first + 1] < START_FRACTION * dev[k, p])
         starts[k] = max(0, (int(below[-1]) + 1 if below.size else 0) - MARGIN_SAMPLES)
     return starts
 
@@ -52,15 +71,19 @@ def impact_starts(force_n: np.ndarray) -> np.ndarray:
 def pretrigger_bias(
     frequency_hz: np.ndarray, damping_ratio: np.ndarray, pretrigger_s: float, record_s: float
 ) -> np.ndarray:
-    """(n_modes,) r * min(sigma t0, 1): how much D turns across each mode's half-power band.
+    """(n_modes,) 2 r sin(min(sigma t0, pi / 2)) / |1 - r exp(j omega_d T)|: how much D
+    (module docstring) changes across each mode's half-power band, relative to its size.
 
     frequency_hz, damping_ratio: (n_modes,) Hz and 1; pretrigger_s: t0, s; record_s: T, s.
     """
     f = np.asarray(frequency_hz, dtype=float)
-    zeta = np.clip(np.asarray(damping_ratio, dtype=float), 0.0, None)
+    zeta = np.clip(np.asarray(damping_ratio, dtype=float), 0.0, 1.0)
     sigma = zeta * 2 * np.pi * f
     left = np.exp(-sigma * max(record_s - pretrigger_s, 0.0))
-    return left * np.minimum(sigma * pretrigger_s, 1.0)
+    omega_d = 2 * np.pi * f * np.sqrt(1 - zeta**2)
+    size = np.abs(1 - left * np.exp(1j * omega_d * record_s))
+    turn = 2 * left * np.sin(np.minimum(sigma * pretrigger_s, np.pi / 2))
+    return turn / np.maximum(size, 1e-12)
 
 
 def cut_at_impact(

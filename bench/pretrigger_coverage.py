@@ -46,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--whole", action="store_true", help="switch the cut off")
     args = parser.parse_args(argv)
     if args.whole:
-        run_analysis.BIAS_LIMIT = float("inf")
+        run_analysis.SCREEN_LIMIT = float("inf")
     uniform = WindowSpec("uniform")
     z_f, z_zeta, n_cut = [], [], 0
     for seed in range(args.seeds):

@@ -535,8 +535,8 @@ def sections(
         if decay > 0
         else ". "
     )
-    cut = s.get("pretrigger_cut_s") or 0.0
-    cut_text = f"{pretrigger_text(cut)[0].upper()}{pretrigger_text(cut)[1:]}. " if cut > 0 else ""
+    cut_text = pretrigger_text(s)
+    cut_text = f"{cut_text[0].upper()}{cut_text[1:]}. " if cut_text else ""
     note = (
         f"From {source}.{band_text} Windows: {windows}{removed}{cut_text}"
         + (f"± is the standard uncertainty of the value, from {', '.join(u_from)}. " if u_from else "")

@@ -209,6 +209,8 @@ def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: Analy
         "n_averages": result.n_averages,
         "added_decay_1_s": result.added_decay_1_s,
         "pretrigger_cut_s": result.pretrigger_cut_s,
+        "pretrigger_range_s": list(result.pretrigger_range_s),
+        "record_after_cut_s": result.record_after_cut_s,
         "band": _band(result),
         "zones": [
             {"low_hz": z.low_hz, "high_hz": z.high_hz, "max_order": z.max_order, "basis": z.basis}

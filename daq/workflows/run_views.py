@@ -170,9 +170,18 @@ def spectra_dict(spectra) -> dict[str, Any] | None:
     }  # fmt: skip
 
 
-def pretrigger_text(cut_s: float) -> str:
-    """The line saying an analysis cut the hits at the impact (analysis.pretrigger)."""
+def pretrigger_text(summary: dict[str, Any]) -> str:
+    """The line saying an analysis cut the hits at their impacts (analysis.pretrigger),
+    from an analysis summary; "" when it did not."""
+    cut = summary.get("pretrigger_cut_s") or 0.0
+    if cut <= 0:
+        return ""
+    low, high = summary.get("pretrigger_range_s") or (cut, cut)
+    spread = f" ({low:.4g}-{high:.4g} s over the hits)" if high > low else ""
+    kept = summary.get("record_after_cut_s") or 0.0
+    records = f", records of {kept:.4g} s from each impact" if kept > 0 else ""
     return (
-        f"hits cut at the impact: {cut_s:.4g} s of pre-trigger left out, because the response had not "
-        "died away by the record's end and a pre-trigger then biases the poles (docs/analysis.md)"
+        f"hits cut at their impacts: {cut:.4g} s of pre-trigger left out{spread}{records}, because "
+        "the response had not died away by the record's end and the modes read from the whole "
+        "records moved by more than their ± (docs/analysis.md)"
     )

@@ -45,13 +45,15 @@ def test_the_cut_keeps_one_length_from_each_start():
 
 
 def test_the_bias_measure_is_the_theory():
-    # r = exp(-sigma (T - t0)), sigma t0 capped at 1: the 45 Hz mode at 1.5 % of the note.
-    sigma = 0.015 * 2 * np.pi * 45.0
+    # 2 r sin(sigma t0) / |1 - r exp(j omega_d T)|: the 45 Hz mode at 1.5 % of the note.
+    sigma, omega_d = 0.015 * 2 * np.pi * 45.0, 2 * np.pi * 45.0 * np.sqrt(1 - 0.015**2)
+    r = np.exp(-sigma * 0.3)
     (b,) = pretrigger_bias(np.array([45.0]), np.array([0.015]), 0.2, 0.5)
-    assert b == pytest.approx(np.exp(-sigma * 0.3) * sigma * 0.2)
-    (b,) = pretrigger_bias(np.array([45.0]), np.array([0.015]), 0.5, 1.0)
-    assert b == pytest.approx(np.exp(-sigma * 0.5))
+    assert b == pytest.approx(2 * r * np.sin(sigma * 0.2) / abs(1 - r * np.exp(1j * omega_d * 0.5)))
     assert pretrigger_bias(np.array([45.0]), np.array([0.015]), 0.0, 0.5)[0] == 0.0
+    # A lightly damped mode on a line (f T whole) is the worst case: |D| is 1 - r there.
+    on, off = pretrigger_bias(np.array([46.0, 45.0]), np.array([0.001, 0.001]), 0.03, 0.5)
+    assert on > 5 * off
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -72,7 +74,7 @@ def test_a_long_pretrigger_no_longer_biases_the_damping(seed):
 def test_the_whole_records_were_biased(monkeypatch):
     """The test above can fail: the same hits analysed whole (the cut switched off) miss
     the 45 Hz mode's damping by many u."""
-    monkeypatch.setattr("analysis.run_analysis.BIAS_LIMIT", np.inf)
+    monkeypatch.setattr("analysis.run_analysis.SCREEN_LIMIT", np.inf)
     force, response = _hits(0.2, 0.5, 1)
     whole = analyze_hits(force, response, 1024.0, np.ones(3, bool), UNIFORM, UNIFORM)
     assert whole.pretrigger_cut_s == 0.0
@@ -92,3 +94,31 @@ def test_windowed_records_are_never_cut():
     exp = WindowSpec("exponential", exp_decay_s=0.1)
     result = analyze_hits(force, response, 1024.0, np.ones(3, bool), UNIFORM, exp)
     assert result.pretrigger_cut_s == 0.0
+
+
+def test_a_double_tap_starts_at_its_first_tap_even_when_the_second_is_larger():
+    force, _ = _hits(0.2, 0.5, 8, n_hits=1)
+    (first,) = impact_starts(force)
+    tapped = force.copy()
+    tapped[0, first + 11 : first + 11 + 4] += 3 * np.abs(force).max()  # a larger tap 11 ms on
+    assert list(impact_starts(tapped)) == [first]
+
+
+def test_a_pretrigger_too_long_to_cut_is_a_caution():
+    """0.4 s of pre-trigger in 0.5 s records: a cut would keep a fifth of them."""
+    force, response = _hits(0.4, 0.5, 9)
+    result = analyze_hits(force, response, 1024.0, np.ones(3, bool), UNIFORM, UNIFORM)
+    assert result.pretrigger_cut_s == 0.0
+    (caution,) = [c for c in result.cautions if "pre-trigger" in c]
+    assert "shorter pre-trigger" in caution
+
+
+def test_hits_with_different_pretriggers_are_cut_to_one_length():
+    force, response = _hits(0.05, 0.5, 10)
+    later, later_response = _hits(0.2, 0.5, 10)
+    force[1], response[1] = later[1], later_response[1]
+    result = analyze_hits(force, response, 1024.0, np.ones(3, bool), UNIFORM, UNIFORM)
+    low, high = result.pretrigger_range_s
+    assert low == pytest.approx(0.05, abs=0.005)
+    assert high == pytest.approx(0.2, abs=0.005)
+    assert result.record_after_cut_s == pytest.approx(0.5 - high, abs=2 / 1024)

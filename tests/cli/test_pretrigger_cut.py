@@ -31,14 +31,14 @@ def test_a_long_pretrigger_is_cut_and_said_everywhere(tmp_path):
     text = invoke_daq("analyze", "latest", "--store", store)
     assert text.returncode == 0, text.stderr
     (line,) = [s for s in text.stdout.splitlines() if "pre-trigger" in s]
-    assert line.startswith("  hits cut at the impact: 0.19"), line
+    assert line.startswith("  hits cut at their impacts: 0.19"), line
     (info,) = json.loads(invoke_daq("analyze", "latest", "--json", "--store", store).stdout)
     assert 0.195 <= info["pretrigger_cut_s"] <= 0.2
     (mode,) = [m for m in info["modes"] if abs(m["frequency_hz"] - 45) < 1]
     assert abs(mode["damping_ratio"] - 0.015) <= 3 * mode["damping_u"], mode
     report = invoke_daq("report", "latest", "-o", str(tmp_path / "r"), "--store", store)
     assert report.returncode == 0, report.stderr
-    assert "Hits cut at the impact: 0.19" in (tmp_path / "r" / "index.html").read_text()
+    assert "Hits cut at their impacts: 0.19" in (tmp_path / "r" / "index.html").read_text()
 
 
 def test_a_short_pretrigger_says_nothing(tmp_path):

@@ -223,7 +223,7 @@ def _print(info: dict) -> None:
     if info.get("pretrigger_cut_s"):
         from daq.workflows.run_views import pretrigger_text
 
-        typer.echo(f"  {pretrigger_text(info['pretrigger_cut_s'])}")
+        typer.echo(f"  {pretrigger_text(info)}")
     zones = info.get("zones") or []
     if len(zones) > 1:
         low, high = min(z["max_order"] for z in zones), max(z["max_order"] for z in zones)
