@@ -159,6 +159,9 @@ def test_service_captures_get_fresh_seeds_that_daq_capture_replays(tmp_path, env
         for _ in range(2):
             run_id = served.post("/api/capture", {"hits": 2, "auto": True}).json()["run_id"]
             wait_for(lambda: served.get("/api/capture").json()["state"] == "idle", 60, "the capture")
+            ended = served.get("/api/capture").json()
+            # A capture that ended early keeps its hits so far: say why, not a shape mismatch.
+            assert ended["last_outcome"] == "sealed", (ended["last_outcome"], ended["last_message"])
             runs.append(Store(served.store).open(run_id))
     first, second = (run.provenance["simulator"] for run in runs)
     assert (first["scenario"], first["time_scale"]) == (DEFAULT_SCENARIO.value, DEFAULT_TIME_SCALE)
