@@ -105,6 +105,11 @@ def serve(
     except _Shutdown:
         # A second signal while the service closed.
         sys.stderr.write("daq serve: stopped\n")
+    except Exception:
+        if not _NOTED:
+            raise
+        # ... or that second signal wrapped by a library the closing imported.
+        sys.stderr.write("daq serve: stopped\n")
     finally:
         for signum, handler in previous.items():  # as found: serve may run inside another program
             signal.signal(signum, handler)
@@ -267,6 +272,12 @@ def run_service(
         server.run(sockets=[sock])
     except _Shutdown:
         pass
+    except Exception:
+        # The shutdown raised inside a library's lazy import or start-up comes out as that
+        # library's error ("ImportError: initialization failed" from a C extension): it is
+        # still the signal, not a failure of the service.
+        if not _NOTED:
+            raise
     finally:
         # From here on the process ends, whatever hangs: a read stuck in a damaged run
         # file cannot be interrupted, and the interpreter would wait for it at exit.
@@ -323,6 +334,7 @@ def _note(signum: int, frame: object) -> None:
 
 
 def _raise_shutdown(signum: int, frame: object) -> None:
+    _NOTED.append(signum)  # so that the shutdown is known when a library wraps it
     raise _Shutdown
 
 
