@@ -163,7 +163,7 @@ def analyze_hits(
     pretrigger_s = float(np.median(starts)) / sample_rate_hz
     bias = pretrigger_bias(
         np.array([m.frequency_hz for m in result.modes]),
-        np.array([m.damping_ratio for m in result.modes]),
+        np.array([np.nan if m.damping_ratio is None else m.damping_ratio for m in result.modes], dtype=float),
         pretrigger_s,
         n / sample_rate_hz,
     )
