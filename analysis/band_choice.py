@@ -25,6 +25,7 @@ Avitabile). Every choice says why in ``reason``.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,7 +82,10 @@ def choose_band(
     coherence_ok = True
     if coherence is not None:
         c = np.asarray(coherence, dtype=float)
-        c = np.nanmean(np.atleast_2d(c), axis=0) if c.ndim == 2 else c
+        if c.ndim == 2:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # a line with no finite value: NaN, then 0
+                c = np.nanmean(c, axis=0)
         c = np.where(np.isfinite(c), c, 0.0)[lines]
         running = median_filter(c, size=width, mode="nearest")
         good = np.flatnonzero(running >= MIN_COHERENCE)

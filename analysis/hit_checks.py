@@ -49,6 +49,8 @@ CLIP_SAMPLES = 4
 OVERLOAD, DOUBLE_IMPACT, FORCE_ROLLOFF, TOO_WEAK = "overload", "double impact", "force roll-off", "too weak"
 #: The check of records from a file, which carry no analyzer overload flags.
 CLIPPED = "clipped"
+#: A file's force that is no hammer pulse (IMPULSE_CREST): noise, or random excitation.
+NO_IMPACT = "no impact"
 
 
 @dataclass(frozen=True)
@@ -229,8 +231,9 @@ IMPULSE_CREST = 7.0
 
 def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> list[HitCheck]:
     """The checks a hit read from a file can have without the analyzer's settings and
-    flags: double impact (for a force that is a pulse at all) and clipped; none for a
-    record holding a non-finite value (the store refuses those)."""
+    flags: double impact for a force that is a pulse (else "no impact", failed: noise or
+    random excitation, where modes read from the FRF may be the noise's) and clipped;
+    none for a record holding a non-finite value (the store refuses those)."""
     force = np.abs(np.asarray(force_n))
     if force.size == 0 or not (np.all(np.isfinite(force)) and np.all(np.isfinite(response))):
         return []
@@ -238,8 +241,11 @@ def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float
     # Scaled by the peak first: a file's values near 1e200 must not overflow the square.
     crest = 1.0 / float(np.sqrt(np.mean((force / peak) ** 2))) if peak > 0 else 0.0
     if crest < IMPULSE_CREST:
-        detail = f"not checked: the force is no single pulse (crest factor {crest:.1f})"
-        impact = HitCheck(DOUBLE_IMPACT, True, detail, None)
+        detail = (
+            f"the force is no hammer pulse: its peak is {crest:.1f} times its RMS, under "
+            f"{IMPULSE_CREST:g} (noise or random excitation)"
+        )
+        impact = HitCheck(NO_IMPACT, False, detail, crest)
     else:
         impact = double_impact(force_n, sample_rate_hz)
     return [impact, clipped(force_n, response)]

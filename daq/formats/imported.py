@@ -151,6 +151,16 @@ def make_hits(
     rejected = {
         k: (r.strip() or "rejected in the source file") for k, r in (rejected or {}).items() if k < n_hits
     }
+    # A force that is zero in every sample has no FRF: kept, as rejected, unless no hit
+    # has a force at all, which is no file of hits (a wrong column, a dead channel).
+    silent = [k for k in range(n_hits) if force[k].size and not np.any(force[k])]
+    if silent and len(silent) == n_hits:
+        raise FormatError(
+            f"{show_path(path)}: the force is zero in every sample of every hit: no hammer hit to "
+            "store (is the force column the right one?)"
+        )
+    for k in silent:
+        rejected.setdefault(k, "the force is zero in every sample")
     try:
         return Hits(
             force_n=force,

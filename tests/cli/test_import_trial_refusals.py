@@ -38,10 +38,13 @@ def table(path, rows, separator: str = "\t", header: str | None = None):
 
 
 def time_rows(n: int, rate_hz: float = 51200.0, extra: int = 0) -> np.ndarray:
-    """n samples: time, force, response and ``extra`` more columns (k, 2k, ...)."""
+    """n samples: time, force (a hammer pulse on noise), response and ``extra`` more
+    columns (k, 2k, ...)."""
     t = np.arange(n) / rate_hz
     rng = np.random.default_rng(n)
-    cols = [t, rng.normal(size=n), rng.normal(size=n)] + [np.full(n, 10.0 * (k + 1)) for k in range(extra)]
+    # One sample: a crest factor of 8 even in 64 samples (file_checks wants 7).
+    pulse = np.where(np.arange(n) == 5, 100.0, 0.0) + 0.01 * rng.normal(size=n)
+    cols = [t, pulse, rng.normal(size=n)] + [np.full(n, 10.0 * (k + 1)) for k in range(extra)]
     return np.column_stack(cols)
 
 

@@ -1,0 +1,59 @@
+"""Hits from a file whose force is no hammer hit: all zero is refused, one zero hit is kept
+as rejected, and noise is imported with a failed "no impact" check that analyze names."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from daq.store import Store
+from tests.cli_helpers import invoke_daq
+
+
+def _write(path, forces, responses, rate_hz=1024.0):
+    lines = ["hit,time,force,response"]
+    t = np.arange(forces.shape[1]) / rate_hz
+    for k, (f, r) in enumerate(zip(forces, responses, strict=True)):
+        lines += [
+            f"{k + 1},{a!r},{b!r},{c!r}" for a, b, c in zip(t.tolist(), f.tolist(), r.tolist(), strict=True)
+        ]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _pulse_hits(n_hits: int, seed: int):
+    from tests.analysis.impact_synth import impact_hits
+
+    return impact_hits([45.0, 120.0], [0.01, 0.01], [1.0, 0.5], 1024.0, 1.0, n_hits, 0.02, 0.003, seed)
+
+
+def test_a_force_of_zeros_in_every_hit_is_refused_and_nothing_stored(tmp_path):
+    _, response = _pulse_hits(2, 1)
+    _write(tmp_path / "zero.csv", np.zeros_like(response), response)
+    result = invoke_daq("import", str(tmp_path / "zero.csv"), "--store", str(tmp_path / "store"))
+    assert result.returncode != 0
+    (line,) = result.stderr.splitlines()
+    assert "the force is zero in every sample of every hit" in line
+    assert not (tmp_path / "store").exists() or Store(tmp_path / "store").list() == []
+
+
+def test_one_hit_of_zeros_is_kept_as_rejected(tmp_path):
+    force, response = _pulse_hits(3, 2)
+    force[1] = 0.0
+    _write(tmp_path / "one.csv", force, response)
+    assert invoke_daq("import", str(tmp_path / "one.csv"), "--store", str(tmp_path / "store")).returncode == 0
+    (run,) = [Store(tmp_path / "store").open(s.run_id) for s in Store(tmp_path / "store").list()]
+    assert list(run.hits.accepted) == [True, False, True]
+    assert run.hits.reject_reason[1] == "the force is zero in every sample"
+
+
+def test_noise_for_a_force_is_imported_with_a_failed_no_impact_check_that_analyze_names(tmp_path):
+    rng = np.random.default_rng(3)
+    force, response = rng.normal(size=(1, 2048)), rng.normal(size=(1, 2048))
+    _write(tmp_path / "noise.csv", force, response)
+    imported = invoke_daq("import", str(tmp_path / "noise.csv"), "--store", str(tmp_path / "store"))
+    assert imported.returncode == 0, imported.stderr
+    assert "failed the no impact check" in imported.stdout + imported.stderr
+    analysed = invoke_daq("analyze", "latest", "--json", "--store", str(tmp_path / "store"))
+    (info,) = json.loads(analysed.stdout)
+    assert any("no impact" in c for c in info["cautions"]), info["cautions"]
