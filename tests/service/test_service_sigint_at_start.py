@@ -110,3 +110,10 @@ def test_a_signal_a_library_wraps_while_the_service_starts_still_stops_it(tmp_pa
     assert result.stderr.endswith("daq serve: stopped\n"), result.stderr
     assert "internal error" not in result.stderr
     assert result.returncode == 0
+    # serve ran in this process: it must leave no timer that ends the process later.
+    import threading
+
+    timers = [t for t in threading.enumerate() if isinstance(t, threading.Timer)]
+    for timer in timers:
+        timer.join(timeout=2)  # a cancelled timer's thread ends at once
+    assert not [t for t in timers if t.is_alive()]

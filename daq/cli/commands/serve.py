@@ -281,9 +281,11 @@ def run_service(
     finally:
         # From here on the process ends, whatever hangs: a read stuck in a damaged run
         # file cannot be interrupted, and the interpreter would wait for it at exit.
-        _exit_after(STOP_DEADLINE_S)
+        watchdog = _exit_after(STOP_DEADLINE_S)
         service.close()
         sock.close()
+        # Stopped in time: a program that ran serve in its own process goes on without it.
+        watchdog.cancel()
     sys.stderr.write("daq serve: stopped\n")
     if service.reads.busy():
         sys.stderr.flush()
@@ -296,7 +298,9 @@ def run_service(
 STOP_DEADLINE_S = 30.0
 
 
-def _exit_after(seconds: float) -> None:
+def _exit_after(seconds: float):
+    """A started daemon timer that ends the process after ``seconds`` (cancel it once
+    stopped)."""
     import threading
 
     def watchdog() -> None:
@@ -307,6 +311,7 @@ def _exit_after(seconds: float) -> None:
     timer = threading.Timer(seconds, watchdog)
     timer.daemon = True
     timer.start()
+    return timer
 
 
 class _Shutdown(Exception):
