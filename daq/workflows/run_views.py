@@ -183,5 +183,5 @@ def pretrigger_text(summary: dict[str, Any]) -> str:
     return (
         f"hits cut at their impacts: {cut:.4g} s of pre-trigger left out{spread}{records}, because "
         "the response had not died away by the record's end and the modes read from the whole "
-        "records moved by more than their ± (docs/analysis.md)"
+        "records moved by more than 3 times their ± (docs/analysis.md)"
     )
