@@ -100,8 +100,17 @@ def _voltage_factor(text: str, quantity: str) -> float:
     rest = sensitivity.strip()[number.end() :].strip()
     volts, slash, physical = rest.partition("/")
     volts, physical = volts.strip(), physical.strip()
-    if not slash or volts not in _VOLTS or physical not in _PHYSICAL[quantity]:
+    if not slash or volts not in _VOLTS:
         raise FormatError(f"unknown {quantity} unit {_show(text)}: use {accepted_forms(quantity)}")
+    if physical not in _PHYSICAL[quantity]:
+        # A sensitivity per the other quantity's unit (a force in mV/g) is a likely slip.
+        other = next((q for q in QUANTITIES if q != quantity and physical in _PHYSICAL[q]), None)
+        kind = {"force": "a force", "response": "an acceleration"}
+        said = f"{physical!r} is {kind[other]} unit" if other else f"{physical!r} is not one of them"
+        raise FormatError(
+            f"{quantity} unit {_show(text)}: the sensitivity must be per a {quantity} unit "
+            f"({', '.join(_PHYSICAL[quantity])}); {said}"
+        )
     value = float(number.group(0))
     if not math.isfinite(value) or value <= 0:
         raise FormatError(f"{quantity} unit {_show(text)}: sensitivity must be positive and finite")

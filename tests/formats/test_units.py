@@ -86,3 +86,21 @@ def test_a_bare_voltage_asks_for_the_sensitivity_not_unknown(unit, quantity, sho
     assert "is a voltage" in str(info.value)
     assert shown in str(info.value)
     assert "unknown" not in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("unit", "quantity", "said"),
+    [
+        ("V@2.25mV/g", "force", "'g' is an acceleration unit"),
+        ("mV@10.2mV/N", "response", "'N' is a force unit"),
+        ("V@2mV/furlong", "force", "'furlong' is not one of them"),
+    ],
+)
+def test_a_sensitivity_per_the_wrong_quantity_says_which_unit_it_must_be_per(unit, quantity, said):
+    with pytest.raises(FormatError) as info:
+        parse_unit(unit, quantity)
+    message = str(info.value)
+    assert f"the sensitivity must be per a {quantity} unit" in message
+    assert said in message
+    assert "unknown" not in message
+    assert "\n" not in message
