@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from daq.formats.axis import fit_regular, printed_half_units
-from daq.formats.errors import FormatError
+from daq.formats.errors import FormatError, count
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
     MAX_IMPORT_HITS,
@@ -218,7 +218,9 @@ class Table:
                 return
         cells = self._split(line)
         if len(cells) != self.n_cols:
-            raise FormatError(f"{self.name} line {number}: {len(cells)} columns, expected {self.n_cols}")
+            raise FormatError(
+                f"{self.name} line {number}: {count(len(cells), 'column')}, expected {self.n_cols}"
+            )
         if self.keep_time_text and self.picked is None:
             self.complex_mode = self.columns is None and all(
                 self.find(n) is not None for n in COMPLEX_COLUMNS
@@ -311,7 +313,7 @@ class Table:
             rest = [i for i in range(self.n_cols) if i != hit]
             if len(rest) < 3:
                 raise FormatError(
-                    f"{self.name} has {len(rest)} data column(s); need time, force and response"
+                    f"{self.name} has {count(len(rest), 'data column')}; need time, force and response"
                 )
             named = [self.find(n) for n in ("time", "force", "response")]
             return (named if None not in named else rest[:3]), hit  # type: ignore[return-value]

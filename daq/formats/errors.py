@@ -20,3 +20,8 @@ class FormatError(Exception):
     def __init__(self, message: str) -> None:
         # Messages must stay on one line: the CLI prints them after "daq: error: ".
         super().__init__(" ".join(str(message).split()))
+
+
+def count(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless n is 1: "1 column", "3 columns"."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"

@@ -45,7 +45,7 @@ from typing import IO, Any
 import numpy as np
 
 from daq.formats.csv_text import COMMENT_MARKS, Table, choose_delimiter, header_name_unit, is_frequency_name
-from daq.formats.errors import FormatError
+from daq.formats.errors import FormatError, count
 from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
 from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
 from daq.store.model import FRF_FORMS
@@ -272,7 +272,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         kinds = ["freq"] + ["re", "im"] * ((table.n_cols - 1) // 2)
         if table.n_cols < 3 or (table.n_cols - 1) % 2:
             raise FormatError(
-                f"{name}: {table.n_cols} columns without a header; an FRF table needs frequency, "
+                f"{name}: {count(table.n_cols, 'column')} without a header; an FRF table needs frequency, "
                 "then Re, Im for each FRF (or a header naming the columns)"
             )
         labels_of = [""] * table.n_cols
@@ -292,7 +292,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     if layout.units is not None:
         if len(layout.unit_cells) > table.n_cols and any(layout.unit_cells[table.n_cols :]):
             raise FormatError(
-                f"{name} line {layout.units + 1}: {len(layout.unit_cells)} units for {table.n_cols} columns"
+                f"{name} line {layout.units + 1}: {count(len(layout.unit_cells), 'unit')} "
+                f"for {count(table.n_cols, 'column')}"
             )
         for col, cell in enumerate(layout.unit_cells[: table.n_cols]):
             if units[col] is None and cell.strip("[]()\"' "):

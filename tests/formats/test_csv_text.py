@@ -219,6 +219,7 @@ def test_hand_written_zoom_file(tmp_path):
     ("text", "kwargs", "expected"),
     [
         ("0,1,2\n1,2\n", {}, "line 2: 2 columns, expected 3"),
+        ("0,1,2\n1\n", {}, "line 2: 1 column, expected 3"),
         ("# c\n0,1,2\n1,2,x\n", {}, "line 3 column 3: 'x' is not a number"),
         ("0,1,2\n1,nan,3\n", {}, "line 2 column 2"),
         ("0,1,2\n1,2,inf\n", {}, "not finite"),
