@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.band_choice import BandChoice, choose_band, edge_text
+from analysis.measurement_text import with_uncertainty
 from analysis.modal_id import ModalResult, identify_modes
 from analysis.modal_id.lscf import lscf_poles
 from analysis.pretrigger import (
@@ -465,9 +466,10 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         )
     vague = [m for m in result.modes if np.isfinite(m.damping_u) and m.damping_u > m.damping_ratio]
     for m in vague:
+        value, u = with_uncertainty(100 * m.damping_ratio, 100 * m.damping_u)
         out.append(
             f"the damping of the mode at {m.frequency_hz:.6g} Hz is not fixed by the data: its ± "
-            f"({100 * m.damping_u:.2g} %) is larger than the value ({100 * m.damping_ratio:.2g} %); a finer "
+            f"({u} %) is larger than the value ({value} %); a finer "
             "frequency step, more hits or a --band around the mode may fix it"
         )
     line = float(np.median(np.diff(result.frequency_hz))) if result.frequency_hz.size > 1 else 0.0

@@ -10,6 +10,9 @@ from __future__ import annotations
 
 import math
 
+# Written as measurements are, the same way in the analysis' cautions and here.
+from analysis.measurement_text import with_uncertainty  # noqa: F401 (re-exported)
+
 #: From here up a number written out is longer than its exponent form helps anyone.
 PLAIN_BELOW = 1e15
 
@@ -36,17 +39,3 @@ def span(low: float, high: float, spec: str = ".6g", unit: str = "Hz") -> str:
     a, b = plain(low, spec), plain(high, spec)
     sep = " to " if "e" in a or "e" in b or b.startswith("-") else "-"
     return f"{a}{sep}{b} {unit}".rstrip()
-
-
-def with_uncertainty(value: float, u: float | None, spec: str = ".4f") -> tuple[str, str]:
-    """(value, u) as a measurement is written: u to two significant digits and the value
-    to the same decimal place (1073.2692 with u 2.5: "1073.3", "2.5"; 19.76852 with u
-    0.0017: "19.7685", "0.0017"; 30.0 with u 123: "30", "120"). Without a usable u (None,
-    not finite, not positive): the value as ``spec`` writes it, and "–"."""
-    if u is None or not math.isfinite(u) or u <= 0 or not math.isfinite(value):
-        return format(value, spec), "–"
-    decimals = 1 - math.floor(math.log10(u))
-    if decimals > 0:
-        return f"{value:.{decimals}f}", f"{u:.{decimals}f}"
-    step = 10.0 ** (-decimals)
-    return f"{round(value / step) * step:.0f}", f"{round(u / step) * step:.0f}"

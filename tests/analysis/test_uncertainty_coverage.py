@@ -107,3 +107,17 @@ def test_a_damping_whose_u_exceeds_it_is_said():
     mode.damping_u = 2 * mode.damping_ratio
     (said,) = [c for c in _cautions(result) if "is not fixed by the data" in c]
     assert said.startswith(f"the damping of the mode at {mode.frequency_hz:.6g} Hz is not fixed by the data")
+
+
+def test_that_caution_writes_the_damping_as_the_mode_line_does():
+    """Value to the decimal place of its u (two significant digits), as the mode line
+    writes it: 0.47 % with u 1.4 % is "0.5 %", not "0.47 %" beside a mode line's 0.5 %."""
+    from analysis.run_analysis import _cautions
+
+    uniform = WindowSpec("uniform")
+    force, response = impact_hits(FN, ZETA, AMP, 1024.0, 4.0, 5, 0.02, 2e-3, 100)
+    result = analyze_hits(force, response, 1024.0, np.ones(5, bool), uniform, uniform)
+    mode = result.modes[0]
+    mode.damping_ratio, mode.damping_u = 0.0047, 0.014
+    (said,) = [c for c in _cautions(result) if "is not fixed by the data" in c]
+    assert "its ± (1.4 %) is larger than the value (0.5 %)" in said
