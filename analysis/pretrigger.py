@@ -27,6 +27,8 @@ Pure numpy; time records (n_hits, n_samples) at baseband.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 #: The pulse starts where the force first rises above this fraction of its peak, going
@@ -87,14 +89,87 @@ def pretrigger_bias(
 
 
 def cut_at_impact(
-    force_n: np.ndarray, response: np.ndarray, starts: np.ndarray
+    force_n: np.ndarray, response: np.ndarray, starts: np.ndarray, n_keep: int | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Both (n_hits, n_samples) records cut to start at each hit's ``starts`` and to one
-    length (the shortest that remains); new arrays."""
+    length: ``n_keep`` samples (several runs cut to the same lines), else the shortest that
+    remains; new arrays."""
     force, resp = np.atleast_2d(force_n), np.atleast_2d(response)
-    n = force.shape[1] - int(np.max(starts))
+    n = force.shape[1] - int(np.max(starts)) if n_keep is None else int(n_keep)
+    if not 0 < n <= force.shape[1] - int(np.max(starts)):
+        raise ValueError(f"cannot keep {n} samples after the impacts of records of {force.shape[1]}")
     rows = np.asarray(starts, dtype=int)[:, np.newaxis] + np.arange(n)
     return np.take_along_axis(force, rows, axis=1), np.take_along_axis(resp, rows, axis=1)
+
+
+@dataclass
+class Screen:
+    """What the screen says of modes read from whole records: pretrigger_s, the median
+    pre-trigger (s); range_s (low, high) over the hits; kept_samples, the samples left
+    after the latest impact; suspects, the modes whose measure passed SCREEN_LIMIT;
+    too_short: a cut would keep less than MIN_KEPT_FRACTION of the record (caution_text
+    says so), so none is made."""
+
+    pretrigger_s: float
+    range_s: tuple[float, float]
+    kept_samples: int
+    suspects: list
+    too_short: bool
+
+    def caution_text(self, record_s: float) -> str:
+        low, high = self.range_s
+        spread = f"{low:.4g} s" if low == high else f"{low:.4g}-{high:.4g} s"
+        return (
+            f"the hits' pre-trigger ({spread} of {record_s:.4g} s records) may bias the damping of modes "
+            "that have not died away by the record's end, and cutting it would leave too little of the "
+            "record: record with a shorter pre-trigger (docs/analysis.md)"
+        )
+
+
+def screen(modes: list, starts: np.ndarray, n_samples: int, rate_hz: float) -> Screen | None:
+    """The screen of the module docstring over ``modes`` (objects with frequency_hz and
+    damping_ratio, None where unknown) read from records of ``n_samples`` at ``rate_hz``
+    whose pulses start at ``starts`` (any shape, samples): None when the pre-trigger is
+    shorter than MIN_PRETRIGGER_SAMPLES or no mode passes."""
+    starts = np.asarray(starts).ravel()
+    if not modes or starts.size == 0 or starts.max() < MIN_PRETRIGGER_SAMPLES:
+        return None
+    pretrigger_s = float(np.median(starts)) / rate_hz
+    zeta = np.array([np.nan if m.damping_ratio is None else m.damping_ratio for m in modes], dtype=float)
+    bias = pretrigger_bias(np.array([m.frequency_hz for m in modes]), zeta, pretrigger_s, n_samples / rate_hz)
+    if not bias.max() > SCREEN_LIMIT:
+        return None
+    kept = n_samples - int(starts.max())
+    return Screen(
+        pretrigger_s,
+        (float(starts.min()) / rate_hz, float(starts.max()) / rate_hz),
+        kept,
+        [m for m, b in zip(modes, bias, strict=True) if b > SCREEN_LIMIT],
+        kept < MIN_KEPT_FRACTION * n_samples,
+    )
+
+
+def moved(suspects: list, cut_modes: list, cut_frequency_hz: np.ndarray) -> bool:
+    """True when a mode of the cut records (``cut_modes``, with frequency_hz,
+    frequency_u_hz, damping_ratio, damping_u; read on the lines ``cut_frequency_hz``) lies
+    more than MOVED_BY_U of its standard uncertainties from one of the ``suspects`` (the
+    nearest within its half-power half-width, or a line), in frequency or damping: the
+    pre-trigger changed what the data say. Only suspects count: a cut moves the lines, and
+    with them any mode by up to a u or two (lvm-2ch, 2 hits: up to 1.75 u where nothing
+    can be biased), so the threshold stands above that too."""
+    line = float(np.median(np.diff(cut_frequency_hz))) if np.size(cut_frequency_hz) > 1 else 0.0
+    for m in cut_modes:
+        near = [w for w in suspects if abs(w.frequency_hz - m.frequency_hz) <= max(
+            (m.damping_ratio or 0.0) * m.frequency_hz, line)]  # fmt: skip
+        if not near:
+            continue
+        w = min(near, key=lambda w: abs(w.frequency_hz - m.frequency_hz))
+        if m.frequency_u_hz and abs(w.frequency_hz - m.frequency_hz) > MOVED_BY_U * m.frequency_u_hz:
+            return True
+        both = m.damping_ratio is not None and w.damping_ratio is not None
+        if both and m.damping_u and abs(w.damping_ratio - m.damping_ratio) > MOVED_BY_U * m.damping_u:
+            return True
+    return False
 
 
 #: The first half of the pre-trigger must hold at least this many samples to read each

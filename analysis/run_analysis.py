@@ -17,16 +17,7 @@ from analysis.band_choice import BandChoice, choose_band, edge_text
 from analysis.measurement_text import with_uncertainty
 from analysis.modal_id import ModalResult, identify_modes
 from analysis.modal_id.lscf import lscf_poles
-from analysis.pretrigger import (
-    MIN_KEPT_FRACTION,
-    MIN_PRETRIGGER_SAMPLES,
-    MOVED_BY_U,
-    SCREEN_LIMIT,
-    cut_at_impact,
-    impact_starts,
-    pretrigger_bias,
-    single_hit_noise,
-)
+from analysis.pretrigger import cut_at_impact, impact_starts, moved, screen, single_hit_noise
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
 from analysis.windows import WindowSpec, added_decay_rate, correct_pole, window
 
@@ -143,7 +134,7 @@ def analyze_hits(
 
     Records without windows whose pre-trigger may bias a mode that has not died away by
     the record's end (analysis.pretrigger) are analysed again, cut to start at the
-    impact; where a mode moved by more than MOVED_BY_U of its u, that result is returned
+    impact; where a mode moved by more than MOVED_BY_U (analysis.pretrigger) of its u, that result is returned
     and ``pretrigger_cut_s`` says so.
     """
     options = options or AnalysisOptions()
@@ -158,66 +149,24 @@ def analyze_hits(
         return result
     force, response = np.atleast_2d(force_n)[accepted], np.atleast_2d(response_m_s2)[accepted]
     starts = impact_starts(force)
-    if starts.max() < MIN_PRETRIGGER_SAMPLES:
-        return result
     n = force.shape[1]
-    pretrigger_s = float(np.median(starts)) / sample_rate_hz
-    bias = pretrigger_bias(
-        np.array([m.frequency_hz for m in result.modes]),
-        np.array([np.nan if m.damping_ratio is None else m.damping_ratio for m in result.modes], dtype=float),
-        pretrigger_s,
-        n / sample_rate_hz,
-    )
-    if not bias.max() > SCREEN_LIMIT:
+    found = screen(result.modes, starts, n, sample_rate_hz)
+    if found is None:
         return result
-    kept = n - int(starts.max())
-    if kept < MIN_KEPT_FRACTION * n:
-        result.cautions.append(
-            f"the hits' pre-trigger ({_seconds(starts.min(), starts.max(), sample_rate_hz)} of "
-            f"{n / sample_rate_hz:.4g} s records) may bias the damping of modes that have not died "
-            "away by the record's end, and cutting it would leave too little of the record: "
-            "record with a shorter pre-trigger (docs/analysis.md)"
-        )
+    if found.too_short:
+        result.cautions.append(found.caution_text(n / sample_rate_hz))
         return result
     force, response = cut_at_impact(force, response, starts)
     cut = _analyze_records(
         force, response, sample_rate_hz, np.ones(force.shape[0], dtype=bool), force_window, response_window,
         center_hz, options,
     )  # fmt: skip
-    suspects = [m for m, b in zip(result.modes, bias, strict=True) if b > SCREEN_LIMIT]
-    if not _moved(suspects, cut):
+    if not moved(found.suspects, cut.modes, cut.frequency_hz):
         return result
-    cut.pretrigger_cut_s = pretrigger_s
-    cut.pretrigger_range_s = (float(starts.min()) / sample_rate_hz, float(starts.max()) / sample_rate_hz)
-    cut.record_after_cut_s = kept / sample_rate_hz
+    cut.pretrigger_cut_s = found.pretrigger_s
+    cut.pretrigger_range_s = found.range_s
+    cut.record_after_cut_s = found.kept_samples / sample_rate_hz
     return cut
-
-
-def _seconds(low: int, high: int, rate_hz: float) -> str:
-    """A span of samples said in seconds: "0.2 s", or "0.05-0.2 s" when they differ."""
-    a, b = low / rate_hz, high / rate_hz
-    return f"{a:.4g} s" if low == high else f"{a:.4g}-{b:.4g} s"
-
-
-def _moved(suspects: list[ModeEstimate], cut: RunAnalysis) -> bool:
-    """True when a mode of ``cut`` lies more than MOVED_BY_U of its standard uncertainties
-    from one of the ``suspects`` (the modes of the whole records whose measure passed the
-    screen; the nearest within its half-power half-width, or a line), in frequency or
-    damping: the pre-trigger changed what the data say. Only suspects count: a cut moves
-    the lines, and with them any mode by up to a u or two (lvm-2ch, 2 hits: up to 1.75 u
-    where nothing can be biased), so the threshold stands above that too."""
-    line = float(np.median(np.diff(cut.frequency_hz))) if cut.frequency_hz.size > 1 else 0.0
-    for m in cut.modes:
-        near = [w for w in suspects if abs(w.frequency_hz - m.frequency_hz) <= max(
-            m.damping_ratio * m.frequency_hz, line)]  # fmt: skip
-        if not near:
-            continue
-        w = min(near, key=lambda w: abs(w.frequency_hz - m.frequency_hz))
-        if m.frequency_u_hz and abs(w.frequency_hz - m.frequency_hz) > MOVED_BY_U * m.frequency_u_hz:
-            return True
-        if m.damping_u and abs(w.damping_ratio - m.damping_ratio) > MOVED_BY_U * m.damping_u:
-            return True
-    return False
 
 
 def _analyze_records(

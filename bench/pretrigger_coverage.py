@@ -27,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import numpy as np
 
+import analysis.pretrigger as pretrigger
 import analysis.run_analysis as run_analysis
 from analysis.windows import WindowSpec
 from tests.analysis.impact_synth import impact_hits
@@ -46,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--whole", action="store_true", help="switch the cut off")
     args = parser.parse_args(argv)
     if args.whole:
-        run_analysis.SCREEN_LIMIT = float("inf")
+        pretrigger.SCREEN_LIMIT = float("inf")
     uniform = WindowSpec("uniform")
     z_f, z_zeta, n_cut = [], [], 0
     for seed in range(args.seeds):

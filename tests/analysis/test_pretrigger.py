@@ -74,7 +74,7 @@ def test_a_long_pretrigger_no_longer_biases_the_damping(seed):
 def test_the_whole_records_were_biased(monkeypatch):
     """The test above can fail: the same hits analysed whole (the cut switched off) miss
     the 45 Hz mode's damping by many u."""
-    monkeypatch.setattr("analysis.run_analysis.SCREEN_LIMIT", np.inf)
+    monkeypatch.setattr("analysis.pretrigger.SCREEN_LIMIT", np.inf)
     force, response = _hits(0.2, 0.5, 1)
     whole = analyze_hits(force, response, 1024.0, np.ones(3, bool), UNIFORM, UNIFORM)
     assert whole.pretrigger_cut_s == 0.0
