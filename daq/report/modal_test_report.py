@@ -121,6 +121,8 @@ class ModalTestReport:
     damping_matrix_std: np.ndarray | None = None
     fit_notes: list[str] = field(default_factory=list)
     cautions: list[str] = field(default_factory=list)
+    #: How the points' records were analysed, where not whole (hits cut at their impacts).
+    records_note: str = ""
     #: (n_modes,) the exact beam mode (0-based, -1: none) each measured mode is paired
     #: with (Table 2 of a test: nearest in frequency); None: the mode of the same number.
     paired_exact_mode: np.ndarray | None = None
@@ -407,6 +409,8 @@ def render_page(r: ModalTestReport, figures: dict[str, bytes]) -> str:
         ("fixed point", r.fixed_point), ("points", len(r.point_names)), ("FRFs", len(r.frf_labels)),
         ("shape scaling", r.shape_scaling),
     ]  # fmt: skip
+    if r.records_note:
+        info.append(("records", r.records_note))
     parts = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>Modal test {_e(r.test_name)}</title><style>{STYLE}"

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from analysis.pretrigger import cut_at_impact, impact_starts
 from analysis.spectra import convert_form, frf_estimate, linear_spectra, per_hit_frf
 from analysis.windows import added_decay_rate
 from daq.store import Run
@@ -26,7 +27,10 @@ class PointFrf:
     coherence (n_lines,) or None; per_hit (n_hits, n_lines) complex or None (FRF-only
     runs); added_decay_1_s: the exponential window's decay in the poles, 1/s;
     source: "hits", "measured_frf" or "analyzer"; force_autospectrum (n_lines,) the
-    averaged force autospectrum, N^2 s^2 (hits only: the band choice reads it)."""
+    averaged force autospectrum, N^2 s^2 (hits only: the band choice reads it);
+    impact_starts (n_hits,) the sample each accepted hit's pulse starts at, for hits
+    without windows at baseband (analysis.pretrigger; else None), in records of n_samples
+    at sample_rate_hz, as measured (before any cut)."""
 
     frequency_hz: np.ndarray
     frf: np.ndarray
@@ -35,21 +39,33 @@ class PointFrf:
     added_decay_1_s: float
     source: str
     force_autospectrum: np.ndarray | None = None
+    impact_starts: np.ndarray | None = None
+    n_samples: int = 0
+    sample_rate_hz: float = 0.0
 
     @property
     def n_hits(self) -> int:
         return 0 if self.per_hit is None else int(self.per_hit.shape[0])
 
 
-def point_frf(run: Run) -> PointFrf:
+def point_frf(run: Run, n_keep: int | None = None) -> PointFrf:
     """The H1 FRF over the run's accepted hits, else the first FRF the run holds.
-    Raises ValueError (one line) when the run has neither."""
+    n_keep: hits without windows are cut at their impacts to this many samples first
+    (analysis.pretrigger.cut_at_impact; a multi-point test cuts every point to one length,
+    so that they keep one frequency axis). Raises ValueError (one line) when the run has
+    neither hits nor an FRF."""
     if run.hits is not None and run.hits.accepted.any():
         force_window, response_window, _ = window_specs(run)
         accepted = run.hits.accepted
+        force, response = run.hits.force_n[accepted], run.hits.response_m_s2[accepted]
+        unwindowed = force_window.kind == response_window.kind == "uniform"
+        starts = None
+        if unwindowed and run.hits.center_hz == 0 and np.isrealobj(force):
+            starts = impact_starts(force)
+            if n_keep is not None:
+                force, response = cut_at_impact(force, response, starts, n_keep)
         spectra = linear_spectra(
-            run.hits.force_n[accepted], run.hits.response_m_s2[accepted], run.hits.sample_rate_hz,
-            force_window, response_window, run.hits.center_hz,
+            force, response, run.hits.sample_rate_hz, force_window, response_window, run.hits.center_hz,
         )  # fmt: skip
         estimate = frf_estimate(spectra)
         decay = added_decay_rate(response_window) - added_decay_rate(force_window)
@@ -59,7 +75,8 @@ def point_frf(run: Run) -> PointFrf:
         gain = float(np.exp(decay * max(0.0, -float(run.hits.start_s))))
         return PointFrf(
             estimate.frequency_hz, gain * estimate.h1, estimate.coherence, gain * per_hit_frf(spectra),
-            float(decay), "hits", estimate.g_ff,
+            float(decay), "hits", estimate.g_ff, starts, int(run.hits.force_n.shape[1]),
+            float(run.hits.sample_rate_hz),
         )  # fmt: skip
     frfs = run.measured_frfs if run.measured_frfs is not None else run.analyzer
     if frfs is None:

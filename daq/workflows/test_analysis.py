@@ -21,6 +21,7 @@ from analysis.band_choice import choose_band
 from analysis.beam_shapes import exact_shapes
 from analysis.mac import align, auto_mac
 from analysis.modal_id.shapes import ModeShapes, mode_shapes
+from analysis.pretrigger import Screen, moved, screen
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, set_aside
 from analysis.table2 import ModalTestTable2, modal_test_table2
 from daq.store import ModalTest, Point, Store, StoreError
@@ -67,8 +68,9 @@ class TestData:
     cautions: list[str] = field(default_factory=list)
 
 
-def gather(store_dir: Path, name: str) -> TestData:
-    """Every measured point of test ``name``: its counted run's FRF. WorkflowError when
+def gather(store_dir: Path, name: str, n_keep: int | None = None) -> TestData:
+    """Every measured point of test ``name``: its counted run's FRF (hits without windows
+    cut at their impacts to ``n_keep`` samples when given: point_frf). WorkflowError when
     no point is measured or the points do not share one frequency axis."""
     test = open_test(store_dir, name)
     store = Store(store_dir)
@@ -82,7 +84,7 @@ def gather(store_dir: Path, name: str) -> TestData:
             continue
         try:
             run = store.open(run_id)
-            measured = point_frf(run)
+            measured = point_frf(run, n_keep)
         except (StoreError, ValueError, OSError) as exc:
             raise WorkflowError(f"test {name}, point {point.name}: run {run_id}: {exc}") from None
         forms[point.name] = _stored_form(run)
@@ -184,25 +186,31 @@ class TestAnalysis:
 
 
 def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = None) -> TestAnalysis:
-    """Analyse every measured point of test ``name`` together. WorkflowError (one line)."""
+    """Analyse every measured point of test ``name`` together. WorkflowError (one line).
+
+    Points measured as hits without windows, whose pre-trigger may bias a mode that has
+    not died away by the record's end, are analysed again cut at their impacts, all to
+    one length, as one run's hits are (analysis.run_analysis.analyze_hits): that result is
+    kept where a mode moved by more than MOVED_BY_U of its u (analysis.pretrigger)."""
     options = options or AnalysisOptions()
     data = gather(store_dir, name)
-    band = None
-    forces = [p.force_autospectrum for p in data.point_frfs]
-    try:
-        if options.band_hz is None and all(g is not None for g in forces):
-            # Where every hit put energy and the coherence is usable, as for one run: the
-            # points' force spectra (their median) instead of the FRFs alone.
-            band = choose_band(data.frequency_hz, np.median(np.stack(forces), axis=0), data.coherence)
-            options = replace(options, band_hz=(band.low_hz, band.high_hz))
-        result = analyze_frfs(
-            data.frequency_hz, data.frf, data.coherence, "hits", options, data.added_decay_1_s
-        )
-    except ValueError as exc:
-        raise WorkflowError(f"test {name}: {exc}") from None
+    result, band = _analyze_points(data, name, options)
+    pre_cautions: list[str] = []
+    found = _pretrigger_screen(data, result)
+    if found is not None and found.too_short:
+        first = data.point_frfs[0]
+        pre_cautions.append(found.caution_text(first.n_samples / first.sample_rate_hz))
+    elif found is not None:
+        cut_data = gather(store_dir, name, n_keep=found.kept_samples)
+        cut_result, cut_band = _analyze_points(cut_data, name, options)
+        if moved(found.suspects, cut_result.modes, cut_result.frequency_hz):
+            data, result, band = cut_data, cut_result, cut_band
+            result.pretrigger_cut_s = found.pretrigger_s
+            result.pretrigger_range_s = found.range_s
+            result.record_after_cut_s = found.kept_samples / data.point_frfs[0].sample_rate_hz
     if band is not None:
         result.band = band
-    cautions = list(data.cautions) + list(result.cautions)
+    cautions = list(data.cautions) + pre_cautions + list(result.cautions)
     if not result.modes:
         aside = ",".join(f"{f:.6g}" for f, _ in set_aside(result))
         raise WorkflowError(
@@ -284,6 +292,37 @@ def analyze_test(store_dir: Path, name: str, options: AnalysisOptions | None = N
     return TestAnalysis(data, result, shapes, table, exact_at, auto, cautions)
 
 
+def _analyze_points(data: TestData, name: str, options: AnalysisOptions) -> tuple[RunAnalysis, Any]:
+    """The points' FRFs analysed together, and the band chosen from their hits (or None)."""
+    band = None
+    forces = [p.force_autospectrum for p in data.point_frfs]
+    try:
+        if options.band_hz is None and all(g is not None for g in forces):
+            # Where every hit put energy and the coherence is usable, as for one run: the
+            # points' force spectra (their median) instead of the FRFs alone.
+            band = choose_band(data.frequency_hz, np.median(np.stack(forces), axis=0), data.coherence)
+            options = replace(options, band_hz=(band.low_hz, band.high_hz))
+        result = analyze_frfs(
+            data.frequency_hz, data.frf, data.coherence, "hits", options, data.added_decay_1_s
+        )
+    except ValueError as exc:
+        raise WorkflowError(f"test {name}: {exc}") from None
+    return result, band
+
+
+def _pretrigger_screen(data: TestData, result: RunAnalysis) -> Screen | None:
+    """The pre-trigger screen (analysis.pretrigger.screen) over the modes read from every
+    point's whole records, when every point is hits without windows of one length and
+    rate; else None."""
+    points = data.point_frfs
+    if not result.modes or any(p.impact_starts is None for p in points):
+        return None
+    if len({(p.n_samples, p.sample_rate_hz) for p in points}) != 1:
+        return None
+    starts = np.concatenate([p.impact_starts for p in points])
+    return screen(result.modes, starts, points[0].n_samples, points[0].sample_rate_hz)
+
+
 def _poles_seen(result: RunAnalysis) -> np.ndarray:
     """The poles of the reported modes as the FRFs show them (window decay included),
     rad/s: the identification's pole nearest each reported mode."""
@@ -336,6 +375,9 @@ def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
         "band_hz": [result.band.low_hz, result.band.high_hz],
         "band_reason": result.band.reason,
         "n_lines": int(data.frequency_hz.size),
+        "pretrigger_cut_s": result.pretrigger_cut_s,
+        "pretrigger_range_s": list(result.pretrigger_range_s),
+        "record_after_cut_s": result.record_after_cut_s,
         "synthesis_error": _finite(result.modal.synthesis_error),
         "set_aside": [{"frequency_hz": f, "damping_ratio": _finite(z)} for f, z in set_aside(result)],
         "shape_scaling": _scaling_text(shapes.scaling, data),

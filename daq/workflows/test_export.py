@@ -21,6 +21,7 @@ from daq.formats.uff_multipoint import Dof, ModeShapes, MultiPointExchange, Node
 from daq.report.modal_test_report import ModalTestReport
 from daq.workflows.article import article_beam, article_nodes
 from daq.workflows.errors import WorkflowError
+from daq.workflows.run_views import pretrigger_text
 from daq.workflows.test_analysis import EXACT_MODES, TestAnalysis, aligned_shapes, pairs
 from daq.workflows.test_fit import TestFit
 
@@ -182,4 +183,11 @@ def report_inputs(analysis: TestAnalysis, fit: TestFit | None = None) -> ModalTe
         cautions=list(analysis.cautions) + ([] if fit is None else list(fit.cautions)),
         paired_exact_mode=np.array([-1 if j is None else j for j in exact_pairs]),
         set_aside_hz=np.array([f for f, _ in set_aside(result)]),
+        records_note=pretrigger_text(
+            {
+                "pretrigger_cut_s": result.pretrigger_cut_s,
+                "pretrigger_range_s": result.pretrigger_range_s,
+                "record_after_cut_s": result.record_after_cut_s,
+            }
+        ),
     )

@@ -262,7 +262,12 @@ def print_test_analysis(info: dict[str, Any]) -> None:
         f"point{'s' * (n_points != 1)}"
         + ("" if error is None else f", synthesis error {plain(100 * error, '.3g')} %")
     )
-    typer.echo(f"  band {span(*info['band_hz'])}: {for_a_test(info['band_reason'])}")
+    typer.echo(f"  band {span(*info['band_hz'], '.4g')}: {for_a_test(info['band_reason'])}")
+    from daq.workflows.run_views import pretrigger_text
+
+    cut = pretrigger_text(info)
+    if cut:
+        typer.echo("  " + cut.replace("hits cut", "every point's hits cut", 1))
     for caution in info["cautions"]:
         typer.echo(f"caution: {caution}")
     typer.echo(f"  shapes: {info['shape_scaling']}; ± standard uncertainty, {info['shape_uncertainty_from']}")
