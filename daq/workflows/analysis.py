@@ -183,11 +183,17 @@ def _averaged_against_checks(run: Run) -> str | None:
         else (f"{len(against)} hits in the average failed their checks")
     )
     leave_out = (
-        "mark them in the file (a line '# rejected hit K: reason', K counted from 0) and import it again"
+        f"mark {'it' if len(against) == 1 else 'them'} in the file (a line '# rejected hit K: reason', "
+        "K counted from 0) and import it again"
         if run.kind == "imported"
         else "take the test again without them"
     )
-    return f"{count}, {said}: their FRFs are wrong and pull the modes and damping; {leave_out}"
+    wrong = (
+        "its FRF is wrong and pulls the modes and damping"
+        if len(against) == 1
+        else "their FRFs are wrong and pull the modes and damping"
+    )
+    return f"{count}, {said}: {wrong}; {leave_out}"
 
 
 def cache_key(path: Path, options: AnalysisOptions) -> str:
