@@ -441,6 +441,8 @@ class Table:
         ignored = [i for i in range(self.n_cols) if i not in picked and i != hit_col]
         if ignored:
             notes["notes"] = [self._ignored_note(ignored, picked, complex_mode)]
+        if said := self._marker_notes(len(groups), None if ids is None else [int(ids[g[0]]) for g in groups]):
+            notes.setdefault("notes", []).extend(said)
         details = {
             "columns": names,
             "hit_column": header[hit_col] if hit_col is not None else None,
@@ -475,6 +477,36 @@ class Table:
             f"{text}; give --columns to choose (header names or 0-based indices), e.g. --columns "
             + ",".join(example)
         )
+
+    def _marker_notes(self, n_hits: int, labels: list[int] | None) -> list[str]:
+        """One line per '# rejected hit K' whose meaning a reader could mistake: K counts
+        the file's hits from 0 in file order (as our exports write it, where the hit
+        column counts so too), never by the file's own hit column. labels: that column's
+        value for each of the n_hits hits in file order, or None without one. Told when K
+        names no hit (it rejects nothing) and when the hit it rejects is labelled otherwise
+        than K (a hit column counting from 1: '# rejected hit 3' leaves out the hit labelled 4)."""
+        out = []
+        for k in sorted(self.rejected):
+            if k < n_hits and (labels is None or labels[k] == k):
+                continue
+            marker = f"'# rejected hit {k}'"
+            other = labels.index(k) if labels is not None and k in labels else None
+            if labels is not None and k < n_hits:
+                text = (
+                    f"{marker} rejected the file's {_ordinal(k + 1)} hit, labelled {labels[k]} in its hit "
+                    "column: the marker counts hits from 0 in file order, not by the hit column"
+                )
+                if other is not None and other not in self.rejected:
+                    text += f"; the hit labelled {k} is kept (its marker would be '# rejected hit {other}')"
+            else:
+                text = (
+                    f"{marker} names no hit and rejects nothing: the marker counts the file's "
+                    f"{count(n_hits, 'hit')} from 0 in file order (0-{n_hits - 1})"
+                )
+                if other is not None:
+                    text += f"; the hit labelled {k} in the hit column is '# rejected hit {other}'"
+            out.append(text)
+        return out
 
     def _time_said(self) -> str:
         """What the time column is called in a message: "time" under a header; without one,
@@ -684,6 +716,12 @@ def _refuse_complex(name: str, number: int, cells: list[str]) -> None:
             f"{name} line {number}: cells look like complex numbers (a+bj), e.g. {_show(cell)}; "
             "write the real and imaginary parts as two columns"
         )
+
+
+def _ordinal(n: int) -> str:
+    """1st, 2nd, 3rd, 4th, 11th, 12th, 13th, 21st, ..."""
+    suffix = "th" if 10 <= n % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
+    return f"{n}{suffix}"
 
 
 def _show(text: str) -> str:

@@ -29,8 +29,9 @@ from daq.workflows.outcome import RunOutcome, failure_reason
 RESULT_NAME = "analysis"
 #: Bumped when the analysis changes what it computes from the same run and options
 #: (3: both LSCF normalisations, the spurious test's second way in, input cautions;
-#: 4: records without windows cut at the impact where their pre-trigger biases a pole).
-ANALYSIS_VERSION = 4
+#: 4: records without windows cut at the impact where their pre-trigger biases a pole;
+#: 5: close modes' poles refined on the FRF, analysis.modal_id.refine).
+ANALYSIS_VERSION = 5
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
@@ -182,18 +183,36 @@ def _averaged_against_checks(run: Run) -> str | None:
         if len(against) == 1
         else (f"{len(against)} hits in the average failed their checks")
     )
-    leave_out = (
-        f"mark {'it' if len(against) == 1 else 'them'} in the file (a line '# rejected hit K: reason', "
-        "K counted from 0) and import it again"
-        if run.kind == "imported"
-        else "take the test again without them"
-    )
+    leave_out = _leave_out(run, against, [", ".join(failed_check_names(checks[i])) for i in against])
     wrong = (
         "its FRF is wrong and pulls the modes and damping"
         if len(against) == 1
         else "their FRFs are wrong and pull the modes and damping"
     )
     return f"{count}, {said}: {wrong}; {leave_out}"
+
+
+def _leave_out(run: Run, against: list[int], reasons: list[str]) -> str:
+    """How to leave the hits ``against`` (0-based) out of the average: for an imported run,
+    the exact '# rejected hit K: reason' lines to add, K the hit's position in the file
+    counted from 0 (daq/formats/csv_text.py reads them so, whatever a hit column labels the
+    hits), to the CSV file itself or to the run exported as CSV; for a capture, a new test."""
+    one = len(against) == 1
+    if run.kind != "imported":
+        return f"take the test again without {'it' if one else 'them'}"
+    lines = [f"'# rejected hit {i}: {reason}'" for i, reason in zip(against, reasons, strict=True)]
+    shown = lines[0] if one else ", ".join(lines[:-1]) + " and " + lines[-1]
+    add = f"add the line{'' if one else 's'} {shown}"
+    imported = run.provenance.get("imported_from", {})
+    if isinstance(imported, dict) and imported.get("format") == "csv":
+        return (
+            f"to leave {'it' if one else 'them'} out, {add} to the file and import it again "
+            "(the line counts the file's hits from 0 in file order, whatever its hit column says)"
+        )
+    return (
+        f"to leave {'it' if one else 'them'} out, export the run as CSV (daq export {run.run_id} "
+        f"--format csv), {add} to that file and import it"
+    )
 
 
 def cache_key(path: Path, options: AnalysisOptions) -> str:

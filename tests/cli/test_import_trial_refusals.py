@@ -500,7 +500,10 @@ def test_a_double_impact_and_a_clipped_hit_from_a_file_are_noted_and_cautioned(t
     (caution,) = [c for c in info["cautions"] if "failed their checks" in c]
     assert caution.startswith("2 hits in the average failed their checks, hit 2: double impact (")
     assert "; hit 3: clipped (" in caution
-    assert caution.endswith("(a line '# rejected hit K: reason', K counted from 0) and import it again")
+    assert (
+        "to leave them out, add the lines '# rejected hit 1: double impact' and '# rejected hit 2: clipped' "
+        "to the file and import it again" in caution
+    )
 
 
 def test_hits_from_a_file_show_no_invented_time(tmp_path):
