@@ -36,6 +36,7 @@ from daq.formats.errors import FormatError, count
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
     MAX_IMPORT_HITS,
+    SAME_AXIS_REMEDY,
     ImportedData,
     atomic_temp,
     commit_temp,
@@ -598,9 +599,13 @@ class Table:
             if k:
                 drift = abs(fit.step - steps[0]) * (t.size - 1)
                 if abs(fit.start - starts[0]) > tolerance or drift > tolerance:
+                    if abs(fit.start - starts[0]) > tolerance:
+                        how = f"it starts at {fit.start:.6g} s, {hit(0)} at {starts[0]:.6g} s"
+                    else:
+                        how = f"its step is {fit.step:.6g} s, {hit(0)}'s {steps[0]:.6g} s"
                     raise FormatError(
                         f"{self.name}: {hit(k)} (line {lines[rows[0]]}) has a different time axis "
-                        f"from {hit(0)}"
+                        f"from {hit(0)} ({how}); {SAME_AXIS_REMEDY}"
                     )
             else:
                 first_t = t

@@ -31,6 +31,12 @@ MAX_IMPORT_BYTES = 512 * 2**20
 #: per-hit objects of a run (verdicts, stamps, checks) stay small. A legal 30 MB CSV of
 #: 10^6 two-sample hits once took 4.3 GB to import.
 MAX_IMPORT_HITS = 10_000
+#: What to do about hits whose time axes differ (the CSV and UFF readers): a run's hits
+#: share one axis, so that their spectra average line by line.
+SAME_AXIS_REMEDY = (
+    "the hits of one run must share one time axis (the same start and step): put every hit on one "
+    "(e.g. each from the same pre-trigger) or import them separately"
+)
 #: Frequency lines above 0 Hz that any analysis needs: `daq analyze` refuses a band of
 #: fewer (analysis/run_analysis.py, even with --max-order 2, whose LSCF needs 6): an
 #: import holding fewer can never be analysed (short_of_lines says so).

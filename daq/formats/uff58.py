@@ -35,6 +35,7 @@ from daq.formats.axis import fit_regular
 from daq.formats.errors import FormatError
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
+    SAME_AXIS_REMEDY,
     ImportedData,
     check_regular_file,
     make_frfs,
@@ -235,8 +236,13 @@ def _hits(path: Path, name: str, records: list[_Record], stamp: str, details: di
             )
         s0, d0 = _time_axis(name, rec)
         if abs(s0 - start) > AXIS_TOLERANCE * step or abs(d0 - step) > AXIS_TOLERANCE * step:
+            if abs(s0 - start) > AXIS_TOLERANCE * step:
+                how = f"it starts at {s0:.6g} s, #{first.index} at {start:.6g} s"
+            else:
+                how = f"its step is {d0:.6g} s, #{first.index}'s {step:.6g} s"
             raise FormatError(
-                f"{name}: time record #{rec.index} has a different time axis from #{first.index}"
+                f"{name}: time record #{rec.index} has a different time axis from #{first.index} ({how}); "
+                f"{SAME_AXIS_REMEDY}"
             )
     rate, start = _exact_axis(first, start, step, details)
     center = 0.0
