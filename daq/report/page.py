@@ -431,15 +431,20 @@ def hit_quality_section(run: Any, figures: Any) -> Section | None:
     ))  # fmt: skip
     if rest:
         section.blocks.append(Para(
-            f"Drawn: hits {_numbers_text(numbers)} (the first {QUALITY_HITS} and every hit accepted against "
-            f"a failed check, as far as their records resolve the span); not drawn: hits "
-            f"{_numbers_text(rest)}, listed in the Hits table.",
+            f"Drawn: {_hits_text(numbers)} (the first {QUALITY_HITS} and every hit accepted against "
+            f"a failed check, as far as their records resolve the span); not drawn: "
+            f"{_hits_text(rest)}, listed in the Hits table.",
             "note",
         ))  # fmt: skip
     for k in numbers:
         verdict, _ = hit_verdict(run, k - 1)
         section.blocks.append(Fig(f"hit_quality_{k}", f"hit {k}: {verdict}"))
     return section
+
+
+def _hits_text(numbers: list[int]) -> str:
+    """ "hit 4", "hits 1-3, 5": the word in the number the list holds."""
+    return f"hit{'s' * (len(numbers) != 1)} {_numbers_text(numbers)}"
 
 
 def _numbers_text(numbers: list[int]) -> str:
@@ -527,7 +532,8 @@ def sections(
     source = {"hits": f"{hits_text}, {s.get('estimator')}"}.get(s["source"], s["source"])
     windows = s.get("windows", {}).get("from", "")
     band = s.get("band")
-    band_text = f" Band {span(band['low_hz'], band['high_hz'])}: {band['reason']}." if band else ""
+    # Four digits, as `daq analyze` prints them: the edges are lines (0.999997 Hz).
+    band_text = f" Band {span(band['low_hz'], band['high_hz'], '.4g')}: {band['reason']}." if band else ""
     u_from = sorted({m.get("uncertainty_from") for m in s["modes"]} - {None})
     decay = s.get("added_decay_1_s") or 0.0
     removed = (
