@@ -357,7 +357,7 @@ class Table:
         """(unit, SI factor, where from: "option", "header" or "default") of a data column."""
         header_unit = self.units[col] if self.header is not None else None
         if option is not None:
-            said = f"option (the header says {header_unit})" if header_unit else "option"
+            said = f"option; the header says {header_unit}" if header_unit else "option"
             return option, parse_unit(option, quantity), said
         if header_unit is None:
             return DEFAULT_UNITS[quantity], 1.0, "default"

@@ -427,7 +427,7 @@ def _form(
         raise FormatError(f"{name}: the FRF columns have different units ({shown})")
     where = "units row" if parsed and parsed[0][0] in row_units else "header"
     if option is not None:
-        said = f"option (the {where} says {frf_unit_text(parsed[0][0])})" if parsed else "option"
+        said = f"option; the {where} says {frf_unit_text(parsed[0][0])}" if parsed else "option"
         same = [factor for _, form, factor in parsed if form == option]
         return option, same[0] if same else 1.0, said
     if parsed:

@@ -98,7 +98,7 @@ def test_frf_form_option_wins_over_the_units_row(tmp_path):
     path.write_bytes(signalcalc())
     got = read_frf_text(path, frf_form="mobility")
     assert got.measured_frfs.form == "mobility"
-    assert got.details["form_from"] == "option (the units row says (m/s^2)/N)"
+    assert got.details["form_from"] == "option; the units row says (m/s^2)/N"
 
 
 def test_a_utf8_export_with_lf_and_magnitude_phase_reads_too(tmp_path):

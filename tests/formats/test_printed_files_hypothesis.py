@@ -217,7 +217,7 @@ def test_units_in_the_header_are_applied_and_an_option_wins(force, response, tim
     assert got.hits.sample_rate_hz == pytest.approx(1 / (0.5 * time[1]))
     assert got.details["units_from"] == {
         "force": "header",
-        "response": f"option (the header says {response[0].replace('²', '^2')})" if option else "header",
+        "response": f"option; the header says {response[0].replace('²', '^2')}" if option else "header",
     }
 
 
