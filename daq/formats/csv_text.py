@@ -113,6 +113,24 @@ def read_csv(
     return table.build(path, columns, force_unit, response_unit, mtime_utc(info))
 
 
+def join_units(cells: list[str]) -> list[str]:
+    """The cells of a header split at whitespace, each unit in brackets joined to the name
+    before it: ["Time", "(s)", "acc", "[m", "/", "s^2]"] -> ["Time (s)", "acc [m / s^2]"].
+    Split at its spaces, the header of a whitespace table ("Time (s) Force (N)") would
+    count a column per unit, and a one-column "Time (s)" two."""
+    out: list[str] = []
+    closing = ""
+    for cell in cells:
+        if closing or (out and cell[:1] in "(["):
+            closing = closing or (")" if cell[0] == "(" else "]")
+            out[-1] += " " + cell
+            if cell.endswith(closing):
+                closing = ""
+            continue
+        out.append(cell)
+    return out
+
+
 def header_name_unit(cell: str) -> tuple[str, str | None]:
     """("Force", "N") for "Force [N]" or "Force (N)"; (cell, None) without a unit."""
     match = _HEADER_UNIT.fullmatch(cell)
@@ -212,6 +230,9 @@ class Table:
             self.n_cols = len(cells)
             _refuse_complex(self.name, number, cells)  # else a row of them reads as a header
             if not all(self._is_number(cell) for cell in cells):
+                if self.delimiter is None:  # "Time (s) Force [N]": a unit is no column of its own
+                    cells = join_units(cells)
+                    self.n_cols = len(cells)
                 self.header = [cell.strip().strip('"').strip("'") for cell in cells]
                 pairs = [header_name_unit(cell) for cell in self.header]
                 self.names = [n for n, _ in pairs]
