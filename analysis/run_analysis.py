@@ -17,6 +17,7 @@ from analysis.band_choice import BandChoice, choose_band, edge_text
 from analysis.measurement_text import with_uncertainty
 from analysis.modal_id import ModalResult, identify_modes
 from analysis.modal_id.lscf import lscf_poles
+from analysis.modal_id.refine import refine_poles
 from analysis.pretrigger import cut_at_impact, impact_starts, moved, screen, single_hit_noise
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
 from analysis.windows import WindowSpec, added_decay_rate, correct_pole, window
@@ -76,6 +77,7 @@ class ModeEstimate:
         identified one by one (NaN with fewer than 2 hits matched): the spread of ONE hit.
     n_hits_matched : hits in which this mode was found again.
     quality : from the stability diagram (orders stable, scatter, synthesis share).
+    pole : the pole as fitted, rad/s, window decay still in it (analysis.modal_id).
     """
 
     frequency_hz: float
@@ -89,6 +91,7 @@ class ModeEstimate:
     damping_std: float = float("nan")
     n_hits_matched: int = 0
     quality: dict = field(default_factory=dict)
+    pole: complex = complex("nan")
 
 
 @dataclass
@@ -332,10 +335,12 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band, noise=
                     "damping_scatter_rel": float(mode.quality.damping_scatter_rel),
                     "synthesis_share": float(mode.quality.synthesis_share),
                     "accepted": bool(mode.quality.accepted),
+                    "refined": bool(mode.quality.refined),
                     "frequency_spread_top_hz": float(mode.quality.frequency_spread_top_hz),
                     "damping_spread_top": float(mode.quality.damping_spread_top),
                     "normalisation": mode.normalisation,
                 },
+                pole=complex(mode.pole),
             )
         )
     if options.frequencies_hz is not None:
@@ -589,6 +594,7 @@ def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions
     """
     keep = np.isin(result.frequency_hz, result.modal.frequency_hz)
     found = np.array([_estimates(result, h[keep], decay) for h in hit_frfs])  # (n_hits, n_modes, 2)
+    _refine_per_hit(result, hit_frfs[:, keep], decay, found)
     for k, mode in enumerate(result.modes):
         ok = np.isfinite(found[:, k, 0]) & np.isfinite(found[:, k, 1])
         mode.n_hits_matched = int(ok.sum())
@@ -602,6 +608,34 @@ def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions
             mode.uncertainty_from = f"{n} hits"
     if any(m.uncertainty_from == "" for m in result.modes):
         _bootstrap(result, decay, only_missing=True)
+
+
+def _refine_per_hit(result: RunAnalysis, hit_frfs: np.ndarray, decay: float, found: np.ndarray) -> None:
+    """Each hit's (frequency, damping) of each mode in ``found`` (n_hits, n_modes, 2),
+    where LSCF found it in that hit, replaced by the pole refined on that hit's FRF
+    (n_hits, n_lines used) from the averaged FRF's refined poles, as the averaged
+    result's were (analysis.modal_id.refine): the spread over hits is then the spread of
+    the estimator that gave the value, not of LSCF's, whose noise bias differs."""
+    for k, frf in enumerate(hit_frfs):
+        finite = np.isfinite(frf)
+        _refined_estimates(result, frf[finite], result.modal.frequency_hz[finite], decay, found[k])
+
+
+def _refined_estimates(result: RunAnalysis, frf, frequency_hz, decay: float, found, noise=None) -> None:
+    """``found`` (n_modes, 2), the (frequency, damping) of each mode in ``frf`` (n_lines,)
+    or (n_frf, n_lines) on ``frequency_hz``: for each mode refined in the result where
+    LSCF found it in ``frf``, replaced by its pole refined on ``frf`` from the result's
+    (noise: refine_poles' noise_std, the bootstrap's weights)."""
+    refine = np.array([bool(m.quality.get("refined")) for m in result.modes], dtype=bool)
+    poles = np.array([m.pole for m in result.modes], dtype=complex)
+    if not refine.any() or not np.all(np.isfinite(poles)) or frequency_hz.size < 2:
+        return
+    line = float(np.median(np.diff(frequency_hz)))
+    new, done = refine_poles(frequency_hz, frf, poles, line, noise, refine=refine)
+    w_n = np.abs(new)
+    f_true, z_true = correct_pole(w_n / (2 * np.pi), -new.real / w_n, decay)
+    use = done & np.isfinite(found[:, 0])
+    found[use, 0], found[use, 1] = f_true[use], z_true[use]
 
 
 #: How far apart the pole's two uncertainties may be before the smaller is raised
@@ -643,10 +677,14 @@ def _bootstrap(result: RunAnalysis, decay: float, only_missing: bool = False) ->
     frf = result.frf[:, keep]
     n_lines = frf.shape[1]
     found = []
+    lines = result.modal.frequency_hz
     for _ in range(BOOTSTRAP_REPLICATES):
         weights = rng.poisson(1.0, n_lines).astype(float)
         # All FRFs in one fit, as the run's poles were found: one solve per zone.
-        found.append(_estimates(result, frf, decay, weights))
+        estimates = _estimates(result, frf, decay, weights)
+        with np.errstate(divide="ignore"):
+            _refined_estimates(result, frf, lines, decay, estimates, noise=1.0 / np.sqrt(weights))
+        found.append(estimates)
     found = np.array(found)  # (B, n_modes, 2)
     for k, mode in enumerate(result.modes):
         if only_missing and mode.uncertainty_from:

@@ -12,6 +12,7 @@ import numpy as np
 
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.lsfd import FORMS, lsfd
+from analysis.modal_id.refine import refine_poles, to_refine
 from analysis.modal_id.stability import (
     Cluster,
     cluster_poles,
@@ -29,7 +30,8 @@ class ModeQuality:
     term (both poles of the pair) over the sum of the energies of all terms of the
     synthesis (modes and residuals), over the FRFs and lines used; accepted: False for
     a cluster picked for a frequency of interest that failed a selection rule (too few
-    stable orders, ...); *_spread_top: standard deviation of the cluster's frequency
+    stable orders, ...); refined: the pole was refined on the FRF (analysis.modal_id.refine),
+    not LSCF's; *_spread_top: standard deviation of the cluster's frequency
     (Hz) and damping over its poles in the top TOP_ORDERS orders of its zone (the
     models a result is read from; the lowest orders of a chain are still immature), with,
     for a mode read with the second normalisation (NORMALISATIONS), the standard deviation
@@ -40,6 +42,7 @@ class ModeQuality:
     damping_scatter_rel: float
     synthesis_share: float
     accepted: bool = True
+    refined: bool = False
     frequency_spread_top_hz: float = float("nan")
     damping_spread_top: float = float("nan")
 
@@ -190,6 +193,7 @@ def identify_modes(
     max_damping: float = 0.3,
     zones: list[Zone] | None = None,
     noise_std: np.ndarray | None = None,
+    refine: bool = True,
 ) -> ModalResult:
     """Find the modes of FRFs without being told how many.
 
@@ -204,7 +208,9 @@ def identify_modes(
     the noise of ``frf`` at each line, in its units (from the scatter over hits), which
     names the possible modes left out (spurious_check); default: read from the FRF's
     second differences, right only where the noise is uncorrelated between lines.
-    Raises ValueError on bad inputs.
+    refine: the selected poles refined by nonlinear least squares on the FRF, weighted by
+    noise_std where given (analysis.modal_id.refine); a mode's frequency and damping are
+    its refined pole's. Raises ValueError on bad inputs.
     """
     f, h, band, use = _check_inputs(frequency_hz, frf, band, max_order, form)
     fu, hu = f[use], h[:, use]
@@ -252,8 +258,13 @@ def identify_modes(
                 )
         chosen = [c for c, k in zip(chosen, keep, strict=True) if k]
         poles = poles[keep]
-        if not keep.all():
-            est = lsfd(fu, hu, poles, form)
+    refined = np.zeros(poles.size, dtype=bool)
+    if poles.size and refine:
+        # Close modes' LSCF poles carry a bias from the noise in H (analysis.modal_id.refine).
+        poles, refined = refine_poles(fu, hu, poles, line_hz, refine=to_refine(poles))
+    if poles.size:
+        est = lsfd(fu, hu, poles, form)
+    f_modes, zeta_modes = frequency_damping(poles) if poles.size else (np.empty(0), np.empty(0))
     energy_modes = np.sum(np.abs(est.mode_terms) ** 2, axis=(1, 2))
     total = energy_modes.sum() + np.sum(np.abs(est.residual_terms) ** 2)
     modes = []
@@ -265,12 +276,12 @@ def identify_modes(
             damping_scatter_rel=cl.damping_scatter_rel,
             synthesis_share=float(energy_modes[r] / total) if total > 0 else 0.0,
             accepted=bool(cl.accepted),
+            refined=bool(refined[r]),
             **_top_spread(fits[owner[c][0]], cl, fits[owner[c][0] % len(zones)]),
         )
         normalisation = fits[owner[c][0]].normalisation
-        modes.append(
-            Mode(cl.frequency_hz, cl.damping_ratio, poles[r], est.modal_constants[r], quality, normalisation)
-        )
+        f_r, zeta_r = float(f_modes[r]), float(zeta_modes[r])
+        modes.append(Mode(f_r, zeta_r, poles[r], est.modal_constants[r], quality, normalisation))
     diagram = _diagram(fits, owner, chosen)
     orders_text = ", ".join(f"{z.low_hz:g}-{z.high_hz:g} Hz order {z.max_order}" for z in zones)
     return ModalResult(

@@ -110,7 +110,7 @@ def classify_order(
     allowed = damping_tolerance(fp[cols], zp[cols], damping_tol, line_hz)
     # Overlapping modes trade damping between them from one order to the next: where the
     # partner has a neighbour within OVERLAP half-power bandwidths, the tolerance widens.
-    allowed = allowed * np.where(_overlapped(fp, zp)[cols], OVERLAP_WIDENING, 1.0)
+    allowed = allowed * np.where(overlapped(fp, zp)[cols], OVERLAP_WIDENING, 1.0)
     with np.errstate(all="ignore"):
         damp_ok = np.abs(z[rows] - zp[cols]) <= allowed
         # The residue's size follows the damping: it may change by as much.
@@ -135,7 +135,7 @@ OVERLAP = 3.0
 OVERLAP_WIDENING = 2.0
 
 
-def _overlapped(frequency_hz: np.ndarray, damping_ratio: np.ndarray) -> np.ndarray:
+def overlapped(frequency_hz: np.ndarray, damping_ratio: np.ndarray) -> np.ndarray:
     """(n,) bool: the pole has another of the same order within OVERLAP summed half-widths."""
     f, z = np.asarray(frequency_hz, dtype=float), np.abs(np.asarray(damping_ratio, dtype=float))
     if f.size < 2:

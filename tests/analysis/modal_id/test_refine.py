@@ -1,0 +1,96 @@
+"""Close modes' poles refined on the FRF (analysis/modal_id/refine.py): LSCF's noise bias
+gone, with honest uncertainties, on simulated impact tests with known truth."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import analysis.modal_id.refine as refine
+from analysis.modal_id.refine import refine_poles, to_refine
+from analysis.run_analysis import analyze_hits
+from analysis.windows import WindowSpec
+from tests.analysis.impact_synth import impact_hits
+
+UNIFORM = WindowSpec("uniform")
+#: Two modes 2 Hz apart (half-power half-widths 0.75 and 1.2 Hz) and one alone.
+FN, ZETA, AMP = np.array([150.0, 152.0, 400.0]), np.array([0.005, 0.008, 0.01]), np.array([1.0, 0.8, 1.0])
+RATE_HZ = 2048.0
+
+
+def _pair(result):
+    return [min(result.modes, key=lambda m: abs(m.frequency_hz - f)) for f in FN[:2]]
+
+
+def _analyse(seed: int):
+    force, response = impact_hits(FN, ZETA, AMP, RATE_HZ, 1.0, 5, 0.02, 1.5e-3, seed)
+    return analyze_hits(force, response, RATE_HZ, np.ones(5, bool), UNIFORM, UNIFORM)
+
+
+def _pole(f_hz: float, zeta: float) -> complex:
+    w = 2 * np.pi * f_hz
+    return complex(-zeta * w, w * np.sqrt(1 - zeta**2))
+
+
+def test_only_close_light_modes_are_refined():
+    poles = np.array(
+        [
+            _pole(f, z)
+            for f, z in zip([150, 152, 400, 1000, 1010], [0.005, 0.008, 0.01, 0.03, 0.03], strict=True)
+        ]
+    )
+    assert list(to_refine(poles)) == [True, True, False, False, False]
+
+
+def test_poles_are_found_exactly_on_an_frf_without_noise():
+    f = np.arange(100.0, 200.0, 0.25)
+    jw = 2j * np.pi * f
+    true = np.array([_pole(150.0, 0.005), _pole(152.0, 0.008)])
+    residues = np.array([1.0 + 0.2j, -0.6 + 0.1j]) * 1e3
+    h = sum(a / (jw - p) + np.conj(a) / (jw - np.conj(p)) for a, p in zip(residues, true, strict=True))
+    start = true * np.array([1.0004 + 0.0j, 0.9996 + 0.0j]) + np.array([-0.15, 0.2])
+    found, done = refine_poles(f, h, start, 0.25)
+    assert done.all()
+    np.testing.assert_allclose(found, true, rtol=1e-7)
+
+
+def test_a_pole_that_would_wander_off_is_left_where_lscf_put_it():
+    """A pole with nothing under it (noise only) may not move beyond its half-width."""
+    rng = np.random.default_rng(1)
+    f = np.arange(100.0, 200.0, 0.25)
+    h = rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)
+    start = np.array([_pole(150.0, 0.005), _pole(152.0, 0.008)])
+    found, done = refine_poles(f, h, start, 0.25)
+    for p, q, d in zip(found, start, done, strict=True):
+        assert (p == q) or d
+        assert abs(abs(p) - abs(q)) / (2 * np.pi) <= max(abs(q.real) / (2 * np.pi), 0.25) + 1e-9
+
+
+@pytest.mark.slow
+def test_close_modes_read_their_damping_without_lscfs_noise_bias_and_within_their_u():
+    """12 draws of 5 hits, response noise 2 % of its RMS: LSCF alone reads the pair's
+    damping 48 % high on average (0 of 24 within 1 u); refined, within 12 % and the truth
+    within 2 u of each value at least 90 % of the time."""
+    rel, z_f, z_zeta = [], [], []
+    for seed in range(12):
+        for mode, f, zeta in zip(_pair(_analyse(seed)), FN, ZETA, strict=False):
+            assert mode.quality["refined"]
+            rel.append(mode.damping_ratio / zeta - 1)
+            z_f.append((mode.frequency_hz - f) / mode.frequency_u_hz)
+            z_zeta.append((mode.damping_ratio - zeta) / mode.damping_u)
+    assert abs(np.mean(rel)) < 0.03
+    assert np.max(np.abs(rel)) < 0.15
+    assert np.mean(np.abs(z_f) <= 2) >= 0.9
+    assert np.mean(np.abs(z_zeta) <= 2) >= 0.9
+
+
+def test_lscf_alone_was_biased(monkeypatch):
+    """The test above can fail: with refinement off the same draws read the 150 Hz mode's
+    damping over 20 % high."""
+    monkeypatch.setattr(refine, "MAX_DAMPING", 0.0)
+    rel = []
+    for seed in range(3):
+        mode = _pair(_analyse(seed))[0]
+        assert not mode.quality["refined"]
+        rel.append(mode.damping_ratio / ZETA[0] - 1)
+    assert min(rel) > 0.2, rel
