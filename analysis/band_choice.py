@@ -94,17 +94,25 @@ def choose_band(
             why.append(f"the coherence never reaches {MIN_COHERENCE:g}: every line is used")
         else:
             c_low, c_high = int(lines[good[0]]), int(lines[good[-1]])
-            if c_low > low:
+            if c_low <= low and c_high >= high:
+                # Checked, and limiting neither edge: said, not passed over as if absent.
+                usable = f"{MIN_COHERENCE:g} or more from the lowest line up to the top"
+                why.append(f"the coherence ({usable}) limits neither edge")
+            said_low = c_low > low
+            if said_low:
                 low = c_low
                 why.append(f"the coherence reaches {MIN_COHERENCE:g} from {edge_text(f[low])} Hz")
             if c_high < high:
                 high = c_high
-                why.append(f"it stays usable up to {edge_text(f[high])} Hz")
+                what = "it" if said_low else "the coherence"
+                why.append(f"{what} stays usable up to {edge_text(f[high])} Hz")
     if high - low + 1 < MIN_LINES:
         suggested = f"{edge_text(f[low])}-{edge_text(f[high])} Hz"
         return BandChoice(float(f[first]), float(f[last]),
                           f"every line above 0 Hz: the band the data suggest ({suggested}) "
                           f"holds fewer than {MIN_LINES} lines", coherence_ok)  # fmt: skip
+    if force_autospectrum is None and coherence is not None and high == last:
+        why.append("there is no force spectrum to limit the top")
     if not why:
         why.append("nothing in the run limits it (no force spectrum, no coherence)")
     return BandChoice(float(f[low]), float(f[high]), "; ".join(why), coherence_ok)
