@@ -386,7 +386,7 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
     asked = options.frequencies_hz is not None
     out = []
     band = result.band
-    span = f"{band.low_hz:.6g}-{band.high_hz:.6g} Hz" if band else "the band"
+    span = f"{edge_text(band.low_hz)}-{edge_text(band.high_hz)} Hz" if band else "the band"
     aside = set_aside(result)
     if not result.modes and not asked:
         out.append(
@@ -422,7 +422,7 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
     for m in vague:
         value, u = with_uncertainty(100 * m.damping_ratio, 100 * m.damping_u)
         out.append(
-            f"the damping of the mode at {m.frequency_hz:.6g} Hz is not fixed by the data: its ± "
+            f"the damping of the mode at {_at(m)} Hz is not fixed by the data: its ± "
             f"({u} %) is larger than the value ({value} %); a finer "
             "frequency step, more hits or a --band around the mode may fix it"
         )
@@ -431,30 +431,38 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         m for m in result.modes if line > 0 and 2 * m.damping_ratio * m.frequency_hz < NARROW_LINES * line
     ]
     if narrow:
-        listed = ", ".join(f"{m.frequency_hz:.6g}" for m in narrow)
+        listed = ", ".join(_at(m) for m in narrow)
         widest = max(2 * m.damping_ratio * m.frequency_hz for m in narrow)
         out.append(
-            f"the damping of the mode{'s' * (len(narrow) > 1)} at {listed} Hz is read from a peak "
-            f"narrower than {NARROW_LINES:g} of a line (half-power band {widest:.2g} Hz at most, lines "
-            f"{line:.3g} Hz): with noise it may read high by more than its ±, the same in every hit; record "
-            "longer for finer lines"
+            f"the mode{'s' * (len(narrow) > 1)} at {listed} Hz {'are' if len(narrow) > 1 else 'is'} read "
+            f"from a peak narrower than {NARROW_LINES:g} of a line (half-power band {widest:.2g} Hz at "
+            f"most, lines {line:.3g} Hz): with noise the damping may read high and the frequency off by "
+            "more than their ±, the same in every hit; record longer for finer lines"
         )
     if band is not None:
         margin = EDGE_FRACTION * (band.high_hz - band.low_hz)
         for m in result.modes:
             if m.frequency_hz < band.low_hz + margin or m.frequency_hz > band.high_hz - margin:
                 out.append(
-                    f"the mode at {m.frequency_hz:.6g} Hz lies at an edge of the band {span}: it may stand "
+                    f"the mode at {_at(m)} Hz lies at an edge of the band {span}: it may stand "
                     "for modes outside; widen the band to check it"
                 )
     return out
 
 
-#: A mode whose half-power band 2 zeta f is narrower than this share of a line has its
-#: damping read from the skirt of a peak the lines do not resolve: a new user's files with
-#: noise read a 0.2 % mode 4.7 u high at 0.17 of a line (1.1 Hz lines), 5.5 u at 0.08, and
-#: within 1.5 u at 0.38; noise-free, exactly.
-NARROW_LINES = 0.25
+def _at(mode: ModeEstimate) -> str:
+    """A mode's frequency in a caution as its own line writes it (to the decimal place of
+    its u: analysis.measurement_text), so that the two can be matched by eye."""
+    return with_uncertainty(mode.frequency_hz, mode.frequency_u_hz, ".6g")[0]
+
+
+#: A mode whose half-power band 2 zeta f is narrower than this share of a line is read
+#: from the skirt of a peak the lines do not resolve: a new user's files with noise read a
+#: 0.2 % mode's damping 4.7 u high at 0.17 of a line (1.1 Hz lines), 5.5 u at 0.08, and
+#: within 1.5 u at 0.38; noise-free, exactly. A second user's files read the frequency off
+#: too: 42 Hz at 0.1 % (0.08 of a line) 5-7 u, and 155 Hz at 0.08 % (0.25 of a line) 3-6.6
+#: u, where the damping read at the threshold kept the caution away; 0.4 leaves margin.
+NARROW_LINES = 0.4
 
 
 #: Hits too few for their spread to give a trustworthy ±, and how often ±2 u held the

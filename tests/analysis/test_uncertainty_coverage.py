@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from analysis.measurement_text import with_uncertainty
 from analysis.run_analysis import analyze_frfs, analyze_hits
 from analysis.windows import WindowSpec
 from tests.analysis.impact_synth import impact_hits
@@ -106,7 +107,8 @@ def test_a_damping_whose_u_exceeds_it_is_said():
     mode = result.modes[0]
     mode.damping_u = 2 * mode.damping_ratio
     (said,) = [c for c in _cautions(result) if "is not fixed by the data" in c]
-    assert said.startswith(f"the damping of the mode at {mode.frequency_hz:.6g} Hz is not fixed by the data")
+    at = with_uncertainty(mode.frequency_hz, mode.frequency_u_hz)[0]
+    assert said.startswith(f"the damping of the mode at {at} Hz is not fixed by the data")
 
 
 def test_that_caution_writes_the_damping_as_the_mode_line_does():
