@@ -51,6 +51,9 @@ OVERLOAD, DOUBLE_IMPACT, FORCE_ROLLOFF, TOO_WEAK = "overload", "double impact", 
 CLIPPED = "clipped"
 #: A file's force that is no hammer pulse (IMPULSE_CREST): noise, or random excitation.
 NO_IMPACT = "no impact"
+#: A file whose response column looks like the hammer pulse and force column like a
+#: decaying response (channels_swapped): the columns were read the wrong way round.
+SWAPPED = "swapped columns"
 
 
 @dataclass(frozen=True)
@@ -229,11 +232,77 @@ def clipped(force_n: np.ndarray, response: np.ndarray, min_samples: int = CLIP_S
 IMPULSE_CREST = 7.0
 
 
+#: swapped columns: the span around a channel's peak, each side, as a share of the record
+#: (16 samples of 1,024, 80 of 5,120: 15.6 ms at 5,120 Hz, 31 ms at 512 Hz), at least
+#: SWAP_MIN_HALF samples; records shorter than SWAP_MIN_SAMPLES are not judged (the span
+#: would be much of the record).
+SWAP_SPAN_FRACTION = 1 / 64
+SWAP_MIN_HALF = 2
+SWAP_MIN_SAMPLES = 128
+#: swapped columns: the response column holds at least SWAP_PULSE_SHARE of its energy in
+#: that span (a hammer pulse does) and the force column at most SWAP_DECAY_SHARE of its
+#: (a response ringing on does). Why these figures (measured with this span):
+#: - a response is the force convolved with the structure's impulse response, so in a
+#:   file read the right way round it is never much more concentrated than the force:
+#:   the force holds 0.93-1.00 of its energy in the span in every correctly ordered file
+#:   we hold (the synthetic trial files, tests/analysis/impact_synth.py, the simulator's
+#:   captures on every analyzer and scenario, the measured pyfrf-impact and lvm-2ch
+#:   sets), and 0.6 is well below that: a double tap far from the first (outside the span)
+#:   at 60 % of its peak still leaves 0.74;
+#: - responses reach 0.95 in the span (the seed scenario's heavy damping) and 0.77 in
+#:   the synthetic close modes, so the response's share alone tells nothing: only with
+#:   the force's low share does it mean a swap; a real hammer pulse holds 0.93-1.00, and
+#:   0.85 keeps a noisy one;
+#: - a swapped file of a lightly damped beam gives 1.00 and 0.47 (the trial's swapped.csv);
+#:   one of a heavily damped structure (its response holding 0.9 in the span) is not told
+#:   from a right one, and is let through rather than a right one flagged.
+SWAP_PULSE_SHARE = 0.85
+SWAP_DECAY_SHARE = 0.6
+
+
+def _peak_share(record: np.ndarray, half: int) -> float:
+    """The share of ``record``'s energy (real or complex) within ``half`` samples of its
+    largest magnitude; NaN for a record of no energy."""
+    magnitude = np.abs(np.asarray(record))
+    peak = float(magnitude.max()) if magnitude.size else 0.0
+    if not peak > 0:
+        return float("nan")
+    energy = (magnitude / peak) ** 2  # scaled first: values near 1e200 must not overflow
+    i = int(np.argmax(magnitude))
+    return float(energy[max(0, i - half) : i + half + 1].sum() / energy.sum())
+
+
+def channels_swapped(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> HitCheck:
+    """Failed when the response column looks like the hammer pulse (SWAP_PULSE_SHARE or
+    more of its energy near its peak) and the force column like a decaying response
+    (SWAP_DECAY_SHARE or less of its): the file's columns were read the wrong way round
+    (a --columns matter). value: the response's share less the force's."""
+    n = int(np.asarray(force_n).size)
+    if n < SWAP_MIN_SAMPLES:
+        return HitCheck(SWAPPED, True, f"not judged: {n} samples are too few", None)
+    half = max(SWAP_MIN_HALF, round(SWAP_SPAN_FRACTION * n))
+    f_share, r_share = _peak_share(force_n, half), _peak_share(response, half)
+    if not (math.isfinite(f_share) and math.isfinite(r_share)):
+        return HitCheck(SWAPPED, True, "not judged: a channel is zero throughout", None)
+    span = f"{1e3 * half / sample_rate_hz:.3g} ms" if sample_rate_hz > 0 else f"{half} samples"
+    if r_share >= SWAP_PULSE_SHARE and f_share <= SWAP_DECAY_SHARE:
+        detail = (
+            f"{r_share:.0%} of the response's energy lies within {span} of its peak, as a hammer "
+            f"pulse's does, and {f_share:.0%} of the force's, as a decaying response's"
+        )
+        return HitCheck(SWAPPED, False, detail, r_share - f_share)
+    detail = (
+        f"within {span} of their peaks: {f_share:.0%} of the force's energy, {r_share:.0%} of the response's"
+    )
+    return HitCheck(SWAPPED, True, detail, r_share - f_share)
+
+
 def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> list[HitCheck]:
     """The checks a hit read from a file can have without the analyzer's settings and
     flags: double impact for a force that is a pulse (else "no impact", failed: noise or
-    random excitation, where modes read from the FRF may be the noise's) and clipped;
-    none for a record holding a non-finite value (the store refuses those)."""
+    random excitation, where modes read from the FRF may be the noise's), clipped, and
+    swapped columns (the response a pulse, the force a decaying response); none for a
+    record holding a non-finite value (the store refuses those)."""
     force = np.abs(np.asarray(force_n))
     if force.size == 0 or not (np.all(np.isfinite(force)) and np.all(np.isfinite(response))):
         return []
@@ -248,7 +317,7 @@ def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float
         impact = HitCheck(NO_IMPACT, False, detail, crest)
     else:
         impact = double_impact(force_n, sample_rate_hz)
-    return [impact, clipped(force_n, response)]
+    return [impact, clipped(force_n, response), channels_swapped(force_n, response, sample_rate_hz)]
 
 
 def run_checks(

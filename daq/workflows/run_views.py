@@ -4,6 +4,7 @@ that the page and the terminal can never disagree about a run."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +46,39 @@ def accepted_against_checks(run) -> list[int]:
     if hits is None:
         return []
     return [i for i in range(int(hits.n_hits)) if hits.accepted[i] and failed_check_names(hits.checks[i])]
+
+
+_PLAIN_COLUMN = re.compile(r"[A-Za-z0-9_.+-]+")
+
+
+def swapped_columns(run) -> tuple[list[int], str] | None:
+    """(the 0-based indices of the hits whose response looks like the hammer pulse and
+    force like a decaying response, analysis/hit_checks.py channels_swapped; one line
+    saying so, with the --columns that reads the file the other way round for a CSV file)
+    or None when no hit looks swapped. The same for all hits as a rule: one line for the
+    file, not one per hit."""
+    from analysis.hit_checks import SWAPPED
+
+    hits = run.hits
+    if hits is None:
+        return None
+    bad = [i for i, checks in enumerate(hits.checks) if (checks.get(SWAPPED) or {}).get("passed") is False]
+    if not bad:
+        return None
+    n = int(hits.n_hits)
+    which = (
+        "every hit" if len(bad) == n else f"hit{'s' * (len(bad) > 1)} {', '.join(str(i + 1) for i in bad)}"
+    )
+    first = hits.checks[bad[0]][SWAPPED].get("detail", "")
+    text = f"the force and response columns look swapped in {which} (hit {bad[0] + 1}: {first})"
+    imported = (run.provenance or {}).get("imported_from")
+    columns = imported.get("columns") if isinstance(imported, dict) else None
+    from_csv = isinstance(imported, dict) and imported.get("format") == "csv" and not imported.get("zoom")
+    if from_csv and isinstance(columns, list) and len(columns) == 3:
+        given = ",".join((columns[0], columns[2], columns[1]))
+        shown = given if all(_PLAIN_COLUMN.fullmatch(c) for c in columns) else f"'{given}'"
+        return bad, f"{text}; if so, import the file again with --columns {shown}"
+    return bad, f"{text}; if so, swap the force and response records of the file and import it again"
 
 
 def _number(value: Any, unit: str) -> str:

@@ -13,6 +13,7 @@ from analysis.hit_checks import (
     CLIPPED,
     DOUBLE_IMPACT,
     NO_IMPACT,
+    SWAPPED,
     clipped,
     double_impact,
     file_checks,
@@ -74,7 +75,7 @@ def test_a_random_force_is_no_impact_not_a_double_impact(seed, n):
     """Random excitation (a shaker's noise, or a file with no hit in it) is no hammer hit:
     said, not checked for a second tap."""
     rng = np.random.default_rng(seed)
-    (impact, _) = file_checks(rng.normal(size=n), rng.normal(size=n), FS)
+    (impact, *_) = file_checks(rng.normal(size=n), rng.normal(size=n), FS)
     assert impact.name == NO_IMPACT
     assert not impact.passed
     assert impact.detail.startswith("the force is no hammer pulse")
@@ -85,7 +86,7 @@ def test_huge_or_non_finite_records_neither_overflow_nor_warn():
     overflow; a record with NaN or inf gets no checks (the store refuses it anyway)."""
     force, response = _hit(1)
     checks = file_checks(force * 1e200, response * 1e200, FS)
-    assert [c.name for c in checks] == [DOUBLE_IMPACT, CLIPPED]
+    assert [c.name for c in checks] == [DOUBLE_IMPACT, CLIPPED, SWAPPED]
     assert all(c.passed for c in checks)
     assert file_checks(np.where(np.arange(force.size) == 5, np.nan, force), response, FS) == []
     assert file_checks(force, np.where(np.arange(response.size) == 5, np.inf, response), FS) == []

@@ -345,12 +345,17 @@ def said_units(details: dict[str, Any]) -> list[str]:
 def failed_hit_checks(run) -> list[str]:
     """One line per hit whose checks failed (double impact, clipped), counted from 1:
     kept and accepted, and `daq analyze` cautions about them."""
-    from daq.workflows.run_views import failed_check_names
+    from daq.workflows.run_views import failed_check_names, swapped_columns
 
     if run.hits is None:
         return []
     out = []
+    swapped = swapped_columns(run)
+    if swapped is not None:  # one line for the file; the hits' other checks read the wrong channel
+        out.append(swapped[1])
     for i, checks in enumerate(run.hits.checks):
+        if swapped is not None and i in swapped[0]:
+            continue
         for name in failed_check_names(checks):
             out.append(
                 f"hit {i + 1} failed the {name} check ({checks[name].get('detail', '')}); it is kept "

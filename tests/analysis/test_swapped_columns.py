@@ -1,0 +1,68 @@
+"""A file read with its force and response the wrong way round (analysis/hit_checks.py
+channels_swapped): the response column then holds a pulse and the force column a
+response ringing on. Found in such files; never in a file the right way round, nor in
+the simulator's captures."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from analysis.hit_checks import SWAPPED, channels_swapped, file_checks
+from tests.analysis.impact_synth import impact_hits
+from tests.cli_helpers import invoke_daq
+
+CASES = [
+    # (modes Hz, damping, amplitudes, fs, seconds, pulse s): light and heavy damping,
+    # close modes, a short record, a soft tip.
+    ([42.0, 155.0, 388.0, 710.0], [0.012, 0.006, 0.02, 0.004], [1.0, -0.6, 0.4, 0.3], 5120.0, 1.0, 1e-3),
+    ([45.0, 132.0, 310.0], [0.015, 0.008, 0.02], [1.0, -0.6, 0.4], 2048.0, 2.0, 2e-3),
+    ([100.0, 104.0], [0.002, 0.002], [1.0, 0.8], 1024.0, 4.0, 3e-3),
+    ([30.0, 300.0], [0.1, 0.08], [1.0, 0.5], 1024.0, 1.0, 5e-3),
+    ([800.0, 2500.0], [0.01, 0.02], [1.0, 0.5], 25600.0, 0.08, 2e-4),
+]
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("noise", [0.0, 0.01, 0.05])
+def test_hits_the_right_way_round_pass(case, noise):
+    fn, zeta, amp, fs, seconds, pulse = case
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 3, noise, pulse, 11)
+    for f, a in zip(force, response, strict=True):
+        check = channels_swapped(f, a, fs)
+        assert check.passed, check.detail
+        assert channels_swapped(-f, a, fs).passed  # a gauge wired the other way
+
+
+def test_the_lightly_damped_hits_swapped_fail():
+    fn, zeta, amp, fs, seconds, pulse = CASES[0]
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 3, 0.01, pulse, 11)
+    for f, a in zip(force, response, strict=True):
+        check = channels_swapped(a, f, fs)
+        assert not check.passed
+        assert check.detail.endswith("as a decaying response's")
+        assert check.name in {c.name for c in file_checks(a, f, fs) if not c.passed}
+
+
+def test_short_or_silent_records_are_not_judged():
+    assert channels_swapped(np.r_[0.0, 1.0, np.zeros(30)], np.ones(32), 1000.0).passed
+    assert channels_swapped(np.zeros(1024), np.r_[1.0, np.zeros(1023)], 1000.0).passed
+
+
+@pytest.mark.parametrize("scenario", ["seed", "realistic"])
+@pytest.mark.parametrize("analyzer", ["35660A", "3562A", "35670A"])
+def test_the_simulators_captures_pass(tmp_path, scenario, analyzer):
+    from daq.store import Store
+
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--scenario", scenario, "--analyzer", analyzer, "--hits", "3",
+        "--time-scale", "0", "--seed", "5", "--hammer", "double_hit_probability=0.3",
+        "--store", str(tmp_path),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    (summary,) = Store(tmp_path).list()
+    hits = Store(tmp_path).open(summary.run_id).hits
+    for k in range(hits.n_hits):
+        check = channels_swapped(hits.force_n[k], hits.response_m_s2[k], hits.sample_rate_hz)
+        assert check.passed, (k, check.detail)
+        assert check.name == SWAPPED
