@@ -166,7 +166,8 @@ class Capture:
         an incomplete run); the run is then incomplete, without the analyzer's FRF.
     replayed_from : the original run's provenance when this is a replay (kind "replayed").
     points : where the run is measured (a test's point: its article, force and response
-        points); None records ``sample`` (default the seed's beam at the tip).
+        points); None records ``sample`` (default the seed's beam at the tip; None: no
+        test article, as a replay of an imported run records).
     store_dir : the run store; when set, the hits are journaled there as they are taken
         (and the store is checked for room for the whole run before the first hit).
     transducers : {"hammer"|"accelerometer": Transducer} the setup names; each is stored
@@ -189,7 +190,7 @@ class Capture:
     simulator: dict[str, Any] | None = None
     operator: str = ""
     note: str = ""
-    sample: Sample = field(default_factory=table1_sample)
+    sample: Sample | None = field(default_factory=table1_sample)
     points: RunPoints | None = None
     max_hits: int | None = None
     hit_timeout_s: float | None = None
@@ -307,7 +308,8 @@ class Capture:
         meta = {
             "run_id": self.run_id, "kind": self._kind(), "start_time": self.start_time,
             "operator": self.operator, "note": self.note, "provenance": self._provenance(),
-            "instrument": asdict(self._instrument()), "sample": asdict(self.sample),
+            "instrument": asdict(self._instrument()),
+            "sample": asdict(self.sample) if self.sample is not None else None,
             "points": self.points.to_dicts() if self.points is not None else None,
         }  # fmt: skip
         self.journal = Journal.create(self.store_dir, self.run_id, meta, need_bytes=need)

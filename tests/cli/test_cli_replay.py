@@ -205,3 +205,31 @@ def test_an_unknown_name_among_several_replays_nothing(tmp_path):
     assert_one_line_error(replay(tmp_path, good.run_id, f"{tmp_path}/nope.h5"), "no such run file")
     assert_one_line_error(replay(tmp_path, good.run_id, f"{tmp_path}/"), "not a regular file")
     assert new_runs(tmp_path, {good.run_id}) == []
+
+
+def test_a_replayed_import_keeps_its_missing_windows_and_article_and_analyses_alike(tmp_path):
+    """An imported file records no windows and no test article: its replay records
+    uniform windows and no article (not the simulator's windows and beam), so `daq
+    analyze` gives both runs the same modes and neither a Table 2."""
+    captured = capture(tmp_path / "sim", "--hits", "3")
+    exported = tmp_path / "sim.csv"
+    done = invoke_daq("export", captured, "-f", "csv", "-o", str(exported), "--store", str(tmp_path / "sim"))
+    assert done.returncode == 0, done.stderr
+    store = tmp_path / "runs"
+    assert invoke_daq("import", str(exported), "--store", str(store)).returncode == 0
+    (imported,) = [s.run_id for s in Store(store).list()]
+    result = replay(store, imported)
+    assert result.returncode == 0, result.stderr
+    (new,) = new_runs(store, {imported})
+    replayed = Store(store).open(new)
+    assert replayed.sample is None
+    settings = replayed.instrument.settings
+    assert settings["hammer"]["window"] == settings["accelerometer"]["window"] == "UNIF"
+    modes = {}
+    for run_id in (imported, new):
+        out = invoke_daq("analyze", run_id, "--json", "--store", str(store))
+        assert out.returncode == 0, out.stderr
+        (info,) = json.loads(out.stdout)
+        modes[run_id] = [(m["frequency_hz"], m["damping_ratio"]) for m in info["modes"]]
+        assert info["table2"]["beam"].startswith("no beam model for this run")
+    assert modes[imported] == modes[new]

@@ -11,6 +11,7 @@ rejected with the same reason), so the analyzer averages the same hits.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -161,9 +162,9 @@ def replay_one(the_store: Any, path: Path, operator: str, note: str) -> Any:
             simulator={"replay_of": original.run_id, "time_scale": 0.0, "model": model},
             operator=operator,
             note=note or f"replay of {original.run_id}",
-            sample=original.sample
-            if original.sample is not None
-            else Capture.__dataclass_fields__["sample"].default_factory(),
+            # A run that records no test article (an imported file) gets none: the
+            # simulator's beam is not what was measured.
+            sample=original.sample,
             max_hits=hits.n_hits + 1,
             stop_after_hits=hits.n_hits,
             replayed_from={
@@ -229,7 +230,28 @@ def replay_settings(run: Any, from_dict: Any) -> tuple[str, Any]:
     ):
         return model, stored.with_lines(lines)
     pre_trigger = min(max(0.0, -hits.start_s), hits.n_samples / hits.sample_rate_hz)
-    return model, ImpactSettings(span_hz=span, center_hz=center, pre_trigger_s=pre_trigger, lines=lines)
+    hammer, accelerometer = _recorded_windows(run)
+    return model, ImpactSettings(
+        span_hz=span, center_hz=center, pre_trigger_s=pre_trigger, lines=lines, hammer=hammer,
+        accelerometer=accelerometer,
+    )  # fmt: skip
+
+
+def _recorded_windows(run: Any) -> tuple[Any, Any]:
+    """(hammer, accelerometer) channel setups whose windows are those the original run's
+    analysis uses (an imported file's, or uniform where it records none): a replay must
+    not add windows the records never had, nor change what its analysis gives."""
+    from daq.workflows.analysis import WINDOW_KINDS, window_specs
+    from drivers.setting_table import Window
+    from drivers.settings import ImpactSettings
+
+    code = {kind: Window(c) for c, kind in WINDOW_KINDS.items()}
+    defaults = ImpactSettings()
+    setups = []
+    for spec, default in zip(window_specs(run)[:2], (defaults.hammer, defaults.accelerometer), strict=True):
+        widths = {"force_width_s": spec.force_width_s, "exp_decay_s": spec.exp_decay_s}
+        setups.append(dataclasses.replace(default, window=code[spec.kind], **widths))
+    return setups[0], setups[1]
 
 
 def first_difference(a: Any, b: Any) -> str:
