@@ -69,6 +69,9 @@ def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(tmp_path
     (caution,) = info["cautions"]
     assert "not determined by these data" in caution
     assert info["stiffness"]["mode_frequencies"]["applied"]
+    # Each fitted mode names the analysis' mode it stands for, with that reading's u.
+    assert [m["identified"]["mode"] for m in info["modes"]] == [1, 2, 3, 4]
+    assert all(m["identified"]["damping_u"] > 0 for m in info["modes"])
 
 
 def test_realistic_run_old_defaults_stay_reachable_and_say_what_is_wrong(tmp_path):

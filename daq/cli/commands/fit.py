@@ -10,7 +10,7 @@ import typer
 
 from daq.cli.errors import UserError
 from daq.cli.options import JobsOption, JsonOption, SchedulerOption, StoreOption
-from daq.report.numbers import plain
+from daq.report.numbers import plain, with_uncertainty
 
 #: FitOptions' field names as the options a user types.
 OPTION_NAMES = (
@@ -189,12 +189,27 @@ def print_fit(info: dict) -> None:
             for name, h, f in zip(unc["names"], per_hit, fisher, strict=True)
         ]
         typer.echo("  spread of per-hit refits / sqrt(n) over the Fisher std: " + ", ".join(ratios))
-    for k, mode in enumerate(info["modes"], 1):
+    for mode in info["modes"]:
         if mode["frequency_hz"] is None or mode["damping_ratio"] is None:
-            typer.echo(f"  mode {k}: overdamped or unstable with this R (no oscillating pole)")
+            typer.echo("  a mode is overdamped or unstable with this R (no oscillating pole)")
             continue
         zeta = plain(100 * mode["damping_ratio"], ".3g")
-        typer.echo(f"  mode {k}: {mode['frequency_hz']:.4f} Hz, damping {zeta} %")
+        partner = mode.get("identified")
+        # Numbered as the run's analysis numbers its modes (`daq analyze`), with its reading.
+        label = f"mode {partner['mode']}" if partner else "a mode with no identified partner"
+        read = f" (analysis: {_identified_text(partner)})" if partner else ""
+        typer.echo(f"  {label}: {mode['frequency_hz']:.4f} Hz, damping {zeta} % with this R{read}")
     for direction in unc["null_directions"]:
         combo = " ".join(f"{w:+.2f} {name}" for name, w in direction["combination"].items() if abs(w) >= 0.05)
         typer.echo(f"  not determined by the data: {combo}")
+
+
+def _identified_text(partner: dict) -> str:
+    """'97.7098 Hz, 0.3998 % ± 0.0063 %': a fitted mode's partner as `daq analyze` writes it."""
+    f_text, _ = with_uncertainty(partner["frequency_hz"], partner.get("frequency_u_hz"), ".4f")
+    zeta = partner.get("damping_ratio")
+    if zeta is None:
+        return f"{f_text} Hz"
+    u = partner.get("damping_u")
+    z_text, u_text = with_uncertainty(100 * zeta, 100 * u if u else None, ".3g")
+    return f"{f_text} Hz, {z_text} %" + (f" ± {u_text} %" if u_text != "–" else "")
