@@ -645,12 +645,23 @@ def _fit_sections(fits: dict[str, dict], figures: Any) -> list[Section]:
         for direction in unc["null_directions"]:
             combo = " ".join(f"{w:+.2f} {k}" for k, w in direction["combination"].items() if abs(w) >= 0.05)
             section.blocks.append(Para(f"Not determined by the data (? above): {combo}.", "note"))
+        # Numbered as the run's analysis numbers its modes, beside that reading (a fit
+        # stored before the partner was kept has none: its position, and "–").
         mode_rows = [
-            [str(k), _num(m["frequency_hz"], ".4f"), _num(_pct(m["damping_ratio"]), ".3g")]
+            [
+                str(m["identified"]["mode"]) if m.get("identified") else "–" if "identified" in m else str(k),
+                _num(m["frequency_hz"], ".4f"),
+                _num(_pct(m["damping_ratio"]), ".3g"),
+                _analysis_damping(m.get("identified")),
+            ]
             for k, m in enumerate(s["modes"], 1)
         ]
         section.blocks.append(
-            Table(["mode", "frequency (Hz)", "damping (%)"], mode_rows, frozenset({0, 1, 2}))
+            Table(
+                ["mode", "frequency (Hz)", "damping with R (%)", "analysis (%)"],
+                mode_rows,
+                frozenset({0, 1, 2, 3}),
+            )
         )
         section.blocks += [Para(c, "caution") for c in [*_window_cautions(s), *s.get("cautions", [])]]
     out = [section]
@@ -842,3 +853,12 @@ def _text_table(table: Table, width: int = 112) -> list[str]:
         if i == 0 and has_header:
             out.append("-" * min(width, sum(widths) + 3 * (n - 1)))
     return out
+
+
+def _analysis_damping(partner: dict | None) -> str:
+    """The run's analysis reading of a fitted mode's damping, "0.39978 ± 0.00014", or "–"."""
+    if not partner or partner.get("damping_ratio") is None:
+        return "–"
+    u = partner.get("damping_u")
+    value, u_text = with_uncertainty(100 * partner["damping_ratio"], 100 * u if u else None, ".3g")
+    return value if u_text == "–" else f"{value} ± {u_text}"

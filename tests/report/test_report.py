@@ -13,6 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from analysis.measurement_text import with_uncertainty
 from daq.store import MeasuredFrf, Store, seal
 from tests.cli_helpers import assert_one_line_error, invoke_daq, run_daq
 from tests.store.store_helpers import make_run
@@ -374,3 +375,17 @@ def test_a_report_that_cannot_be_written_whole_leaves_no_pdf_and_no_page(tmp_pat
     assert not (out / "report.pdf").exists()
     assert not (out / "index.html").exists()  # the page marks a whole report: not written
     assert not list(out.glob(".*tmp*"))
+
+
+def test_the_fits_modes_are_numbered_as_the_analysis_numbers_them_beside_its_reading(filed):
+    fit = Store(filed.store).read_result(filed.run.run_id, "fit-ls")["summary"]
+    partners = [m["identified"] for m in fit["modes"]]
+    rows = [r for r in _rows(filed.page) if len(r) == 4 and r[0] in {str(p["mode"]) for p in partners}]
+    header = "<th>damping with R (%)</th><th>analysis (%)</th>"
+    assert header in filed.page.replace("\n", "")
+    for partner in partners:
+        value, u = with_uncertainty(100 * partner["damping_ratio"], 100 * partner["damping_u"])
+        (row,) = [r for r in rows if r[0] == str(partner["mode"]) and r[3] == f"{value} ± {u}"]
+        assert float(row[2]) == pytest.approx(
+            100 * next(m["damping_ratio"] for m in fit["modes"] if m["identified"] == partner), rel=0.01
+        )
