@@ -65,6 +65,9 @@ class FitOptions:
             raise ValueError(f"n_functions must be 1..{MAX_FUNCTIONS}, got {self.n_functions}")
         if not 0 <= self.starts <= 100:
             raise ValueError(f"starts must be 0..100, got {self.starts}")
+        if not 0 <= self.seed < 2**63:
+            # numpy's generators take none else, and would say so naming no option.
+            raise ValueError(f"seed must be a whole number from 0 to 2^63 - 1, got {self.seed}")
 
     @property
     def result_name(self) -> str:

@@ -87,3 +87,13 @@ def test_frequencies_of_interest_outside_the_lines_are_refused(tmp_path):
     assert result.returncode == 0, result.stderr
     assert '"modes": []' in result.stdout  # no mode near 120 Hz: none is passed off as one
     assert Store(tmp_path).list()[0].run_id == run.run_id
+
+
+def test_fit_options_out_of_range_name_the_option_before_any_run_is_read(tmp_path):
+    for args, said in (
+        (("--method", "ga", "--seed", "-1"), "--seed must be a whole number from 0"),
+        (("--starts", "101"), "--starts must be 0..100"),
+    ):
+        result = invoke_daq("fit", "latest", *args, "--store", str(tmp_path))
+        assert result.returncode == 2
+        assert_one_line_error(result, said)

@@ -15,7 +15,7 @@ from daq.report.numbers import plain, with_uncertainty
 #: FitOptions' field names as the options a user types.
 OPTION_NAMES = (
     ("n_functions", "--functions"), ("method", "--method"), ("stiffness", "--stiffness"),
-    ("domain", "--domain"), ("starts", "--starts"),
+    ("domain", "--domain"), ("starts", "--starts"), ("seed", "--seed"),
 )  # fmt: skip
 
 
