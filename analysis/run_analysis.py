@@ -304,9 +304,10 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band, noise=
         low, high = float(frequency_hz[keep].min()), float(frequency_hz[keep].max())
         outside = [f for f in options.frequencies_hz if not low <= f <= high]
         if outside:
+            said = "frequency {} Hz lies" if len(outside) == 1 else "frequencies {} Hz lie"
             raise ValueError(
-                f"frequencies {', '.join(f'{f:g}' for f in outside)} Hz lie outside the analysed "
-                f"lines ({low:g}-{high:g} Hz)"
+                said.format(", ".join(f"{f:g}" for f in outside))
+                + f" outside the analysed lines ({edge_text(low)}-{edge_text(high)} Hz)"
             )
     modal = identify_modes(
         frequency_hz[keep],

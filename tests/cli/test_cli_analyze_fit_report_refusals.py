@@ -81,7 +81,12 @@ def test_frequencies_of_interest_outside_the_lines_are_refused(tmp_path):
     run = make_run(kind="imported", measured=MeasuredFrf(f, h[np.newaxis, :], None, ["H"]))
     seal(run, tmp_path)
     assert_one_line_error(
-        invoke_daq("analyze", run.run_id, "--frequencies", "500", "--store", str(tmp_path)), "outside"
+        invoke_daq("analyze", run.run_id, "--frequencies", "500", "--store", str(tmp_path)),
+        "frequency 500 Hz lies outside the analysed lines",
+    )
+    assert_one_line_error(
+        invoke_daq("analyze", run.run_id, "--frequencies", "500,600", "--store", str(tmp_path)),
+        "frequencies 500, 600 Hz lie outside",
     )
     result = invoke_daq("analyze", run.run_id, "--frequencies", "120", "--json", "--store", str(tmp_path))
     assert result.returncode == 0, result.stderr
