@@ -257,12 +257,16 @@ def identify_modes(
                     SetAside(cl.frequency_hz, cl.damping_ratio, cl.n_stable_orders, norm, float(w))
                 )
         chosen = [c for c, k in zip(chosen, keep, strict=True) if k]
+        changed = not keep.all()
         poles = poles[keep]
+    else:
+        changed = False
     refined = np.zeros(poles.size, dtype=bool)
     if poles.size and refine:
         # Close modes' LSCF poles carry a bias from the noise in H (analysis.modal_id.refine).
         poles, refined = refine_poles(fu, hu, poles, line_hz, refine=to_refine(poles))
-    if poles.size:
+    if changed or refined.any():
+        # The synthesis of the poles kept, as they are now (none left: residual terms only).
         est = lsfd(fu, hu, poles, form)
     f_modes, zeta_modes = frequency_damping(poles) if poles.size else (np.empty(0), np.empty(0))
     energy_modes = np.sum(np.abs(est.mode_terms) ** 2, axis=(1, 2))
