@@ -5,10 +5,19 @@ multiplies the unknowns; its noise then biases the poles (an errors-in-variables
 growing with the noise's variance over |H|^2). Two modes 2 Hz apart (150 Hz at 0.5 %,
 152 Hz at 0.8 %; 5 hits, response noise 2 % of its RMS) read 0.59-0.60 % and 0.83-0.87 %
 in every seed, 6-9 times their spread over hits (which has the same bias in every hit);
-at 5 % noise 0.76 %. Fitting the modal model itself to H, the residues solved linearly
-for each trial set of poles (variable projection), has no such bias: the same hits read
-0.50 % and 0.80 %. With noise of known spread per line (the scatter over hits), weighting
-each line by its inverse makes this the maximum-likelihood estimate.
+at 5 % noise 0.76 % (a new user's hit generator; with tests/analysis/impact_synth.py at
+5 % LSCF no longer splits the pair at all, and nothing is refined). Fitting the modal
+model itself to H, the residues solved linearly for each trial set of poles (variable
+projection), has no such bias: the same hits read 0.50 % and 0.80 %.
+
+Where it cannot help: a close mode LSCF missed (150/152/154.5 Hz, the middle one never
+found) leaves the window holding more than its poles, and the fit pushes the two it has
+apart (frequencies 1900 ppm off, LSCF's 1050 ppm; neither within its u): the missed mode
+is the fault, and refining does not find it.
+
+Lines are weighted alike within each FRF (each FRF by its RMS over the window): weights
+read from a few hits' scatter correlate with the very noise they weigh and biased the
+fit (197 Hz at 1 % read 3.5 u high in damping that way).
 
 How (refine_poles): the poles are taken in groups whose local windows overlap (a close
 pair is refined together); each group is fitted on the lines within WINDOW_SPAN
