@@ -137,8 +137,8 @@ def analyze_hits(
 
     Records without windows whose pre-trigger may bias a mode that has not died away by
     the record's end (analysis.pretrigger) are analysed again, cut to start at the
-    impact; where a mode moved by more than MOVED_BY_U (analysis.pretrigger) of its u, that result is returned
-    and ``pretrigger_cut_s`` says so.
+    impact; where a mode moved by more than MOVED_BY_U (analysis.pretrigger) of its u,
+    that result is returned and ``pretrigger_cut_s`` says so.
     """
     options = options or AnalysisOptions()
     accepted = np.asarray(accepted, dtype=bool)

@@ -208,9 +208,9 @@ def identify_modes(
     the noise of ``frf`` at each line, in its units (from the scatter over hits), which
     names the possible modes left out (spurious_check); default: read from the FRF's
     second differences, right only where the noise is uncorrelated between lines.
-    refine: the selected poles refined by nonlinear least squares on the FRF, weighted by
-    noise_std where given (analysis.modal_id.refine); a mode's frequency and damping are
-    its refined pole's. Raises ValueError on bad inputs.
+    refine: the poles of close, lightly damped modes (refine.to_refine) refined by
+    nonlinear least squares on the FRF, lines weighted alike (analysis.modal_id.refine);
+    a mode's frequency and damping are its pole's. Raises ValueError on bad inputs.
     """
     f, h, band, use = _check_inputs(frequency_hz, frf, band, max_order, form)
     fu, hu = f[use], h[:, use]
