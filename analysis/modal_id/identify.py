@@ -12,7 +12,7 @@ import numpy as np
 
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.lsfd import FORMS, lsfd
-from analysis.modal_id.refine import refine_poles, to_refine
+from analysis.modal_id.refine import redundant, refine_poles, to_refine
 from analysis.modal_id.stability import (
     Cluster,
     cluster_poles,
@@ -261,6 +261,17 @@ def identify_modes(
         poles = poles[keep]
     else:
         changed = False
+    if poles.size > 1 and refine and freqs is None:
+        # A pole a refined close group does as well without (refine.redundant).
+        extra = redundant(fu, hu, poles, line_hz, to_refine(poles))
+        for c in np.asarray(chosen)[extra]:
+            clusters[c].accepted, clusters[c].reason = (
+                False,
+                "redundant: the close modes beside it, refined, fit the FRF as well without it",
+            )
+        chosen = [c for c, x in zip(chosen, extra, strict=True) if not x]
+        poles = poles[~extra]
+        changed = changed or bool(extra.any())
     refined = np.zeros(poles.size, dtype=bool)
     if poles.size and refine:
         # Close modes' LSCF poles carry a bias from the noise in H (analysis.modal_id.refine).

@@ -30,8 +30,9 @@ RESULT_NAME = "analysis"
 #: Bumped when the analysis changes what it computes from the same run and options
 #: (3: both LSCF normalisations, the spurious test's second way in, input cautions;
 #: 4: records without windows cut at the impact where their pre-trigger biases a pole;
-#: 5: close modes' poles refined on the FRF, analysis.modal_id.refine).
-ANALYSIS_VERSION = 5
+#: 5: close modes' poles refined on the FRF, analysis.modal_id.refine;
+#: 6: a close group's pole its refined neighbours do as well without dropped).
+ANALYSIS_VERSION = 6
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
