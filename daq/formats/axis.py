@@ -15,7 +15,11 @@ Trailing zeros: %g drops them ("0.5" for 0.5000000), so a value's own last digit
 claim less precision than the column has. The column's precision is taken from all its
 values: the most decimals any value shows (fixed-point writers, %f) or the most
 significant digits (%e, %g), whichever claims less; a value's tolerance is never looser
-than its own last digit says.
+than its own last digit says. Except where a notation keeps its trailing zeros: a value
+printed with a zero as its last decimal ("2.50E-04") shows that its writer pads, so the
+values printed in that notation (with an exponent, or without) hold their own last digit.
+Excel-style exports print 3 significant digits with an exponent below 0.1 s and every
+digit above ("7.08E-02", then "0.10025"): the column's 5 digits are no precision of "7.08E-02".
 """
 
 from __future__ import annotations
@@ -61,6 +65,8 @@ def printed_half_units(texts: list[str]) -> np.ndarray:
     lead = np.zeros(n, dtype=np.int64)  # exponent of the first non-zero digit
     zero = np.zeros(n, dtype=bool)
     known = np.zeros(n, dtype=bool)
+    exponent = np.zeros(n, dtype=bool)  # printed with an exponent
+    padded = np.zeros(n, dtype=bool)  # a zero as the last decimal: the writer keeps them
     for i, text in enumerate(texts):
         match = _NUMBER.fullmatch(text)
         if match is None or not (match.group(1) or match.group(2)):
@@ -75,6 +81,8 @@ def printed_half_units(texts: list[str]) -> np.ndarray:
         zero[i] = not stripped
         lead[i] = exp + len(whole) - 1 - (len(digits) - len(stripped))
         known[i] = True
+        exponent[i] = match.group(3) is not None
+        padded[i] = frac.endswith("0")
     out = np.zeros(n, dtype=np.float64)
     if not known.any():
         return out
@@ -84,6 +92,9 @@ def printed_half_units(texts: list[str]) -> np.ndarray:
     relative = 0.5 * 10.0 ** (lead - most_sig + 1).astype(np.float64)
     model = np.where(zero, fixed, np.maximum(fixed, relative))
     literal = 0.5 * 10.0 ** quantum.astype(np.float64)
+    for notation in (exponent, ~exponent):
+        if np.any(padded & known & notation):
+            model = np.where(notation, literal, model)
     out[known] = np.minimum(literal, model)[known]
     return out
 

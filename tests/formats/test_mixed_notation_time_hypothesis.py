@@ -1,0 +1,70 @@
+"""Time columns printed in two notations, as spreadsheets export them (hypothesis): 3
+significant digits with an exponent below a switch ("7.08E-02"), every digit above it
+("0.10025"). Each value holds its own last digit; the digits of the other notation are no
+precision of it (the trial's 4 kHz impact files were refused at line 284, "7.08E-02")."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from daq.formats.csv_text import read_csv
+from daq.formats.errors import FormatError
+
+SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+WORK = Path(tempfile.mkdtemp(prefix="mixed-notation-"))
+
+
+def spreadsheet(value: float, switch: float) -> str:
+    return f"{value:.2E}" if value < switch else f"{value:.15g}"
+
+
+def put(texts: list[str], name: str, sep: str) -> Path:
+    rows = [sep.join(("Time (s)", "Force (N)", "Acc (m/s^2)"))]
+    rows += [sep.join((t, f"{np.sin(i):.6g}", f"{np.cos(i):.6g}")) for i, t in enumerate(texts)]
+    path = WORK / name
+    path.write_text("\r\n".join(rows) + "\r\n", encoding="utf-8")
+    return path
+
+
+@st.composite
+def mixed_axes(draw):
+    """(rate Hz, n, switch s, texts): a regular axis from 0 crossing the switch, whose
+    3-digit values are at most a quarter of the step off (else no file can show a dropped
+    sample in them)."""
+    rate = draw(st.sampled_from([1000.0, 1024.0, 2000.0, 2500.0, 4000.0, 5000.0]))
+    switch = draw(st.sampled_from([0.01, 0.1]))
+    step = 1.0 / rate
+    below = int(np.ceil(switch * rate))
+    n = below + draw(st.integers(2, 200))
+    assume(0.5 * 10.0 ** (np.floor(np.log10(switch * 0.999)) - 2) <= 0.25 * step)
+    t = np.arange(n) / rate
+    return rate, n, switch, [spreadsheet(v, switch) for v in t]
+
+
+@SETTINGS
+@given(axis=mixed_axes(), sep=st.sampled_from([",", "\t"]))
+def test_a_column_in_two_notations_imports_at_its_rate(axis, sep):
+    rate, n, _, texts = axis
+    hits = read_csv(put(texts, "mixed.txt", sep)).hits
+    assert hits.n_samples == n
+    # The values below the switch are up to half a unit (5e-5 s at 0.07 s) off the line.
+    assert abs(1.0 / hits.sample_rate_hz - 1.0 / rate) * (n - 1) <= 0.25 / rate
+
+
+@SETTINGS
+@given(axis=mixed_axes(), data=st.data())
+def test_a_dropped_sample_in_the_coarse_notation_is_still_refused(axis, data):
+    rate, n, switch, _ = axis
+    below = int(np.ceil(switch * rate))
+    assume(below >= 5)
+    at = data.draw(st.integers(2, below - 2))
+    t = np.delete(np.arange(n) / rate, at)
+    path = put([spreadsheet(v, switch) for v in t], "dropped.txt", ",")
+    with pytest.raises(FormatError, match=f"line {at + 2}: uneven time step"):
+        read_csv(path)
