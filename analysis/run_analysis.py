@@ -337,6 +337,7 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band, noise=
                     "synthesis_share": float(mode.quality.synthesis_share),
                     "accepted": bool(mode.quality.accepted),
                     "refined": bool(mode.quality.refined),
+                    "added": bool(mode.quality.added),
                     "frequency_spread_top_hz": float(mode.quality.frequency_spread_top_hz),
                     "damping_spread_top": float(mode.quality.damping_spread_top),
                     "normalisation": mode.normalisation,
@@ -633,9 +634,11 @@ def _refine_per_hit(result: RunAnalysis, hit_frfs: np.ndarray, decay: float, fou
 def _refined_estimates(result: RunAnalysis, frf, frequency_hz, decay: float, found, noise=None) -> None:
     """``found`` (n_modes, 2), the (frequency, damping) of each mode in ``frf`` (n_lines,)
     or (n_frf, n_lines) on ``frequency_hz``: for each mode refined in the result where
-    LSCF found it in ``frf``, replaced by its pole refined on ``frf`` from the result's
-    (noise: refine_poles' noise_std, the bootstrap's weights)."""
+    LSCF found it in ``frf`` (or it was added, refine.missing), replaced by its pole
+    refined on ``frf`` from the result's (noise: refine_poles' noise_std, the
+    bootstrap's weights)."""
     refine = np.array([bool(m.quality.get("refined")) for m in result.modes], dtype=bool)
+    added = np.array([bool(m.quality.get("added")) for m in result.modes], dtype=bool)
     poles = np.array([m.pole for m in result.modes], dtype=complex)
     if not refine.any() or not np.all(np.isfinite(poles)) or frequency_hz.size < 2:
         return
@@ -643,7 +646,8 @@ def _refined_estimates(result: RunAnalysis, frf, frequency_hz, decay: float, fou
     new, done = refine_poles(frequency_hz, frf, poles, line, noise, refine=refine)
     w_n = np.abs(new)
     f_true, z_true = correct_pole(w_n / (2 * np.pi), -new.real / w_n, decay)
-    use = done & np.isfinite(found[:, 0])
+    # A mode added among close ones (refine.missing) has no LSCF pole to be found by.
+    use = done & (np.isfinite(found[:, 0]) | added)
     found[use, 0], found[use, 1] = f_true[use], z_true[use]
 
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.lsfd import FORMS, lsfd
-from analysis.modal_id.refine import redundant, refine_poles, to_refine
+from analysis.modal_id.refine import missing, redundant, refine_poles, to_refine
 from analysis.modal_id.stability import (
     Cluster,
     cluster_poles,
@@ -31,9 +31,11 @@ class ModeQuality:
     synthesis (modes and residuals), over the FRFs and lines used; accepted: False for
     a cluster picked for a frequency of interest that failed a selection rule (too few
     stable orders, ...); refined: the pole was refined on the FRF (analysis.modal_id.refine),
-    not LSCF's; *_spread_top: standard deviation of the cluster's frequency
-    (Hz) and damping over its poles in the top TOP_ORDERS orders of its zone (the
-    models a result is read from; the lowest orders of a chain are still immature), with,
+    not LSCF's; added: a mode LSCF missed among close ones, found by refitting them
+    (refine.missing), with no cluster (n_stable_orders 0, scatters NaN); *_spread_top:
+    standard deviation of the cluster's frequency (Hz) and damping over its poles in the
+    top TOP_ORDERS orders of its zone (the models a result is read from; the lowest
+    orders of a chain are still immature), with,
     for a mode read with the second normalisation (NORMALISATIONS), the standard deviation
     of its reading and the first normalisation's poles near it added in quadrature)."""
 
@@ -45,6 +47,7 @@ class ModeQuality:
     refined: bool = False
     frequency_spread_top_hz: float = float("nan")
     damping_spread_top: float = float("nan")
+    added: bool = False
 
 
 @dataclass
@@ -59,7 +62,7 @@ class Mode:
     pole: complex
     modal_constant: np.ndarray
     quality: ModeQuality
-    normalisation: str = "highest"
+    normalisation: str | None = "highest"  # None: an added mode, read from no LSCF fit
 
 
 @dataclass
@@ -272,6 +275,15 @@ def identify_modes(
         chosen = [c for c, x in zip(chosen, extra, strict=True) if not x]
         poles = poles[~extra]
         changed = changed or bool(extra.any())
+    if poles.size and refine and freqs is None:
+        # A mode LSCF missed among close ones (refine.missing): a pole with no chain.
+        added = missing(fu, hu, poles, line_hz, to_refine(poles))
+        if added.size:
+            order = np.argsort(np.abs(np.concatenate([poles, added])))
+            poles = np.concatenate([poles, added])[order]
+            sources: list[int | None] = [*chosen, *[None] * added.size]
+            chosen = [sources[k] for k in order]
+            changed = True
     refined = np.zeros(poles.size, dtype=bool)
     if poles.size and refine:
         # Close modes' LSCF poles carry a bias from the noise in H (analysis.modal_id.refine).
@@ -284,18 +296,23 @@ def identify_modes(
     total = energy_modes.sum() + np.sum(np.abs(est.residual_terms) ** 2)
     modes = []
     for r, c in enumerate(chosen):
+        share = float(energy_modes[r] / total) if total > 0 else 0.0
+        f_r, zeta_r = float(f_modes[r]), float(zeta_modes[r])
+        if c is None:
+            quality = ModeQuality(0, np.nan, np.nan, share, refined=bool(refined[r]), added=True)
+            modes.append(Mode(f_r, zeta_r, poles[r], est.modal_constants[r], quality, None))
+            continue
         cl = clusters[c]
         quality = ModeQuality(
             n_stable_orders=cl.n_stable_orders,
             frequency_scatter_rel=cl.frequency_scatter_rel,
             damping_scatter_rel=cl.damping_scatter_rel,
-            synthesis_share=float(energy_modes[r] / total) if total > 0 else 0.0,
+            synthesis_share=share,
             accepted=bool(cl.accepted),
             refined=bool(refined[r]),
             **_top_spread(fits[owner[c][0]], cl, fits[owner[c][0] % len(zones)]),
         )
         normalisation = fits[owner[c][0]].normalisation
-        f_r, zeta_r = float(f_modes[r]), float(zeta_modes[r])
         modes.append(Mode(f_r, zeta_r, poles[r], est.modal_constants[r], quality, normalisation))
     diagram = _diagram(fits, owner, chosen)
     orders_text = ", ".join(f"{z.low_hz:g}-{z.high_hz:g} Hz order {z.max_order}" for z in zones)
@@ -383,9 +400,10 @@ def _top_spread(zone_fit: _ZoneFit, cluster: Cluster, preferred: _ZoneFit) -> di
     return {"frequency_spread_top_hz": spread_f, "damping_spread_top": spread_z}
 
 
-def _diagram(fits: list[_ZoneFit], owner: list[tuple[int, int]], chosen: list[int]) -> StabilityDiagram:
-    """One stability diagram of all zones: per order, the poles of every zone."""
-    to_mode = {owner[c]: r for r, c in enumerate(chosen)}
+def _diagram(fits: list[_ZoneFit], owner: list[tuple[int, int]], chosen: list) -> StabilityDiagram:
+    """One stability diagram of all zones: per order, the poles of every zone (chosen:
+    each mode's cluster, None for a mode added without one)."""
+    to_mode = {owner[c]: r for r, c in enumerate(chosen) if c is not None}
     n_orders = max(len(zf.fit.poles) for zf in fits)
     poles, status, selected, normalisation = [], [], [], []
     for k in range(n_orders):

@@ -31,7 +31,8 @@ RESULT_NAME = "analysis"
 #: (3: both LSCF normalisations, the spurious test's second way in, input cautions;
 #: 4: records without windows cut at the impact where their pre-trigger biases a pole;
 #: 5: close modes' poles refined on the FRF, analysis.modal_id.refine;
-#: 6: a close group's pole its refined neighbours do as well without dropped).
+#: 6: a close group's pole its refined neighbours do as well without dropped, a pole
+#: it misses added, analysis.modal_id.refine redundant and missing).
 ANALYSIS_VERSION = 6
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}

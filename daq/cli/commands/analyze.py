@@ -278,8 +278,11 @@ def _mode_text(mode: dict) -> str:
     flag = "" if q.get("accepted", True) else " (asked for; fails a selection rule)"
     # The second LSCF normalisation (analysis/modal_id/identify.py) is said: its poles differ.
     read_with = " with alpha_0 = 1" if q.get("normalisation") == "lowest" else ""
-    return (
-        f"{f_text} Hz{spread}, damping {zeta_text}; "
-        f"stable over {q['n_stable_orders']} orders{read_with}{flag}, "
-        f"{plain(100 * q['synthesis_share'], '.2g')} % of the synthesis"
+    # A mode added among close ones (analysis/modal_id/refine.py, missing) has no chain.
+    how = (
+        "found by refitting the close modes beside it (LSCF missed it)"
+        if q.get("added")
+        else f"stable over {q['n_stable_orders']} orders{read_with}{flag}"
     )
+    share = plain(100 * q["synthesis_share"], ".2g")
+    return f"{f_text} Hz{spread}, damping {zeta_text}; {how}, {share} % of the synthesis"
