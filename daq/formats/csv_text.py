@@ -175,9 +175,11 @@ class Table:
         self.hit_col: int | None = None
         self.complex_mode = False
         self.time_texts: list[str] = []
+        self.unended: int | None = None  # the last line, a data row, when it has no line end
 
     def read(self, handle, max_bytes: int) -> None:
         total = 0
+        number, raw = 0, b""
         for number, raw in enumerate(handle, start=1):
             total += len(raw)
             if total > max_bytes:  # the file grew after it was checked
@@ -197,6 +199,20 @@ class Table:
             self._row(line, number)
         if not self.lines:
             raise FormatError(f"{self.name} holds no data rows")
+        # A copy or download cut short ends mid-line, and its last number may be cut too
+        # (0.06612 for -0.066120503): it reads as a number all the same. Many writers end
+        # the last line without a line end, so it is told, not refused.
+        if not raw.endswith((b"\n", b"\r")) and self.lines[-1] == number:
+            self.unended = number
+
+    def unended_note(self) -> list[str]:
+        """The note on a last data row with no line end, or none."""
+        if self.unended is None:
+            return []
+        return [
+            f"line {self.unended}, the last, has no line end: the file may be cut short and that row "
+            "incomplete; compare its end with the source"
+        ]
 
     def _comment(self, text: str) -> None:
         # "# rejected hit <k>: <reason>" (write_csv), "# key = value" or "# key: value";
@@ -463,6 +479,8 @@ class Table:
         ignored = [i for i in range(self.n_cols) if i not in picked and i != hit_col]
         if ignored:
             notes["notes"] = [self._ignored_note(ignored, picked, complex_mode)]
+        if said := self.unended_note():
+            notes.setdefault("notes", []).extend(said)
         if said := self._marker_notes(len(groups), None if ids is None else [int(ids[g[0]]) for g in groups]):
             notes.setdefault("notes", []).extend(said)
         details = {

@@ -244,7 +244,9 @@ def _fed_lines(head: list[bytes], texts: list[str], layout: Layout, handle: IO[b
     blank (so that every line keeps its number), then the rest of the file as it is."""
     skipped = layout.skipped
     for index, text in enumerate(texts):
-        yield b"\n" if index in skipped else text.encode("utf-8") + b"\n"
+        # The last line keeps its lack of a line end: the reader notes a file cut short.
+        end = b"\n" if head[index].endswith((b"\n", b"\r")) else b""
+        yield b"\n" if index in skipped else text.encode("utf-8") + end
     yield from handle
 
 
@@ -372,6 +374,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         details["preamble"] = _kept_preamble(layout.metadata)
     if coherence and coh is None:
         details["notes"] = [f"{len(coherence)} coherence columns for {len(frfs)} FRFs: coherence ignored"]
+    if said := table.unended_note():
+        details.setdefault("notes", []).extend(said)
     measured = make_frfs(path, freq, frf, coh, labels, form)
     return ImportedData(hits=None, measured_frfs=measured, format="frf-text", details=details)
 

@@ -1,0 +1,72 @@
+"""A text file whose last line has no line end may have been cut short mid-number
+(hypothesis): it still reads, with a note naming that line; a file whose last line ends
+gets none. Time records (csv) and FRF tables (frf-text) alike."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from daq.formats.csv_text import read_csv
+from daq.formats.frf_text import read_frf_text
+from tests.cli_helpers import invoke_daq
+
+SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+WORK = Path(tempfile.mkdtemp(prefix="unended-"))
+
+
+def notes(details: dict) -> list[str]:
+    return [n for n in details.get("notes") or [] if "no line end" in n]
+
+
+@SETTINGS
+@given(
+    n=st.integers(3, 300),
+    end=st.sampled_from(["\n", "\r\n"]),
+    cut=st.integers(0, 12),
+    ended=st.booleans(),
+    comment_after=st.booleans(),
+)
+def test_a_time_record_cut_short_is_noted_with_its_line(n, end, cut, ended, comment_after):
+    rows = ["t,F,a"] + [f"{i / 4000!r},{i * 0.5!r},{-0.066120503 * i!r}" for i in range(n)]
+    text = end.join(rows)
+    # Cut inside the last row's last number, never into its separator.
+    last = rows[-1]
+    text = text[: len(text) - min(cut, len(last) - last.rindex(",") - 3)]
+    if comment_after:
+        text += end + "# end of export"
+    if ended:
+        text += end
+    path = WORK / "cut.csv"
+    path.write_bytes(text.encode())
+    said = notes(read_csv(path).details)
+    if ended or comment_after:
+        assert said == []
+    else:
+        assert said == [
+            f"line {n + 1}, the last, has no line end: the file may be cut short and that row incomplete; "
+            "compare its end with the source"
+        ]
+
+
+@SETTINGS
+@given(n=st.integers(3, 80), ended=st.booleans())
+def test_an_frf_table_cut_short_is_noted_with_its_line(n, ended):
+    rows = ["Frequency (Hz),H Re,H Im"] + [f"{i * 0.5!r},{1.0 / (i + 1)!r},{-0.25 * i!r}" for i in range(n)]
+    path = WORK / "frf.csv"
+    path.write_text("\n".join(rows) + ("\n" if ended else ""), encoding="utf-8")
+    said = notes(read_frf_text(path).details)
+    assert said == ([] if ended else [said[0]])
+    assert ended or said[0].startswith(f"line {n + 1}, the last, has no line end")
+
+
+def test_the_trial_file_cut_mid_number_imports_with_the_note(tmp_path):
+    rows = ["t,F,a"] + [f"{i / 4000!r},{100.0 if i == 3 else 0.0},{0.001 * i!r}" for i in range(100)]
+    path = tmp_path / "truncated_midline.csv"
+    path.write_text("\n".join(rows) + "\n0.025,0,-0.06612", encoding="utf-8")
+    result = invoke_daq("import", str(path), "--store", str(tmp_path / "store"))
+    assert result.returncode == 0, result.stderr
+    assert "note: line 102, the last, has no line end: the file may be cut short" in result.stdout
