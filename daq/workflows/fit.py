@@ -270,8 +270,9 @@ def _prepare(
             model, scale, info = damping.update_stiffness(model, f_hz)
         except ValueError as exc:
             raise ValueError(
-                f"{exc}: the run's modes do not look like this beam's ({beam_origin}); "
-                "check its test article, or give --stiffness none"
+                f"{exc}: the run's modes do not look like this beam's ({beam_origin}); daq fit fits "
+                "that beam's model: check the run's test article (--stiffness none fits the model "
+                "as built regardless, which means something only for a run of that beam)"
             ) from None
         stiffness_info = {"update": "scale on E", "scale": float(scale), **_jsonable(info)}
         if options.stiffness == "modes":
@@ -374,6 +375,23 @@ def _disagreeing(summary: dict[str, Any]) -> list[str]:
             shown = f"{value} ± {u_text} %" if u_text != "–" else f"{value} %"
             out.append(f"mode {partner['mode']}: {100 * zeta:.3g} % against {shown}")
     return out
+
+
+def not_a_result(summary: dict[str, Any]) -> str | None:
+    """Why a fit's R is no estimate at all (exit non-zero: a script must not take it), or
+    None: the model leaves more of the data unexplained than there is (relative residual
+    above 1: R = 0 would do better), or the fit stopped unconverged on an R that makes
+    some mode unstable, undamped or overdamped. Poorer fits are results with cautions."""
+    if "damping_matrix" not in summary:
+        return None  # a run skipped or failed, said on its own
+    rel = summary.get("relative_residual")
+    if rel is not None and rel > 1:
+        return f"the model leaves {100 * rel:.3g} % of the data unexplained (R = 0 would leave 100 %)"
+    zetas = [m["damping_ratio"] for m in summary.get("modes", [])]
+    unphysical = any(z is None or z <= 0 or z >= 1 for z in zetas)
+    if not summary.get("success", True) and summary["method"] != "pilkey-inman" and unphysical:
+        return "the fit did not converge and its R makes some mode unstable, undamped or overdamped"
+    return None
 
 
 def fit_cautions(summary: dict[str, Any]) -> list[str]:

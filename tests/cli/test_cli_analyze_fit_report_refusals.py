@@ -102,3 +102,40 @@ def test_fit_options_out_of_range_name_the_option_before_any_run_is_read(tmp_pat
         result = invoke_daq("fit", "latest", *args, "--store", str(tmp_path))
         assert result.returncode == 2
         assert_one_line_error(result, said)
+
+
+def test_a_fit_that_explains_none_of_the_data_exits_non_zero(tmp_path):
+    """A measured structure that is no beam (modes at 59, 121, 157 and 301 Hz at 1-5 %),
+    fitted with the beam's model as built (--stiffness none): R leaves more of the hit
+    unexplained than R = 0 would. Its lines are printed for a look, but a script must not
+    take it for a damping matrix: one error line, exit 1 (a new user's trial exited 0)."""
+    from tests.analysis.impact_synth import impact_hits
+
+    force, response = impact_hits(
+        [59.4, 120.7, 156.9, 301.2], [0.01, 0.02, 0.05, 0.01], [1, 1, 1, 1], 4000.0, 1.0, 1, 0.01, 1e-3, 0
+    )
+    t = np.arange(force.shape[1]) / 4000.0
+    path = tmp_path / "not_a_beam.csv"
+    np.savetxt(path, np.column_stack([t, force[0], response[0]]), delimiter=",", header="time,force,response")
+    store = str(tmp_path / "store")
+    assert invoke_daq("import", str(path), "--store", store).returncode == 0
+    result = invoke_daq("fit", "latest", "--store", store)
+    assert_one_line_error(result, "do not look like this beam's", "test article")
+    result = invoke_daq("fit", "latest", "--stiffness", "none", "--method", "modal", "--store", store)
+    assert result.returncode == 1
+    assert "caution: a poor fit" in result.stdout
+    assert result.stderr.count("\n") == 1
+    assert "no damping matrix" in result.stderr
+    assert "R = 0 would leave 100 %" in result.stderr
+
+
+def test_only_a_fit_worse_than_nothing_or_unconverged_and_unphysical_is_no_result():
+    from daq.workflows.fit import not_a_result
+
+    good = {"damping_matrix": [[1.0]], "relative_residual": 0.5, "modes": [{"damping_ratio": 0.01}],
+            "success": False, "method": "ls"}  # fmt: skip
+    assert not_a_result(good) is None  # unconverged but physical: a result with its caution
+    assert "unexplained" in not_a_result({**good, "relative_residual": 1.2})
+    assert "did not converge" in not_a_result({**good, "modes": [{"damping_ratio": -0.01}]})
+    assert not_a_result({**good, "modes": [{"damping_ratio": -0.01}], "success": True}) is None
+    assert not_a_result({"run_id": "x", "skipped": "no hits"}) is None

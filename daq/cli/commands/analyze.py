@@ -143,13 +143,14 @@ def run_batch(
     verb: str,
     make_task: Callable[..., Task],
     json_view: Callable[[dict], dict] | None = None,
-) -> None:
+) -> list[dict]:
     """The part `daq analyze` and `daq fit` share: pick where to run (--jobs,
     --scheduler, $DAQ_SCHEDULER), pick the runs (named, or every run file with --all),
     run ``make_task(store_dir, run_id)`` of each on the executor (daq/batch/executor.py)
     with a progress bar, say each failure (or skip) on stderr as it comes, print each
     summary (``printer``, a blank line between runs) or the JSON list (each summary
-    through ``json_view`` when given), and end with one error line if any run failed."""
+    through ``json_view`` when given), and end with one error line if any run failed.
+    The summaries printed."""
     from daq.batch.executor import choose_backend, select_runs
     from daq.store import resolve_store_dir
 
@@ -176,6 +177,7 @@ def run_batch(
     if report.failures:
         done = "analysed" if verb == "analyse" else "fitted"
         raise UserError(f"{len(report.failures)} of {len(ids)} runs could not be {done}")
+    return summaries
 
 
 def run_with_progress(

@@ -95,7 +95,7 @@ def fit(
     """
     from daq.batch.tasks import FitTask
     from daq.cli.commands.analyze import recompute_flag, run_batch
-    from daq.workflows.fit import FitOptions
+    from daq.workflows.fit import FitOptions, not_a_result
 
     recompute = recompute_flag(recompute, force)
     if bool(runs) == all_runs:
@@ -117,10 +117,17 @@ def fit(
         for name, option in OPTION_NAMES:
             text = text.replace(f"{name} must", f"{option} must")
         raise UserError(text, exit_code=2) from None
-    run_batch(
+    summaries = run_batch(
         runs, all_runs, store, jobs, scheduler, json_output, print_fit, "fit",
         lambda store_dir, run_id: FitTask(store_dir, run_id, options, recompute),
     )  # fmt: skip
+    # Printed (and stored) for a look, but no estimate: a script must not take it for one.
+    failed = [(s["run_id"], why) for s in summaries if (why := not_a_result(s))]
+    if len(failed) == 1 and len(summaries) == 1:
+        raise UserError(f"run {failed[0][0]}: no damping matrix: {failed[0][1]}")
+    if failed:
+        raise UserError(f"{len(failed)} of {len(summaries)} fits are no damping matrix: " + "; ".join(
+            f"run {run_id}: {why}" for run_id, why in failed))  # fmt: skip
 
 
 def print_fit(info: dict) -> None:
