@@ -408,10 +408,40 @@ class Table:
         try:
             return header_unit, parse_unit(header_unit, quantity), "header"
         except FormatError:
+            if (order := self._order_by_units()) is not None:
+                other = "an acceleration" if quantity == "force" else "a force"
+                raise FormatError(
+                    f"{self.name}: column {_show(self.header[col])} is read as the {quantity}, but "  # type: ignore[index]
+                    f"{_show(header_unit)} is {other} unit: the columns are in another order; give "
+                    f"--columns {order} (time, force, response)"
+                ) from None
             raise FormatError(
                 f"{self.name}: column {_show(self.header[col])}: unknown {quantity} unit "  # type: ignore[index]
                 f"{_show(header_unit)} in the header; use {accepted_forms(quantity)}, or give {flag}"
             ) from None
+
+    def _order_by_units(self) -> str | None:
+        """The --columns value (time, force, response) that the header's units say, when
+        exactly one other column is in a force unit and one in a response unit; else None.
+        Header names where --columns finds them, else 0-based indices."""
+        time = self.picked[0] if self.picked else 0
+        found: dict[str, list[int]] = {"force": [], "response": []}
+        for i, unit in enumerate(self.units):
+            if i in (time, self.hit_col) or unit is None:
+                continue
+            for quantity, cols in found.items():
+                try:
+                    parse_unit(unit, quantity)
+                except FormatError:
+                    continue
+                cols.append(i)
+        if len(found["force"]) != 1 or len(found["response"]) != 1:
+            return None
+        order = [time, found["force"][0], found["response"][0]]
+        names = [self.names[i] for i in order]
+        if all(_PLAIN_NAME.fullmatch(n) and self.find(n) == i for n, i in zip(names, order, strict=True)):
+            return ",".join(names)
+        return ",".join(str(i) for i in order)
 
     def _time_unit(self, col: int) -> tuple[str, float]:
         unit = self.units[col] if self.header is not None else None
