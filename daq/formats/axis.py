@@ -109,11 +109,7 @@ def fit_regular(values: np.ndarray, half_units: np.ndarray | None = None) -> Axi
     n = t.size
     d = np.diff(t)
     typical = float(np.median(d))
-    h = np.zeros(n) if half_units is None else np.asarray(half_units, dtype=np.float64)
-    tol = np.maximum(np.minimum(h, COARSEST_FRACTION * typical), STEP_FRACTION * typical)
-    # A value exactly half a unit off (0.0003125 printed 0.000313) must pass despite the
-    # rounding of the text to binary and of the arithmetic here: a few ulps of slack.
-    tol = tol * (1.0 + 1e-9) + 8.0 * np.finfo(np.float64).eps * np.abs(t)
+    tol = _tolerances(t, half_units)
     k = np.arange(n, dtype=np.float64)
     # Least squares first (the usual case passes here), around the first value so that
     # a record far from t = 0 keeps its precision.
@@ -134,6 +130,25 @@ def fit_regular(values: np.ndarray, half_units: np.ndarray | None = None) -> Axi
     off = np.flatnonzero(np.abs(resid) > tol)
     bad = odd + 1 if deviation[odd] > tol[odd] + tol[odd + 1] or not off.size else int(off[0])
     return AxisFit(start, step, bad, float(tol.max()))
+
+
+def step_fits(values: np.ndarray, half_units: np.ndarray | None, step: float) -> bool:
+    """Whether a line of slope ``step`` (s) passes within every value's tolerance (the
+    rule of fit_regular) at some start: a stated sample rate the printed times allow."""
+    t = np.asarray(values, dtype=np.float64)
+    tol = _tolerances(t, half_units)
+    resid = (t - t[0]) - step * np.arange(t.size, dtype=np.float64)
+    return float(np.max(resid - tol)) <= float(np.min(resid + tol))
+
+
+def _tolerances(t: np.ndarray, half_units: np.ndarray | None) -> np.ndarray:
+    """Each value's tolerance (see the module's docstring), in the values' unit."""
+    typical = float(np.median(np.diff(t)))
+    h = np.zeros(t.size) if half_units is None else np.asarray(half_units, dtype=np.float64)
+    tol = np.maximum(np.minimum(h, COARSEST_FRACTION * typical), STEP_FRACTION * typical)
+    # A value exactly half a unit off (0.0003125 printed 0.000313) must pass despite the
+    # rounding of the text to binary and of the arithmetic here: a few ulps of slack.
+    return tol * (1.0 + 1e-9) + 8.0 * np.finfo(np.float64).eps * np.abs(t)
 
 
 def _first(t: np.ndarray, fitted: float, tol: np.ndarray) -> float:

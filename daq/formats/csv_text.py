@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from daq.formats.axis import fit_regular, printed_half_units
+from daq.formats.axis import fit_regular, printed_half_units, step_fits
 from daq.formats.errors import FormatError, count
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
@@ -109,8 +109,55 @@ def read_csv(
         raise FormatError(f"{name}: {exc}") from None
     with open_checked(path, max_bytes) as (handle, info):
         table = Table(name, columns=columns, keep_time_text=True)
-        table.read(handle, max_bytes)
+        table.read(_without_preamble(table, handle), max_bytes)
     return table.build(path, columns, force_unit, response_unit, mtime_utc(info))
+
+
+#: Preamble keys (lower case, letters only) that state the sample rate.
+RATE_KEYS = ("samplerate", "samplingrate", "samplingfrequency", "samplefrequency", "fs", "samplespersecond")
+_RATE_VALUE = re.compile(r"([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(hz|khz|s/s|sps)?", re.I)
+
+
+def _without_preamble(table: Table, handle):
+    """The lines of ``handle`` for the table reader, with a preamble of metadata lines
+    before the header row left blank (each line keeps its number); the preamble's
+    sample rate, if it states one, goes to table.stated_rate. Without such a preamble
+    the lines as they are: the table reader alone decides."""
+    from daq.formats.frf_text import _head_lines, _metadata, all_numbers, decode_line, split_cells
+
+    head, _ = _head_lines(handle)
+    texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
+    rows: list[int] = []
+    width = 0
+    for index, text in enumerate(texts):
+        stripped = text.strip()
+        if not stripped or stripped.startswith(COMMENT_MARKS):
+            continue
+        cells, _ = split_cells(stripped)
+        if all_numbers(cells):
+            width = len(cells)
+            break
+        rows.append(index)
+    # The row before the data is the header unless it is a metadata line too; a row that
+    # is no metadata line before it (prose, a units row) leaves the table reader to decide.
+    metas = [(i, _metadata(texts[i].strip(" \r\n"))) for i in rows]
+    # Metadata lines right before the numbers: no header at all.
+    body = metas if metas and metas[-1][1] is not None else metas[:-1]
+    preamble: list[tuple[int, tuple[str, str]]] = []
+    if width >= 3 and body and len(body) <= 64 and all(meta is not None for _, meta in body):
+        preamble = body  # type: ignore[assignment]
+    skipped = {index for index, _ in preamble}
+    table.preamble = [(index + 1, key, value) for index, (key, value) in preamble]
+    for line, key, value in table.preamble:
+        rate = _RATE_VALUE.fullmatch(value.strip())
+        if re.sub("[^a-z]", "", key.lower()) in RATE_KEYS and rate is not None:
+            hz = float(rate.group(1)) * (1000.0 if (rate.group(2) or "").lower() == "khz" else 1.0)
+            if math.isfinite(hz) and hz > 0:
+                table.stated_rate = (hz, f"line {line} ({one_line(key)[:40]}: {one_line(value)[:40]})")
+                break
+    for index, raw in enumerate(head):
+        yield b"\n" if index in skipped else raw
+    yield from handle
 
 
 def join_units(cells: list[str]) -> list[str]:
@@ -176,6 +223,10 @@ class Table:
         self.complex_mode = False
         self.time_texts: list[str] = []
         self.unended: int | None = None  # the last line, a data row, when it has no line end
+        self.preamble: list[tuple[int, str, str]] = []  # (line, key, value) left out before the header
+        # A sample rate (Hz) stated outside the time column, and where: used when the
+        # printed times allow it, else refused.
+        self.stated_rate: tuple[float, str] | None = None
 
     def read(self, handle, max_bytes: int) -> None:
         total = 0
@@ -482,6 +533,24 @@ class Table:
             start_s = exact
         elif exact is not None:
             notes["ignored_start_s"] = self.comments["start_s"]
+        if self.stated_rate is not None:
+            rate, said = self.stated_rate
+            if not step_fits(time[groups[0]], half[groups[0]], 1.0 / rate):
+                raise FormatError(
+                    f"{self.name}: {said} gives a sample rate of {rate:g} Hz, but the time column steps at "
+                    f"{1.0 / steps[0]:.6g} Hz, more than its printed precision allows; correct or remove one"
+                )
+            sample_rate_hz = rate
+            notes.setdefault("notes", []).append(
+                f"sample rate {rate:g} Hz as {said} gives it; the time column allows it"
+            )
+        if self.preamble:
+            lines_said = ", ".join(str(line) for line, _, _ in self.preamble[:8])
+            notes.setdefault("notes", []).append(
+                f"preamble line{'s' if len(self.preamble) > 1 else ''} {lines_said} skipped (kept in the "
+                "provenance)"
+            )
+            notes["preamble"] = {one_line(k)[:60]: one_line(v)[:200] for _, k, v in self.preamble[:64]}
         center = _comment_float(self.comments, "center_hz")
         if "center_hz" in self.comments and center is None:
             raise FormatError(f"{self.name}: center_hz {_show(self.comments['center_hz'])} is not a number")
@@ -508,7 +577,7 @@ class Table:
         names = [header[i] if header else str(i) for i in picked]
         ignored = [i for i in range(self.n_cols) if i not in picked and i != hit_col]
         if ignored:
-            notes["notes"] = [self._ignored_note(ignored, picked, complex_mode)]
+            notes.setdefault("notes", []).append(self._ignored_note(ignored, picked, complex_mode))
         if said := self.unended_note():
             notes.setdefault("notes", []).extend(said)
         if said := self._marker_notes(len(groups), None if ids is None else [int(ids[g[0]]) for g in groups]):
