@@ -16,10 +16,11 @@ claim less precision than the column has. The column's precision is taken from a
 values: the most decimals any value shows (fixed-point writers, %f) or the most
 significant digits (%e, %g), whichever claims less; a value's tolerance is never looser
 than its own last digit says. Except where a notation keeps its trailing zeros: a value
-printed with a zero as its last decimal ("2.50E-04") shows that its writer pads, so the
-values printed in that notation (with an exponent, or without) hold their own last digit.
-Excel-style exports print 3 significant digits with an exponent below 0.1 s and every
-digit above ("7.08E-02", then "0.10025"): the column's 5 digits are no precision of "7.08E-02".
+printed with a zero as its last decimal after another digit ("2.50E-04", not "1.0")
+shows that its writer pads, so the values printed in that notation (with an exponent,
+or without) hold their own last digit, but for zeros, which are exact. Excel-style
+exports print 3 significant digits with an exponent below 0.1 s and every digit above
+("7.08E-02", then "0.10025"): the column's 5 digits are no precision of "7.08E-02".
 """
 
 from __future__ import annotations
@@ -82,7 +83,9 @@ def printed_half_units(texts: list[str]) -> np.ndarray:
         lead[i] = exp + len(whole) - 1 - (len(digits) - len(stripped))
         known[i] = True
         exponent[i] = match.group(3) is not None
-        padded[i] = frac.endswith("0")
+        # "2.50E-04", "0.10": a zero kept after a digit; not "1.0" or "0.0", which repr
+        # and str print for any whole float however precise the column.
+        padded[i] = frac.endswith("0") and bool(frac.rstrip("0"))
     out = np.zeros(n, dtype=np.float64)
     if not known.any():
         return out
@@ -94,7 +97,8 @@ def printed_half_units(texts: list[str]) -> np.ndarray:
     literal = 0.5 * 10.0 ** quantum.astype(np.float64)
     for notation in (exponent, ~exponent):
         if np.any(padded & known & notation):
-            model = np.where(notation, literal, model)
+            # Not a zero: "0.00E+00" is 0 s exactly, not 0 +- 0.005 s.
+            model = np.where(notation & ~zero, literal, model)
     out[known] = np.minimum(literal, model)[known]
     return out
 

@@ -13,6 +13,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from daq.formats.axis import printed_half_units
 from daq.formats.csv_text import read_csv
 from daq.formats.errors import FormatError
 
@@ -51,6 +52,8 @@ def mixed_axes(draw):
 @given(axis=mixed_axes(), sep=st.sampled_from([",", "\t"]))
 def test_a_column_in_two_notations_imports_at_its_rate(axis, sep):
     rate, n, _, texts = axis
+    # A zero ("0.00E+00") is exact, not half a unit of its second decimal.
+    assert printed_half_units(texts)[0] <= printed_half_units(texts)[1]
     hits = read_csv(put(texts, "mixed.txt", sep)).hits
     assert hits.n_samples == n
     # The values below the switch are up to half a unit (5e-5 s at 0.07 s) off the line.
@@ -68,3 +71,21 @@ def test_a_dropped_sample_in_the_coarse_notation_is_still_refused(axis, data):
     path = put([spreadsheet(v, switch) for v in t], "dropped.txt", ",")
     with pytest.raises(FormatError, match=f"line {at + 2}: uneven time step"):
         read_csv(path)
+
+
+@SETTINGS
+@given(
+    rate=st.floats(1e3, 1e5),
+    n=st.integers(8, 300),
+    start=st.sampled_from([0.0, 1.0, -0.125]),
+    whole=st.booleans(),
+)
+def test_repr_printed_columns_keep_the_columns_precision(rate, n, start, whole):
+    """Python's repr prints whole floats as "0.0", "1.0": no sign of a padding writer,
+    and no value of such a column is held to its own short last digit."""
+    t = start + np.arange(n) / (round(rate) if whole else rate)
+    texts = [repr(float(v)) for v in t]
+    half = printed_half_units(texts)
+    whole_values = np.array([v == round(v) for v in t])
+    if whole_values.any() and not whole_values.all():
+        assert half[whole_values].max() <= half[~whole_values].max()
