@@ -560,6 +560,8 @@ def sections(
             str(k), " ± ".join(with_uncertainty(m["frequency_hz"], m.get("frequency_u_hz"), ".4f")),
             "– ± –" if zeta is None else " ± ".join(with_uncertainty(
                 100 * zeta, None if m.get("damping_u") is None else 100 * m["damping_u"], ".3g")),
+            # A mode added among close ones (analysis/modal_id/refine.py, missing) has no chain.
+            "none: added (LSCF missed it)" if q.get("added") else
             str(q["n_stable_orders"]) + (" (alpha_0 = 1)" if q.get("normalisation") == "lowest" else ""),
             f"{plain(100 * q['synthesis_share'], '.2g')} %",
         ])  # fmt: skip
