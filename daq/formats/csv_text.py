@@ -55,6 +55,12 @@ COMPLEX_COLUMNS = ("force_re", "force_im", "response_re", "response_im")
 COMMENT_MARKS = ("#", "%", "//")
 FREQUENCY_NAMES = ("freq", "frequency", "frequencies", "frequency_hz", "freq_hz", "hz")
 DEFAULT_UNITS = {"force": "N", "response": "m/s^2"}
+# A time column printed so that half a unit of its last digit is more than this fraction
+# of the step leaves its fitted rate uncertain enough to say so (3 digits at 4 kHz: 20 %).
+COARSE_FRACTION = 0.01
+# ... and is said only where the rate the printed times allow spreads by more than this
+# fraction of it (0.01 %: a mode's frequency off by as much, far below its damping's say).
+COARSE_RATE_SPREAD = 1e-4
 _REJECTED = re.compile(r"rejected hit ([0-9]{1,6}):(.*)")
 # "Force [N]", "acc (g)", "Time (s)", "a / mV": a name and the unit in brackets.
 _HEADER_UNIT = re.compile(r"(.*?)\s*(?:\[([^\]]*)\]|\(([^)]*)\))\s*")
@@ -89,6 +95,7 @@ def read_csv(
     force_unit: str | None = None,
     response_unit: str | None = None,
     max_bytes: int = MAX_IMPORT_BYTES,
+    sample_rate_hz: float | None = None,
 ) -> ImportedData:
     """Read hits from a delimited text file; force in N and response in m/s^2 after conversion.
 
@@ -97,6 +104,9 @@ def read_csv(
     force_unit, response_unit: units of those columns (see :mod:`daq.formats.units`); None
         takes the header's unit (``Force [N]``), else N and m/s^2. Given, they win over
         the header. details["units_from"] says which was used.
+    sample_rate_hz: the rate (Hz) to store instead of the one fitted to the time column
+        (--sample-rate); wins over a preamble's. FormatError if the printed times do not
+        allow it (daq/formats/axis.py, step_fits).
     Returns ImportedData with hits of shape (n_hits, n_samples). Any problem: FormatError.
     """
     path = Path(path)
@@ -110,6 +120,8 @@ def read_csv(
     with open_checked(path, max_bytes) as (handle, info):
         table = Table(name, columns=columns, keep_time_text=True)
         table.read(_without_preamble(table, handle), max_bytes)
+    if sample_rate_hz is not None:
+        table.stated_rate = (float(sample_rate_hz), "--sample-rate")
     return table.build(path, columns, force_unit, response_unit, mtime_utc(info))
 
 
@@ -544,6 +556,10 @@ class Table:
             notes.setdefault("notes", []).append(
                 f"sample rate {rate:g} Hz as {said} gives it; the time column allows it"
             )
+        elif sample_rate_hz == 1.0 / steps[0] and (
+            coarse := self._coarse_note(time[groups[0]], half[groups[0]], steps[0])
+        ):
+            notes.setdefault("notes", []).append(coarse)
         if self.preamble:
             lines_said = ", ".join(str(line) for line, _, _ in self.preamble[:8])
             notes.setdefault("notes", []).append(
@@ -599,6 +615,27 @@ class Table:
             **notes,
         }
         return ImportedData(hits=hits, measured_frfs=None, format="csv", details=details)
+
+    @staticmethod
+    def _coarse_note(t: np.ndarray, half: np.ndarray, step: float) -> str:
+        """The note on a fitted rate that a coarsely printed time column (half a unit of a
+        last digit more than COARSE_FRACTION of the step) knows only roughly, or "".
+        t, half: one hit's times and their printed half units (s); step: the fitted step (s)."""
+        coarsest = float(half.max())
+        if coarsest <= COARSE_FRACTION * step or t.size < 2:
+            return ""
+        # The fitted line and the true one both pass within the first and the last values'
+        # tolerances, so their steps differ by at most twice those over the record.
+        ends = max(float(half[0]), 0.01 * step) + max(float(half[-1]), 0.01 * step)
+        spread = 2.0 * ends / (t.size - 1) / step**2
+        if spread <= COARSE_RATE_SPREAD / step:
+            return ""  # coarse, but over enough samples: 4000 Hz +- 0.08 Hz needs no word
+        return (
+            f"the time column is printed coarsely (half a unit of its last digit is {coarsest:.3g} s, "
+            f"{100 * coarsest / step:.0f} % of the step): the printed times allow any rate within "
+            f"{spread:.2g} Hz of the fitted {1 / step:.6g} Hz; if you know the exact rate, give it with "
+            "--sample-rate HZ"
+        )
 
     def _ignored_note(self, ignored: list[int], picked: list[int], complex_mode: bool) -> str:
         """One line naming the columns the run leaves out (counted from 1, as in the other

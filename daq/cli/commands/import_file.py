@@ -11,6 +11,7 @@ source's name, size and SHA-256, so it can always be traced back to the bytes it
 from __future__ import annotations
 
 import enum
+import math
 import os
 from pathlib import Path
 from typing import Annotated, Any
@@ -79,6 +80,16 @@ def import_file(
             metavar="<unit>",
             help="CSV: m/s^2, g, mm/s^2, or volts with a sensitivity: mV@10mV/g; wins over the "
             "header's unit [default: the header's, else m/s^2].",
+        ),
+    ] = None,
+    sample_rate: Annotated[
+        float | None,
+        typer.Option(
+            "--sample-rate",
+            metavar="<Hz>",
+            show_default=False,
+            help="CSV: the sample rate to store instead of the one fitted to the time column; refused "
+            "if the printed times do not allow it [default: the fitted rate, or a preamble's].",
         ),
     ] = None,
     frf_form: Annotated[
@@ -164,6 +175,14 @@ def import_file(
         chosen, how = format.value, "given by --format"
     if chosen != "csv" and (columns is not None or force_unit is not None or response_unit is not None):
         raise UserError("--columns, --force-unit and --response-unit apply to CSV files only", exit_code=2)
+    if sample_rate is not None and chosen != "csv":
+        raise UserError(
+            f"--sample-rate applies to CSV time records only, not {chosen} files"
+            + (" (an FRF table has no sample rate)" if chosen == "frf-text" else ""),
+            exit_code=2,
+        )
+    if sample_rate is not None and not (math.isfinite(sample_rate) and sample_rate > 0):
+        raise UserError(f"--sample-rate {sample_rate:g}: give a rate above 0 Hz", exit_code=2)
     if chosen != "frf-text" and frf_form is not None:
         raise UserError("--frf-form applies to frf-text files only", exit_code=2)
     started = utc_now()
@@ -179,7 +198,7 @@ def import_file(
         parts = _from_run_file(file)
     else:
         try:
-            data = _read(file, chosen, columns, force_unit, response_unit, frf_form)
+            data = _read(file, chosen, columns, force_unit, response_unit, frf_form, sample_rate)
             check_read(file, chosen, format is not ImportFormat.auto, data)
         except MemoryError:
             # A well-formed file can still decode to more than this machine holds (int16
@@ -825,11 +844,12 @@ def _read(
     force_unit: str | None,
     response_unit: str | None,
     frf_form: str | None,
+    sample_rate: float | None = None,
 ) -> Any:
     if chosen == "csv":
         from daq.formats.csv_text import read_csv
 
-        return read_csv(file, columns, force_unit, response_unit)
+        return read_csv(file, columns, force_unit, response_unit, sample_rate_hz=sample_rate)
     if chosen == "frf-text":
         from daq.formats.frf_text import read_frf_text
 
