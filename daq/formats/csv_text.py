@@ -28,6 +28,7 @@ import os
 import re
 from array import array
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 
@@ -86,6 +87,80 @@ def choose_delimiter(line: str) -> str | None:
     return None
 
 
+#: How far the preamble scan looks: lines, and bytes of one line.
+HEAD_LINES = 200
+HEAD_LINE_BYTES = 4096
+
+
+def decode_line(raw: bytes, first: bool = False) -> str:
+    """A line of a text export: UTF-8 (a BOM on the first line dropped), else Latin-1, which
+    SignalCalc and other Windows programs write ("m/s²" with the byte 0xB2)."""
+    try:
+        text = raw.decode("utf-8-sig" if first else "utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    return text.rstrip("\r\n")
+
+
+def split_cells(line: str, delimiter: str | None = None) -> tuple[list[str], str | None]:
+    """(cells, delimiter) of a line: ";", tab or "," (found in the line when not given),
+    else runs of whitespace; cells stripped."""
+    if delimiter is None:
+        delimiter = choose_delimiter(line)
+    cells = line.split(delimiter) if delimiter else line.split()
+    return [c.strip() for c in cells], delimiter
+
+
+def is_number_text(cell: str) -> bool:
+    """A cell that any writer means as a number: quotes, a decimal comma, a Unicode minus
+    or a Fortran D exponent allowed (the table reader may still refuse it as written)."""
+    text = cell.strip().strip("\"'").replace("\u2212", "-")
+    if text.count(",") == 1:
+        text = text.replace(",", ".")
+    text = re.sub(r"(?<=[0-9.])[dD](?=[-+]?[0-9])", "e", text)
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def all_numbers(cells: list[str]) -> bool:
+    """Every cell a number, but for empty cells after the last (a trailing delimiter)."""
+    while cells and not cells[-1]:
+        cells = cells[:-1]
+    return bool(cells) and all(is_number_text(c) for c in cells)
+
+
+def _metadata(line: str) -> tuple[str, str] | None:
+    """(key, value) of a preamble line "key: value" or "key<TAB>value", else None."""
+    if "\t" in line:
+        cells = [c.strip() for c in line.split("\t")]
+        if len([c for c in cells if c]) <= 2 and cells[0]:
+            value = " ".join(c for c in cells[1:] if c)
+            return cells[0].rstrip(":").strip(), value.removeprefix(":").strip()
+        return None
+    key, colon, value = line.partition(":")
+    if colon and key.strip():
+        return key.strip(), value.strip()
+    return None
+
+
+def _head_lines(handle: IO[bytes]) -> tuple[list[bytes], bool]:
+    """The first HEAD_LINES raw lines (each complete), and whether the file ended among them."""
+    head: list[bytes] = []
+    for _ in range(HEAD_LINES):
+        raw = handle.readline(HEAD_LINE_BYTES)
+        if not raw:
+            return head, True
+        if not raw.endswith(b"\n"):
+            raw += handle.readline()  # complete a long line: line numbers must stay right
+            head.append(raw)
+            return head, False
+        head.append(raw)
+    return head, False
+
+
 _PLAIN_NAME = re.compile(r"[A-Za-z0-9_.+-]+")
 
 
@@ -135,8 +210,6 @@ def _without_preamble(table: Table, handle):
     before the header row left blank (each line keeps its number); the preamble's
     sample rate, if it states one, goes to table.stated_rate. Without such a preamble
     the lines as they are: the table reader alone decides."""
-    from daq.formats.frf_text import _head_lines, _metadata, all_numbers, decode_line, split_cells
-
     head, _ = _head_lines(handle)
     texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
     rows: list[int] = []

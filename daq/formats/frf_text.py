@@ -44,7 +44,17 @@ from typing import IO, Any
 
 import numpy as np
 
-from daq.formats.csv_text import COMMENT_MARKS, Table, choose_delimiter, header_name_unit, is_frequency_name
+from daq.formats.csv_text import (
+    COMMENT_MARKS,
+    Table,
+    _head_lines,
+    _metadata,
+    all_numbers,
+    decode_line,
+    header_name_unit,
+    is_frequency_name,
+    split_cells,
+)
 from daq.formats.errors import FormatError, count
 from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
 from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
@@ -78,9 +88,6 @@ _PHASE_UNITS = {
     "radian": 180.0 / np.pi,
 }
 _TOKEN = re.compile(r"[A-Za-z0-9]+")
-#: How far the preamble scan looks: lines, and bytes of one line.
-HEAD_LINES = 200
-HEAD_LINE_BYTES = 4096
 #: Preamble lines at most, and what of them the provenance keeps.
 MAX_PREAMBLE_LINES = 64
 MAX_PREAMBLE_KEY = 60
@@ -105,60 +112,6 @@ class Layout:
     def skipped(self) -> set[int]:
         """Lines the table reader must not see (they are read here)."""
         return {*self.preamble, *(i for i in (self.marker, self.units) if i is not None)}
-
-
-def decode_line(raw: bytes, first: bool = False) -> str:
-    """A line of a text export: UTF-8 (a BOM on the first line dropped), else Latin-1, which
-    SignalCalc and other Windows programs write ("m/s²" with the byte 0xB2)."""
-    try:
-        text = raw.decode("utf-8-sig" if first else "utf-8")
-    except UnicodeDecodeError:
-        text = raw.decode("latin-1")
-    return text.rstrip("\r\n")
-
-
-def split_cells(line: str, delimiter: str | None = None) -> tuple[list[str], str | None]:
-    """(cells, delimiter) of a line: ";", tab or "," (found in the line when not given),
-    else runs of whitespace; cells stripped."""
-    if delimiter is None:
-        delimiter = choose_delimiter(line)
-    cells = line.split(delimiter) if delimiter else line.split()
-    return [c.strip() for c in cells], delimiter
-
-
-def is_number_text(cell: str) -> bool:
-    """A cell that any writer means as a number: quotes, a decimal comma, a Unicode minus
-    or a Fortran D exponent allowed (the table reader may still refuse it as written)."""
-    text = cell.strip().strip("\"'").replace("\u2212", "-")
-    if text.count(",") == 1:
-        text = text.replace(",", ".")
-    text = re.sub(r"(?<=[0-9.])[dD](?=[-+]?[0-9])", "e", text)
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def all_numbers(cells: list[str]) -> bool:
-    """Every cell a number, but for empty cells after the last (a trailing delimiter)."""
-    while cells and not cells[-1]:
-        cells = cells[:-1]
-    return bool(cells) and all(is_number_text(c) for c in cells)
-
-
-def _metadata(line: str) -> tuple[str, str] | None:
-    """(key, value) of a preamble line "key: value" or "key<TAB>value", else None."""
-    if "\t" in line:
-        cells = [c.strip() for c in line.split("\t")]
-        if len([c for c in cells if c]) <= 2 and cells[0]:
-            value = " ".join(c for c in cells[1:] if c)
-            return cells[0].rstrip(":").strip(), value.removeprefix(":").strip()
-        return None
-    key, colon, value = line.partition(":")
-    if colon and key.strip():
-        return key.strip(), value.strip()
-    return None
 
 
 def _is_units_marker(line: str) -> bool:
@@ -222,21 +175,6 @@ def scan_layout(lines: list[str]) -> Layout:
             continue
         break  # a second non-number row: the table reader says what is wrong with it
     return layout
-
-
-def _head_lines(handle: IO[bytes]) -> tuple[list[bytes], bool]:
-    """The first HEAD_LINES raw lines (each complete), and whether the file ended among them."""
-    head: list[bytes] = []
-    for _ in range(HEAD_LINES):
-        raw = handle.readline(HEAD_LINE_BYTES)
-        if not raw:
-            return head, True
-        if not raw.endswith(b"\n"):
-            raw += handle.readline()  # complete a long line: line numbers must stay right
-            head.append(raw)
-            return head, False
-        head.append(raw)
-    return head, False
 
 
 def _fed_lines(head: list[bytes], texts: list[str], layout: Layout, handle: IO[bytes]) -> Iterator[bytes]:
