@@ -252,6 +252,12 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     col = 1
     while col < table.n_cols:
         pair = tuple(kinds[col : col + 2])
+        if pair[0] == "mag" and pair != ("mag", "phase"):
+            raise FormatError(
+                f"{name}: column {col + 1} ({_label(table, col)}) is a magnitude without its phase "
+                "in the next column: modes are identified from the complex FRF, so each FRF needs "
+                "its phase (or re, im) beside it"
+            )
         if pair not in (("re", "im"), ("mag", "phase")):
             raise FormatError(
                 f"{name}: column {col + 1} ({_label(table, col)}) starts no FRF: each FRF is a "

@@ -80,6 +80,28 @@ class _Record:
     nodes: tuple[Any, Any, Any, Any]
 
 
+#: Names of UFF 58 function types and ordinate specific data types, to say what a file holds.
+FUNC_NAMES = {1: "time record", 2: "auto spectrum", 3: "cross spectrum", 4: "FRF", 6: "coherence",
+              9: "PSD", 12: "spectrum"}  # fmt: skip
+KIND_NAMES = {0: "an unknown quantity", 1: "a general quantity", 2: "stress", 3: "strain",
+              5: "temperature", 8: "displacement", 9: "force", 11: "velocity", 12: "acceleration",
+              13: "force", 15: "pressure"}  # fmt: skip
+
+
+def _contents(records: list[_Record]) -> str:
+    """What the datasets 58 hold, counted: '2 × time record of pressure (Pa), 1 × PSD of acceleration'."""
+    counts: dict[str, int] = {}
+    for rec in records:
+        what = FUNC_NAMES.get(rec.func, f"function type {rec.func}")
+        of = KIND_NAMES.get(rec.kind, f"data type {rec.kind}")
+        unit = rec.unit.strip()
+        key = f"{what} of {of}" + (f" ({unit})" if unit and unit.upper() not in _NO_UNIT else "")
+        counts[key] = counts.get(key, 0) + 1
+    if not counts:
+        return "no dataset 58"
+    return ", ".join(f"{n} × {key}" for key, n in counts.items())
+
+
 def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     """Read dataset 58 records: time records as hits (N, m/s^2) and FRFs (SI units of their form).
 
@@ -101,7 +123,10 @@ def read_uff(path: Path, max_bytes: int = MAX_IMPORT_BYTES) -> ImportedData:
     hits = _hits(path, name, by_func.get(FUNC_TIME, []), mtime_utc(info), details)
     frfs = _frfs(path, name, by_func.get(FUNC_FRF, []), by_func.get(FUNC_COHERENCE, []), details)
     if hits is None and frfs is None:
-        raise FormatError(f"{name}: no force/acceleration time records and no FRFs among its datasets 58")
+        raise FormatError(
+            f"{name}: no force/acceleration time records and no FRFs among its datasets 58; "
+            f"it holds {_contents(records)}"
+        )
     return ImportedData(hits=hits, measured_frfs=frfs, format="uff", details=details)
 
 

@@ -360,6 +360,7 @@ def test_header_units_are_used_and_said(tmp_path):
         ("t (s);F (N);a (mV)\n0;1;2\n0,001;1;2\n", "--response-unit mV@10.2mV/g"),
         ("t (fortnight),F,a\n0,1,2\n1,1,2\n", "unknown time unit"),
         ("freq,Re\n1,2\n2,3\n", "starts no FRF"),
+        ("Frequency,Magnitude\n1,2\n2,3\n", "a magnitude without its phase"),
     ],
 )
 def test_bad_real_world_files_are_one_line_and_nothing_is_written(tmp_path, content, fragment):

@@ -339,3 +339,16 @@ def test_not_regular_files(tmp_path):
     big = tmp_path / "big.uff"
     write_uff(make_run(hits=make_hits(n_hits=1, n=64)), big)
     assert "more than the import limit" in refused(big, max_bytes=100)
+
+
+def test_a_file_with_no_force_acceleration_record_and_no_frf_says_what_it_holds(tmp_path):
+    """A microphone's pressure record and a PSD: refused, naming what the datasets are
+    (a new user could not tell why their file was refused)."""
+    x = np.arange(64) / 1024.0
+    pressure = time_set(np.sin(x), 15, "Pa", x)
+    psd = frf_set(np.abs(np.sin(x)) + 0.0j, np.arange(64.0), func=9, num="g^2/Hz", den="NONE")
+    path = write_sets(tmp_path / "mic.uff", [pressure, pressure, psd])
+    with pytest.raises(
+        FormatError, match=r"it holds 2 × time record of pressure \(Pa\), 1 × PSD of acceleration"
+    ):
+        read_uff(path)
