@@ -111,7 +111,8 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
         raise ValueError("the run's analysis found no mode with a damping ratio to start from")
     low, high = _band(run, analysis, options)
     in_band = usable & (ident_f >= low) & (ident_f <= high)
-    n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions)
+    searched = _searched_band(analysis, low, high)
+    n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions, searched)
     while True:
         model, beam_origin, stiffness_info, start, matching, data, domain = _prepare(
             run, analysis, options, n, ident_f[usable], ident_z[usable]
@@ -187,7 +188,8 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
         "stiffness": stiffness_info,
         "model": {"ritz_functions": n, "beam": beam_origin, "functions_reason": reason,
                   "functions_requested": options.n_functions, "modes_identified_in_band": int(in_band.sum()),
-                  "band_hz": [float(low), float(high)]},
+                  "band_hz": [float(low), float(high)],
+                  "analysis_band_hz": None if searched is None else [float(searched[0]), float(searched[1])]},
         "uncertainty": {
             "names": list(ident.names),
             # The larger of the two figures below, term by term (std_source says which).
@@ -234,17 +236,50 @@ RESIDUAL_CAUTION = 0.1
 
 
 def resolve_functions(
-    identified_in_band: int, low_hz: float, high_hz: float, requested: int | None
+    identified_in_band: int,
+    low_hz: float,
+    high_hz: float,
+    requested: int | None,
+    searched_hz: tuple[float, float] | None = None,
 ) -> tuple[int, str]:
     """(N, why): the Ritz functions of the fit. An explicit ``requested`` wins;
-    otherwise one per mode the analysis identified in the fitted band, 1..MAX_FUNCTIONS."""
+    otherwise one per mode the analysis identified in the fitted band, 1..MAX_FUNCTIONS.
+    searched_hz: the analysis's band (Hz) where it is narrower than the fitted one
+    (_searched_band): the why then says that modes were looked for there only."""
     band = f"{low_hz:.4g}-{high_hz:.4g} Hz"
     found = f"{identified_in_band} mode{'' if identified_in_band == 1 else 's'} identified in {band}"
+    if searched_hz is not None:
+        found = (
+            f"{found}, looked for in {searched_hz[0]:.4g}-{searched_hz[1]:.4g} Hz only (the analysis's band; "
+            f"daq analyze --band {low_hz:.4g}:{high_hz:.4g} looks over the whole fitted band)"
+        )
     if requested is not None:
         return requested, f"{requested} Ritz function{'' if requested == 1 else 's'} (--functions); {found}"
     n = min(max(identified_in_band, 1), MAX_FUNCTIONS)
     note = "" if n == identified_in_band else f" (at least 1, at most {MAX_FUNCTIONS})"
     return n, f"{n} Ritz function{'' if n == 1 else 's'}: {found}{note}"
+
+
+#: The analysis's band is named beside the fit's where it leaves out more than this share
+#: of the fitted band at its top, or starts above this share of it: a few lines at 0 Hz
+#: the analysis leaves out hold no mode the fit needs.
+SEARCHED_SHARE = 0.05
+
+
+def _searched_band(analysis: dict[str, Any], low_hz: float, high_hz: float) -> tuple[float, float] | None:
+    """(low, high) Hz of the band the analysis identified modes in, where it is clearly
+    narrower than the fit's (low_hz, high_hz); None where it is not, or not recorded
+    (analyses with --frequencies or stored before the band was)."""
+    band = analysis.get("band")
+    if not isinstance(band, dict):
+        return None
+    try:
+        a_low, a_high = float(band["low_hz"]), float(band["high_hz"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    span = high_hz - low_hz
+    narrower = a_high < high_hz - SEARCHED_SHARE * span or a_low > low_hz + SEARCHED_SHARE * span
+    return (a_low, a_high) if narrower and np.isfinite([a_low, a_high]).all() else None
 
 
 def _band(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[float, float]:
@@ -411,6 +446,13 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
         else ""
     )
     tries = []
+    searched = summary["model"].get("analysis_band_hz")
+    if searched is not None and not more_modes:
+        # The analysis looked in part of the fitted band only: a mode elsewhere is unknown.
+        tries.append(
+            f"daq analyze --band {low:.4g}:{high:.4g}, then daq fit (the analysis looked for modes "
+            f"in {searched[0]:.4g}-{searched[1]:.4g} Hz only)"
+        )
     if more_modes:
         tries.append(f"--functions {min(found, MAX_FUNCTIONS)} (one function per identified mode)")
     elif summary["model"].get("functions_requested") is None and n < MAX_FUNCTIONS:

@@ -12,7 +12,7 @@ from analysis.damping import pilkey_inman, undamped_modes, update_mode_frequenci
 from analysis.modal import damped_modes
 from analysis.ritz import RitzBeam
 from analysis.seed import eq18_damping_matrix
-from daq.workflows.fit import FitOptions, fit_cautions, resolve_functions
+from daq.workflows.fit import FitOptions, _searched_band, fit_cautions, resolve_functions
 from tests.cli_helpers import assert_one_line_error, capture_sim, daq_json, invoke_daq
 
 
@@ -61,6 +61,31 @@ def test_pilkey_inman_keeps_r_dissipative_and_still_matches_the_poles():
     assert np.linalg.eigvalsh(r).min() >= -1e-9 * np.abs(r).max()
     with pytest.raises(ValueError, match="Newton"):
         pilkey_inman(model, poles, psd=True, update="lancaster")
+
+
+def test_an_analysis_band_narrower_than_the_fit_is_named_with_the_remedy():
+    """A fourth user's run: the time records span 0-1562 Hz, the analysis looked in 1-401 Hz;
+    the count of identified modes then says nothing of 401-1562 Hz, and the output must say so."""
+    assert _searched_band({"band": {"low_hz": 1.0, "high_hz": 401.0, "reason": ""}}, 0.0, 1562.5) == (
+        1.0,
+        401.0,
+    )
+    # The few lines at 0 Hz an analysis band leaves out, or none recorded: nothing to say.
+    assert _searched_band({"band": {"low_hz": 0.5, "high_hz": 200.0, "reason": ""}}, 0.0, 200.0) is None
+    assert _searched_band({"band": None}, 0.0, 200.0) is None
+    assert _searched_band({}, 0.0, 200.0) is None
+    n, why = resolve_functions(3, 0.0, 1562.5, None, (1.0, 401.0))
+    assert n == 3
+    assert why == (
+        "3 Ritz functions: 3 modes identified in 0-1562 Hz, looked for in 1-401 Hz only (the analysis's "
+        "band; daq analyze --band 0:1562 looks over the whole fitted band)"
+    )
+    model = {"ritz_functions": 3, "modes_identified_in_band": 3, "band_hz": [0.0, 1562.5],
+             "analysis_band_hz": [1.0, 401.0]}  # fmt: skip
+    (far,) = fit_cautions(_summary(psi=0.5, model=model))
+    assert (
+        "try daq analyze --band 0:1562, then daq fit (the analysis looked for modes in 1-401 Hz only)" in far
+    )
 
 
 def _summary(**changes):
