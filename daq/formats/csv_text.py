@@ -54,6 +54,15 @@ from daq.store.model import Run
 AXIS_TOLERANCE = 1e-9  # kept for callers; hits now share one axis within the time rule
 COMPLEX_COLUMNS = ("force_re", "force_im", "response_re", "response_im")
 COMMENT_MARKS = ("#", "%", "//")
+# Header names (lower case, without their unit) that say which column is the force and
+# which the response, whatever their order (a header unit in N or g says so too). Only
+# acceleration units are read for a response, so velocity and displacement are not here.
+KIND_NAMES = {
+    "force": frozenset({"force", "f", "hammer", "excitation", "input", "load"}),
+    "response": frozenset(
+        {"response", "resp", "acc", "accel", "acceleration", "accelerometer", "a", "output"}
+    ),
+}
 FREQUENCY_NAMES = ("freq", "frequency", "frequencies", "frequency_hz", "freq_hz", "hz")
 DEFAULT_UNITS = {"force": "N", "response": "m/s^2"}
 # A time column printed so that half a unit of its last digit is more than this fraction
@@ -174,8 +183,12 @@ def read_csv(
 ) -> ImportedData:
     """Read hits from a delimited text file; force in N and response in m/s^2 after conversion.
 
-    columns: None (the first three columns other than ``hit``: time, force, response) or
-        three header names / 0-based indices, comma-separated, e.g. "t,F,a" or "0,2,1".
+    columns: None or three header names / 0-based indices, comma-separated, e.g. "t,F,a"
+        or "0,2,1". None: the force and response columns by their header names or units
+        where these say which is which (KIND_NAMES; one of each, else nothing is guessed),
+        the time column the one named "time" or the first; else the first three columns
+        other than ``hit``: time, force, response. Taken out of position order, a note
+        says so.
     force_unit, response_unit: units of those columns (see :mod:`daq.formats.units`); None
         takes the header's unit (``Force [N]``), else N and m/s^2. Given, they win over
         the header. details["units_from"] says which was used.
@@ -205,13 +218,11 @@ RATE_KEYS = ("samplerate", "samplingrate", "samplingfrequency", "samplefrequency
 _RATE_VALUE = re.compile(r"([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(hz|khz|s/s|sps)?", re.I)
 
 
-def _without_preamble(table: Table, handle):
-    """The lines of ``handle`` for the table reader, with a preamble of metadata lines
-    before the header row left blank (each line keeps its number); the preamble's
-    sample rate, if it states one, goes to table.stated_rate. Without such a preamble
-    the lines as they are: the table reader alone decides."""
-    head, _ = _head_lines(handle)
-    texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
+def preamble_lines(texts: list[str]) -> list[tuple[int, tuple[str, str]]]:
+    """(index, (key, value)) of each line of a preamble of metadata lines ("key: value",
+    "key<TAB>value") among ``texts`` (a text file's first lines, decoded), before its
+    header row or, with none, before its numbers (a row of 3 numbers or more); [] without
+    one. Blank lines and comments may come between; indices count from 0."""
     rows: list[int] = []
     width = 0
     for index, text in enumerate(texts):
@@ -228,9 +239,19 @@ def _without_preamble(table: Table, handle):
     metas = [(i, _metadata(texts[i].strip(" \r\n"))) for i in rows]
     # Metadata lines right before the numbers: no header at all.
     body = metas if metas and metas[-1][1] is not None else metas[:-1]
-    preamble: list[tuple[int, tuple[str, str]]] = []
     if width >= 3 and body and len(body) <= 64 and all(meta is not None for _, meta in body):
-        preamble = body  # type: ignore[assignment]
+        return body  # type: ignore[return-value]
+    return []
+
+
+def _without_preamble(table: Table, handle):
+    """The lines of ``handle`` for the table reader, with a preamble of metadata lines
+    before the header row left blank (each line keeps its number); the preamble's
+    sample rate, if it states one, goes to table.stated_rate. Without such a preamble
+    the lines as they are: the table reader alone decides."""
+    head, _ = _head_lines(handle)
+    texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
+    preamble = preamble_lines(texts)
     skipped = {index for index, _ in preamble}
     table.preamble = [(index + 1, key, value) for index, (key, value) in preamble]
     for line, key, value in table.preamble:
@@ -304,6 +325,8 @@ class Table:
         self.values = array("d")
         self.lines = array("q")
         self.picked: list[int] | None = None
+        # How the columns were taken when not by position (their header names or units).
+        self.picked_note = ""
         self.hit_col: int | None = None
         self.complex_mode = False
         self.time_texts: list[str] = []
@@ -490,7 +513,18 @@ class Table:
                     f"{self.name} has {count(len(rest), 'data column')}; need time, force and response"
                 )
             named = [self.find(n) for n in ("time", "force", "response")]
-            return (named if None not in named else rest[:3]), hit  # type: ignore[return-value]
+            said = "names"
+            if None in named:
+                named, said = self._by_kind(rest)  # type: ignore[assignment]
+            if None in named:
+                return rest[:3], hit
+            if named != rest[:3]:
+                shown = ", ".join(
+                    f"{role} {self.header[i]!r}"  # type: ignore[index]
+                    for role, i in zip(("time", "force", "response"), named, strict=True)
+                )
+                self.picked_note = f"columns taken by their {said}: {shown}"
+            return named, hit  # type: ignore[return-value]
         items = [item.strip() for item in columns.split(",")]
         if len(items) != 3 or not all(items):
             raise FormatError(
@@ -525,6 +559,52 @@ class Table:
         if hit in picked:
             hit = None  # the user chose to read it as data
         return picked, hit
+
+    def _kind(self, col: int) -> tuple[str | None, str]:
+        """What a header column holds, by its name and its unit: ("force", how),
+        ("response", how), (None, "") when neither says, ("conflict", "") when they disagree
+        (a force-like name in an acceleration unit). how: "names" where the name says so (its
+        unit, if any, agreeing), else "units"."""
+        name = self.names[col].strip().strip("\"'").strip().lower()
+        by_name = next((q for q, names in KIND_NAMES.items() if name in names), None)
+        by_unit = None
+        unit = self.units[col]
+        if unit is not None:
+            fits = []
+            for quantity in ("force", "response"):
+                try:
+                    parse_unit(unit, quantity)
+                except FormatError:
+                    continue
+                fits.append(quantity)
+            by_unit = fits[0] if len(fits) == 1 else None
+        if by_name and by_unit and by_name != by_unit:
+            return "conflict", ""
+        if by_name:
+            return by_name, "names"
+        return by_unit, "units" if by_unit else ""
+
+    def _by_kind(self, rest: list[int]) -> tuple[list[int | None], str]:
+        """([time, force, response], how) where the header's names or units say which
+        column is the force and which the response: exactly one force-like and one
+        response-like column among those after the time column (which stays the first
+        column other than hit) and none whose name and unit disagree; else a list holding
+        None (the columns are then taken by position). how: what said so, for the note."""
+        if self.header is None or len(rest) < 3:
+            return [None], ""
+        found: dict[str, list[int]] = {"force": [], "response": []}
+        hows: set[str] = set()
+        for col in rest[1:]:
+            kind, how = self._kind(col)
+            if kind == "conflict":
+                return [None], ""
+            if kind is not None:
+                found[kind].append(col)
+                hows.add(how)
+        if len(found["force"]) != 1 or len(found["response"]) != 1:
+            return [None], ""
+        said = next(iter(hows)) if len(hows) == 1 else "names and units"
+        return [rest[0], found["force"][0], found["response"][0]], said
 
     def _unit(self, col: int, option: str | None, quantity: str) -> tuple[str, float, str]:
         """(unit, SI factor, where from: "option", "header" or "default") of a data column."""
@@ -663,6 +743,8 @@ class Table:
             force_n = data[order, picked[1]].reshape(len(groups), n) * factors[0]
             response_m_s2 = data[order, picked[2]].reshape(len(groups), n) * factors[1]
         hits = make_hits(path, force_n, response_m_s2, sample_rate_hz, start_s, center, stamp, self.rejected)
+        if self.picked_note and columns is None:
+            notes.setdefault("notes", []).insert(0, self.picked_note)
         names = [header[i] if header else str(i) for i in picked]
         ignored = [i for i in range(self.n_cols) if i not in picked and i != hit_col]
         if ignored:

@@ -63,7 +63,8 @@ def import_file(
         typer.Option(
             metavar="<t,F,a>",
             help="CSV: the time, force and response columns, by header name or 0-based index "
-            "[default: the first three].",
+            "[default: by the header's names or units where they say which is the force and which the "
+            "response, else the first three].",
         ),
     ] = None,
     force_unit: Annotated[
@@ -551,15 +552,17 @@ def frf_table_head(head: bytes) -> tuple[int, list[str]]:
 
 def text_header(head: bytes) -> list[str]:
     """The cells of a text file's header row (its first line that is neither empty nor a
-    comment, when it is not all numbers), or [] when there is none or it is no text."""
-    from daq.formats.csv_text import COMMENT_MARKS, choose_delimiter, looks_complex
+    comment nor in a preamble of metadata lines, when it is not all numbers), or [] when
+    there is none or it is no text."""
+    from daq.formats.csv_text import COMMENT_MARKS, choose_delimiter, looks_complex, preamble_lines
 
     if b"\0" in head:
         return []
-    text = head.decode("utf-8-sig", errors="replace")
-    for line in text.splitlines():
+    lines = head.decode("utf-8-sig", errors="replace").splitlines()
+    preamble = {index for index, _ in preamble_lines(lines)}  # "Sample rate: 4000 Hz" is no header
+    for index, line in enumerate(lines):
         stripped = line.strip()
-        if not stripped or stripped.startswith(COMMENT_MARKS):
+        if not stripped or stripped.startswith(COMMENT_MARKS) or index in preamble:
             continue
         delimiter = choose_delimiter(stripped)
         cells = [
