@@ -624,22 +624,30 @@ class Table:
         try:
             return header_unit, parse_unit(header_unit, quantity), "header"
         except FormatError:
-            if (order := self._order_by_units()) is not None:
+            other_quantity = "response" if quantity == "force" else "force"
+            if (order := self._order_by_units()) is not None or (
+                _parses(header_unit, other_quantity) and (order := self._order_by_units(first=True))
+            ):
+                # Several columns in a force (or response) unit: the first of each is an
+                # example, and the message says so; nothing is guessed.
+                several = self._order_by_units() is None
+                example = "--columns with the force and response you mean, e.g. " if several else ""
                 other = "an acceleration" if quantity == "force" else "a force"
                 raise FormatError(
                     f"{self.name}: column {_show(self.header[col])} is read as the {quantity}, but "  # type: ignore[index]
                     f"{_show(header_unit)} is {other} unit: the columns are in another order; give "
-                    f"--columns {order} (time, force, response)"
+                    f"{example}--columns {order} (time, force, response)"
                 ) from None
             raise FormatError(
                 f"{self.name}: column {_show(self.header[col])}: unknown {quantity} unit "  # type: ignore[index]
                 f"{_show(header_unit)} in the header; use {accepted_forms(quantity)}, or give {flag}"
             ) from None
 
-    def _order_by_units(self) -> str | None:
+    def _order_by_units(self, first: bool = False) -> str | None:
         """The --columns value (time, force, response) that the header's units say, when
-        exactly one other column is in a force unit and one in a response unit; else None.
-        Header names where --columns finds them, else 0-based indices."""
+        exactly one other column is in a force unit and one in a response unit (first:
+        the first of each where there are several); else None. Header names where
+        --columns finds them, else 0-based indices."""
         time = self.picked[0] if self.picked else 0
         found: dict[str, list[int]] = {"force": [], "response": []}
         for i, unit in enumerate(self.units):
@@ -651,7 +659,8 @@ class Table:
                 except FormatError:
                     continue
                 cols.append(i)
-        if len(found["force"]) != 1 or len(found["response"]) != 1:
+        counts = (len(found["force"]), len(found["response"]))
+        if counts != (1, 1) and not (first and min(counts) >= 1):
             return None
         order = [time, found["force"][0], found["response"][0]]
         names = [self.names[i] for i in order]
@@ -1061,3 +1070,12 @@ def _ordinal(n: int) -> str:
 
 def _show(text: str) -> str:
     return repr(one_line(text) if len(text) <= 40 else one_line(text[:40]) + "...")
+
+
+def _parses(unit: str, quantity: str) -> bool:
+    """Whether ``unit`` is one of ``quantity``'s units ("force" or "response")."""
+    try:
+        parse_unit(unit, quantity)
+    except FormatError:
+        return False
+    return True
