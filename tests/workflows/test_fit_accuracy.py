@@ -25,6 +25,14 @@ def seed_run(tmp_path_factory) -> tuple[Path, str]:
     return store, capture_sim(store, "seed", seed=5)
 
 
+@pytest.fixture(scope="module")
+def realistic_run(tmp_path_factory) -> tuple[Path, str]:
+    """One capture of the realistic beam for the tests that fit it with different options
+    (each fit stores its own result: a fit with other options is computed again)."""
+    store = tmp_path_factory.mktemp("realistic")
+    return store, capture_sim(store, "realistic", seed=6)
+
+
 def test_seed_run_least_squares_gives_the_eq18_damping_at_the_noise_level(seed_run):
     store, run_id = seed_run
     # eq (18) is 3 x 3: the model is the seed's N = 3 whatever the analysis identified.
@@ -49,14 +57,14 @@ def test_the_seed_ga_is_reproducible_and_reported_as_it_comes_out(seed_run):
     assert first["n_evaluations"] >= 1500  # the seed's budget: 50 x 30 (+ the first generation)
 
 
-def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(tmp_path):
+def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(realistic_run):
     """The defaults (one Ritz function per identified mode, R = L L^T, each mode at its
     identified frequency) on the realistic beam: all four modes in the 200 Hz band, Psi
     at the noise floor, R positive semi-definite, and no caution but the one saying
     that one tip measurement leaves terms of a 4 x 4 R undetermined (only the modal
     dampings are fixed: docs/damping.md)."""
-    run_id = capture_sim(tmp_path, "realistic", seed=6)
-    (info,) = fit_json(tmp_path, run_id)
+    store, run_id = realistic_run
+    (info,) = fit_json(store, run_id)
     assert info["model"]["ritz_functions"] == 4
     assert info["model"]["functions_reason"] == "4 Ritz functions: 4 modes identified in 0-200 Hz"
     assert info["options"]["n_functions"] == 4  # stored as resolved
@@ -74,18 +82,18 @@ def test_realistic_run_defaults_give_a_dissipative_r_at_the_noise_floor(tmp_path
     assert all(m["identified"]["damping_u"] > 0 for m in info["modes"])
 
 
-def test_realistic_run_old_defaults_stay_reachable_and_say_what_is_wrong(tmp_path):
+def test_realistic_run_old_defaults_stay_reachable_and_say_what_is_wrong(realistic_run):
     """The former defaults, given explicitly (3 functions, unconstrained, one factor on E):
     the first three dampings, Psi far above the floor, and cautions that name the fix."""
-    run_id = capture_sim(tmp_path, "realistic", seed=6)
+    store, run_id = realistic_run
     old = ("--functions", "3", "--unconstrained", "--stiffness", "scale")
-    (info,) = fit_json(tmp_path, run_id, *old)
+    (info,) = fit_json(store, run_id, *old)
     zetas = [m["damping_ratio"] for m in info["modes"]]
     assert zetas == pytest.approx(REALISTIC_DAMPING_RATIOS[:3], rel=0.15)
     assert info["stiffness"]["update"] == "scale on E"
     assert info["psi"] > 3 * info["psi_noise_floor"]
     assert any("noise floor" in c and "--functions 4" in c for c in info["cautions"])
-    printed = invoke_daq("fit", run_id, *old, "--store", str(tmp_path)).stdout
+    printed = invoke_daq("fit", run_id, *old, "--store", str(store)).stdout
     assert any(line.startswith("caution: Psi is") for line in printed.splitlines())
     # This beam's R has terms far beyond the seed's GA coding range [-10, 10]: the GA
     # is run as the paper has it and says it cannot reach the optimum; DE's box is
@@ -93,10 +101,10 @@ def test_realistic_run_old_defaults_stay_reachable_and_say_what_is_wrong(tmp_pat
     fitted = np.abs(np.array(info["damping_matrix"])).max()
     assert fitted > 10
     assert fitted < _de_bounds(np.array(info["start"]["damping_matrix"]), psd=False)[1]
-    result = invoke_daq("fit", run_id, "--method", "ga", *old, "--store", str(tmp_path))
+    result = invoke_daq("fit", run_id, "--method", "ga", *old, "--store", str(store))
     assert result.returncode == 0, result.stderr
     assert "outside the search range [-10, 10] (the seed paper’s GA range)" in result.stdout
-    ga = fit_json(tmp_path, run_id, "--method", "ga", *old)[0]
+    ga = fit_json(store, run_id, "--method", "ga", *old)[0]
     assert ga["psi_noise_floor"] == info["psi_noise_floor"]  # one floor per run, whatever the method
 
 
