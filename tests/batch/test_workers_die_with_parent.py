@@ -11,10 +11,12 @@ import os
 import signal
 import subprocess
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
+from daq.store import Store, new_run_id, seal
 from tests.cli_helpers import DAQ, ENV, capture_sim
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
@@ -24,9 +26,14 @@ pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="ne
 def store(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("store")
     # Enough runs that the batch is still at work when it is killed (one run analyses in
-    # well under a second).
-    for seed in range(1, 9):
-        capture_sim(folder, "realistic", seed, hits=5)
+    # well under a second): one capture, sealed again under 7 new ids. Each is a whole
+    # run file the batch analyses and fits from scratch (--recompute), as much work as
+    # a capture of its own, for a seal instead of a capture (8 captures took 13 s).
+    store = Store(folder)
+    run = store.open(capture_sim(folder, "realistic", 1, hits=5))
+    for _ in range(7):
+        seal(replace(run, run_id=new_run_id()), folder)
+    assert len(store.list()) == 8
     return folder
 
 
