@@ -25,6 +25,7 @@ from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 from starlette.background import BackgroundTask
+from starlette.routing import Match
 
 from daq import __version__
 from daq.service.auth import token_matches
@@ -129,6 +130,11 @@ def create_app(service: Service) -> FastAPI:
             return True
         return service.config.reads_need_token and path.startswith("/api/")
 
+    def route_exists(scope: dict[str, Any]) -> bool:
+        """True if a route answers ``scope``'s method at its path: a method or path
+        that none does gets its 405 or 404 whatever the token (it learns nothing)."""
+        return any(route.matches(scope)[0] == Match.FULL for route in app.router.routes)
+
     def given_ok(method: str, authorization: str, query: str) -> bool:
         given = None
         if authorization.lower().startswith("bearer "):
@@ -139,7 +145,7 @@ def create_app(service: Service) -> FastAPI:
 
     # Added last runs first: the host check, then the token, then the body's size.
     app.add_middleware(BodyLimit)
-    app.add_middleware(TokenGate, needs_token=needs_token, given_ok=given_ok)
+    app.add_middleware(TokenGate, needs_token=needs_token, given_ok=given_ok, route_exists=route_exists)
     if not service.config.reads_need_token:
         # On loopback the reads need no token, so a page elsewhere whose name was made
         # to resolve to 127.0.0.1 (DNS rebinding) must not be served: only loopback names.
@@ -188,7 +194,6 @@ def create_app(service: Service) -> FastAPI:
         return {
             "status": "ok",
             "version": __version__,
-            "store": str(service.store.path),
             "instrument": service.link.status(),
             "capture": {"state": service.capture.state},
             "jobs": service.jobs.counts(),

@@ -49,13 +49,21 @@ class TokenGate:
     validation of a body. ``needs_token(method, path)`` says which; ``check(request
     headers and query)`` compares in constant time."""
 
-    def __init__(self, app: Any, needs_token: Any, given_ok: Any) -> None:
+    def __init__(self, app: Any, needs_token: Any, given_ok: Any, route_exists: Any = None) -> None:
         self.app = app
         self.needs_token = needs_token
         self.given_ok = given_ok
+        #: route_exists(scope): whether any route answers the method at the path. A
+        #: request none answers gets its 404 or 405 whatever the token: a 401 would tell
+        #: the client to find a token for a route that does not exist.
+        self.route_exists = route_exists or (lambda scope: True)
 
     async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
-        if scope["type"] == "http" and self.needs_token(scope["method"], scope["path"]):
+        if (
+            scope["type"] == "http"
+            and self.needs_token(scope["method"], scope["path"])
+            and self.route_exists(scope)
+        ):
             headers = dict(scope.get("headers") or [])
             authorization = headers.get(b"authorization", b"").decode("latin-1")
             query = scope.get("query_string", b"").decode("latin-1")
