@@ -800,6 +800,7 @@ def _analysis(service: Service, rid: str) -> dict[str, Any]:
 
 
 def _run_row(service: Service, s: Any) -> dict[str, Any]:
+    from daq.service import texts
     from daq.workflows.run_views import summary_dict
 
     row = summary_dict(s)
@@ -812,11 +813,24 @@ def _run_row(service: Service, s: Any) -> dict[str, Any]:
     row.update(
         frequencies_u_hz=None, damping_u=None, band=None, synthesis_error=None, cautions=[], fit_cautions=[]
     )
+    # The same numbers as texts, written as `daq analyze` and the report write them (the
+    # page shows these, so that it cannot round differently), why a stage failed, and the
+    # formats the run can be exported as (CSV needs time records).
+    row.update(
+        frequencies_text=None, damping_text=None, band_text=None, synthesis_text=None, fit_psi_text=None,
+        analysis_error=None, fit_error=None, exports=["csv", "uff"] if s.n_hits else ["uff"],
+    )  # fmt: skip
     if s.error is not None:
+        row["exports"] = []
         return plain(row)
     state = service.jobs.state(s.run_id)
     row.update(analysis=state["analysis"], fit=state["fit"])
-    analysis = service.analysis(s.run_id) if state["analysis"] == "done" else None
+    errors = getattr(service.jobs, "error", None)  # a stand-in for the jobs (a test's) may lack it
+    if errors is not None:
+        row.update(analysis_error=errors(s.run_id, "analysis"), fit_error=errors(s.run_id, "fit"))
+    # A stored result that is up to date is shown whatever waits in the queue (a run
+    # analysed or fitted from the command line before the service started).
+    analysis = service.analysis(s.run_id) if _shown(service, s.run_id, state, "analysis") else None
     if analysis is not None:
         summary = analysis["summary"]
         modes = summary.get("modes", [])
@@ -827,11 +841,24 @@ def _run_row(service: Service, s: Any) -> dict[str, Any]:
         row["band"] = summary.get("band")
         row["synthesis_error"] = summary.get("synthesis_error")
         row["cautions"] = analysis_cautions(summary)
-    fit = service.default_fit(s.run_id) if state["fit"] == "done" else None
+        row["frequencies_text"] = [texts.frequency_text(m) for m in modes]
+        row["damping_text"] = [texts.damping_text(m) for m in modes]
+        row["band_text"] = texts.band_text(summary.get("band"))
+        row["synthesis_text"] = texts.synthesis_text(summary.get("synthesis_error"))
+    fit = service.default_fit(s.run_id) if _shown(service, s.run_id, state, "fit") else None
     if fit is not None:
         row["fit_psi"] = fit["summary"].get("psi")
+        row["fit_psi_text"] = texts.psi_text(fit["summary"])
         row["fit_cautions"] = _texts(fit["summary"].get("cautions"))
     return plain(row)
+
+
+def _shown(service: Service, run_id: str, state: dict[str, str], stage: str) -> bool:
+    """Whether the listing shows the stored result of ``stage``: a done one, or one that
+    is up to date while its stage waits or runs again."""
+    if state[stage] == "done":
+        return True
+    return state[stage] in ("queued", "running") and service.jobs.current(run_id, stage)
 
 
 def analysis_cautions(summary: dict[str, Any]) -> list[str]:

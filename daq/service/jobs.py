@@ -56,6 +56,41 @@ def task_for(store_dir: Path, run_id: str, stage: str) -> Task:
     return (AnalyseTask if stage == ANALYSIS else FitTask).default(store_dir, run_id)
 
 
+def analysis_current(store_dir: Path, run_id: str) -> bool:
+    """True if the run's stored analysis was made from the run file as it is now, by
+    this software, with the options stored in it (``daq analyze`` before the service
+    started, with or without options of its own): the service shows it at once and
+    never computes it again (with the default options, which would replace the user's)."""
+    from daq.store import Store, StoreError
+    from daq.workflows.analysis import cache_key, stored_options
+
+    store = Store(store_dir)
+    try:
+        options = stored_options(store, run_id)
+        if options is None:
+            return False
+        stored = store.read_result(run_id, analysis_result_name())
+        return stored.get("cache_key") == cache_key(store_dir / f"{run_id}.h5", options)
+    except (StoreError, OSError, ValueError):
+        return False
+
+
+def fit_current(store_dir: Path, run_id: str) -> bool:
+    """True if the run's stored default fit was made from the run file as it is now and
+    from its stored analysis (``daq fit`` before the service started)."""
+    from daq.store import Store, StoreError
+    from daq.workflows.fit import FitOptions, fit_cache_key
+
+    store = Store(store_dir)
+    try:
+        analysis_key = store.read_result(run_id, analysis_result_name()).get("cache_key")
+        stored = store.read_result(run_id, fit_result_name())
+        key = fit_cache_key(store_dir / f"{run_id}.h5", analysis_key, FitOptions())
+        return stored.get("cache_key") == key
+    except (StoreError, OSError, ValueError):
+        return False
+
+
 def analyse_in_worker(store_dir: Path, run_id: str) -> dict[str, Any] | str:
     """The run's analysis summary, or a one-line reason (as a worker computes it)."""
     outcome = task_for(store_dir, run_id, ANALYSIS).run()
@@ -90,6 +125,10 @@ class JobRunner:
         self._list_runs = list_runs
         self._lock = threading.Lock()
         self._states: dict[str, dict[str, str]] = {}
+        #: The one-line reason of each failed stage, (run_id, stage) -> text.
+        self._errors: dict[tuple[str, str], str] = {}
+        #: Runs whose stored analysis was up to date: only their fit is queued.
+        self._fit_only: set[str] = set()
         self._counts = {"queued": 0, "running": 0, "done": 0, "failed": 0}
         self._queue = QueueBackend(self.workers, scheduler)
         self._closed = False
@@ -154,14 +193,32 @@ class JobRunner:
 
     # ------------------------------------------------------------ queueing
     def submit(self, run_id: str) -> None:
-        """Analyse (unless already done) then fit ``run_id``."""
+        """Analyse (unless its stored analysis is up to date) then fit ``run_id``."""
         with self._lock:
-            if self._closed or self._states.get(run_id, {}).get(ANALYSIS) in ("queued", "running"):
+            if self._closed or self._busy(run_id):
                 return
-            self._states[run_id] = {ANALYSIS: "queued", FIT: "queued"}
+        # A run analysed from the command line before the service started reads
+        # "done" with its numbers at once, not "queued" behind the other runs' work.
+        current = self._on_disk(run_id, ANALYSIS) and analysis_current(self.store_dir, run_id)
+        with self._lock:
+            if self._closed or self._busy(run_id):
+                return
+            self._states[run_id] = {ANALYSIS: "done" if current else "queued", FIT: "queued"}
+            self._errors.pop((run_id, ANALYSIS), None)
+            self._errors.pop((run_id, FIT), None)
             self._counts["queued"] += 1
-            self._waiting.append((run_id, ANALYSIS))
+            if current:
+                self._fit_only.add(run_id)
+                self._waiting.append((run_id, FIT))
+            else:
+                self._fit_only.discard(run_id)
+                self._waiting.append((run_id, ANALYSIS))
+            self.version += 1
         self._pump()
+
+    def _busy(self, run_id: str) -> bool:
+        """True if a stage of ``run_id`` is queued or running (under the lock)."""
+        return any(v in ("queued", "running") for v in self._states.get(run_id, {}).values())
 
     def _pump(self) -> None:
         """Hand waiting work to free workers. Only as much as there are workers is in
@@ -191,6 +248,11 @@ class JobRunner:
     def _finished(self, run_id: str, stage: str, outcome: RunOutcome) -> None:
         failed = not outcome.ok
         summary = outcome.summary or {}
+        with self._lock:
+            if failed:
+                self._errors[(run_id, stage)] = str(outcome.error)
+            else:
+                self._errors.pop((run_id, stage), None)
         self._set(run_id, stage, "failed" if failed else "done")
         with self._lock:
             self._inflight -= 1
@@ -220,7 +282,9 @@ class JobRunner:
         with self._lock:
             self.version += 1
             self._states.setdefault(run_id, {ANALYSIS: "none", FIT: "none"})[stage] = state
-            if stage == ANALYSIS and state == "running":
+            first = stage == ANALYSIS or (stage == FIT and run_id in self._fit_only)
+            if first and state == "running":
+                self._fit_only.discard(run_id)
                 self._counts["queued"] -= 1
                 self._counts["running"] += 1
 
@@ -242,6 +306,20 @@ class JobRunner:
             if known.get(stage) in (None, "none") or known.get(stage) == "done":
                 known[stage] = "done" if self._on_disk(run_id, stage) else known.get(stage, "none")
         return known
+
+    def error(self, run_id: str, stage: str) -> str | None:
+        """The one-line reason ``stage`` (ANALYSIS, FIT) of ``run_id`` failed, if it did."""
+        with self._lock:
+            if self._states.get(run_id, {}).get(stage) != "failed":
+                return None
+            return self._errors.get((run_id, stage))
+
+    def current(self, run_id: str, stage: str) -> bool:
+        """True if the stored result of ``stage`` is up to date with the run file (and,
+        for the fit, with the stored analysis): shown while a recomputation waits."""
+        if not self._on_disk(run_id, stage):
+            return False
+        return (analysis_current if stage == ANALYSIS else fit_current)(self.store_dir, run_id)
 
     def counts(self) -> dict[str, int]:
         with self._lock:

@@ -424,10 +424,11 @@
     return texts(list).map((t) => el(tag || "li", { class: "caution" }, "caution: " + t));
   }
 
-  /* "band 5-7035 Hz: <reason>" of an analysis summary; "" when it has none. */
+  /* "band 1.088–399.4 Hz: <reason>" of an analysis summary (edges to four significant
+   * digits, as `daq analyze` writes them); "" when it has none. */
   function bandText(band) {
     if (!band || typeof band !== "object") return "";
-    let text = "band " + fmt.sig(band.low_hz, 6) + "–" + fmt.sig(band.high_hz, 6) + " Hz";
+    let text = "band " + fmt.sig(band.low_hz, 4) + "–" + fmt.sig(band.high_hz, 4) + " Hz";
     if (band.reason) text += ": " + String(band.reason);
     return text;
   }
@@ -435,6 +436,18 @@
   /* "synthesis error 38 %" (a fraction stored); "" when unknown. */
   function synthesisText(error) {
     return isNum(error) ? "synthesis error " + fmt.sig(error * 100, 3) + " %" : "";
+  }
+
+  /* "3896 ± 12", "0.0347 ± 0.0040": a value and its standard uncertainty as `daq analyze`
+   * and the report write them (analysis/measurement_text.py): u to two significant digits,
+   * the value to the same decimal place. Without a usable u: `fallback` (a text). The runs
+   * page shows the service's own texts (GET /api/runs *_text); this is for the live page. */
+  function measured(value, u, fallback) {
+    if (!isNum(value) || !isNum(u) || !(u > 0)) return fallback;
+    const decimals = 1 - Math.floor(Math.log10(u));
+    if (decimals > 0) return noNegativeZero(value.toFixed(decimals)) + " ± " + u.toFixed(decimals);
+    const step = Math.pow(10, -decimals);
+    return noNegativeZero((Math.round(value / step) * step).toFixed(0)) + " ± " + (Math.round(u / step) * step).toFixed(0);
   }
 
   /* "12.3456 ± 0.0012" of a value and its standard uncertainty (u may be null). */
@@ -628,5 +641,6 @@
     bandText,
     synthesisText,
     withU,
+    measured,
   };
 })();

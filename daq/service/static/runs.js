@@ -28,14 +28,34 @@
     return Array.isArray(list) ? list[k] : null;
   }
 
+  /* A text the service wrote (a string), else `fallback`. */
+  function given(text, fallback) {
+    return typeof text === "string" && text ? text : fallback;
+  }
+
+  /* "analysis failed: <reason>", "fit failed: <reason>" of a run whose stage failed. */
+  function failures(r) {
+    const out = [];
+    for (const stage of ["analysis", "fit"]) {
+      if (r[stage] !== "failed") continue;
+      const reason = r[stage + "_error"];
+      out.push(stage + " failed" + (typeof reason === "string" && reason ? ": " + reason : ""));
+    }
+    return out;
+  }
+
   /* Under a run with an analysis or a fit: the band analysed and why, the synthesis
-   * error, and every caution of the analysis and the fit as a "caution: ..." line. */
+   * error, every caution of the analysis and the fit as a "caution: ..." line, and why
+   * a stage failed. */
   function notesRow(r) {
     const cautions = DAQ.analysisCautions({ cautions: r.cautions }).concat(
       (Array.isArray(r.fit_cautions) ? r.fit_cautions : []).map((t) => "fit: " + t)
     );
-    const facts = [DAQ.bandText(r.band), DAQ.synthesisText(r.synthesis_error)].filter(Boolean).join(" · ");
-    if (!cautions.length && !facts) return null;
+    const facts = [given(r.band_text, DAQ.bandText(r.band)), given(r.synthesis_text, DAQ.synthesisText(r.synthesis_error))]
+      .filter(Boolean)
+      .join(" · ");
+    const failed = failures(r);
+    if (!cautions.length && !facts && !failed.length) return null;
     return el(
       "tr",
       { class: "run-notes-row", dataset: { notesFor: r.run_id } },
@@ -43,6 +63,7 @@
         "td",
         { colspan: "10", class: "run-notes" },
         facts ? el("div", { class: "muted small run-facts" }, facts) : null,
+        ...failed.map((t) => el("div", { class: "stage-failed" }, t)),
         ...DAQ.cautionLines(cautions, "div")
       )
     );
@@ -62,6 +83,16 @@
     const vb = Number.isNaN(tb) ? -Infinity : tb;
     if (va !== vb) return vb - va;
     return String(b.run_id).localeCompare(String(a.run_id));
+  }
+
+  /* The default fit's Psi with its unit ("0.3875 m/s²"), or "failed" (its reason in the
+   * tooltip and in a line under the run), or "–" while there is none. */
+  function psiCell(r) {
+    if (r.fit === "failed") {
+      return el("td", { class: "num psi psi-failed", title: given(r.fit_error, "the fit failed") }, "failed");
+    }
+    const text = given(r.fit_psi_text, fmt.sig(r.fit_psi, 4));
+    return el("td", { class: "num psi", title: r.fit ? "fit: " + r.fit : null }, text);
   }
 
   function row(r) {
@@ -89,33 +120,29 @@
         el(
           "td",
           { class: "num frequencies" },
-          firstThree(r.frequencies_hz, (f, k) =>
-            DAQ.withU(fmt.fixed(f, 2), uOf(r.frequencies_u_hz, k), fmt.sig(uOf(r.frequencies_u_hz, k), 1))
-          )
+          Array.isArray(r.frequencies_text)
+            ? firstThree(r.frequencies_text, String)
+            : firstThree(r.frequencies_hz, (f, k) => DAQ.measured(f, uOf(r.frequencies_u_hz, k), fmt.fixed(f, 4)))
         ),
         el(
           "td",
           { class: "num damping" },
-          firstThree(r.damping_ratios, (d, k) =>
-            DAQ.withU(fmt.pct(d, 2), uOf(r.damping_u, k), fmt.sig(uOf(r.damping_u, k) * 100, 1))
-          )
+          Array.isArray(r.damping_text)
+            ? firstThree(r.damping_text, String)
+            : firstThree(r.damping_ratios, (d, k) =>
+                DAQ.measured(d * 100, Number.isFinite(uOf(r.damping_u, k)) ? uOf(r.damping_u, k) * 100 : null, fmt.sig(d * 100, 3))
+              )
         ),
-        el("td", { class: "num psi", title: r.fit ? "fit: " + r.fit : null }, fmt.sig(r.fit_psi, 3))
+        psiCell(r)
       );
     }
-    cells.push(
-      el(
-        "td",
-        { class: "links" },
-        link(runUrl(id, "/report"), "report"),
-        " ",
-        link(runUrl(id, "/file"), "HDF5", "the sealed run file"),
-        " ",
-        link(runUrl(id, "/export?format=csv"), "CSV"),
-        " ",
-        link(runUrl(id, "/export?format=uff"), "UFF")
-      )
-    );
+    const exports = Array.isArray(r.exports) ? r.exports : ["csv", "uff"];
+    const files = [link(runUrl(id, "/report"), "report"), link(runUrl(id, "/file"), "HDF5", "the sealed run file")];
+    // Only the formats the run can be written as: CSV holds time records, which a run of
+    // FRFs only (an import of UFF or FRF text) has none of.
+    if (exports.includes("csv")) files.push(link(runUrl(id, "/export?format=csv"), "CSV", "the time records as text"));
+    if (exports.includes("uff")) files.push(link(runUrl(id, "/export?format=uff"), "UFF", "the FRFs as UFF 58"));
+    cells.push(el("td", { class: "links" }, ...files.flatMap((a, i) => (i ? [" ", a] : [a]))));
     // labels for the stacked layout on narrow screens (style.css)
     const labels = ["Run", "Started", "Kind", "Complete", "Accepted", "Analysis"].concat(
       r.error ? ["Error"] : ["Frequencies (Hz)", "Damping (%)", "Fit Psi"],
