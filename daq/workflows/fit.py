@@ -24,8 +24,9 @@ from analysis.ritz import RitzBeam
 from analysis.run_analysis import AnalysisOptions
 from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
+from daq.workflows.analysis import NO_BEAM_MODEL, analyze_stored, beam_of, stored_options
 from daq.workflows.analysis import RESULT_NAME as ANALYSIS_RESULT
-from daq.workflows.analysis import analyze_stored, beam_of, stored_options
+from daq.workflows.article import article_beam, read_article
 from daq.workflows.outcome import RunOutcome, failure_reason
 
 METHODS = ("modal", "ls", "ga", "de", "pilkey-inman")
@@ -44,7 +45,9 @@ class FitOptions:
     then each paired mode at its identified frequency, under light damping), "scale"
     (the factor alone) or "none". domain : "time" (eq 17 on the hits) or "frequency"
     (on the run's FRF); zoom records and FRF-only runs use "frequency" whatever is
-    asked."""
+    asked. article : the test article to model for a run that records none (an
+    imported file): "seed-beam" or an article file (daq.workflows.article); None
+    refuses such a run, as Table 2 does ("no beam model for this run")."""
 
     method: str = "ls"
     seed: int = 0
@@ -53,6 +56,7 @@ class FitOptions:
     stiffness: str = "modes"
     domain: str = "time"
     starts: int = 0
+    article: str | None = None
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
@@ -78,9 +82,30 @@ class FitOptions:
         return f"fit-{self.method}{'' if self.psd else '-unconstrained'}{size}"
 
 
-def model_of(run: Run, n_functions: int) -> tuple[Any, str]:
+def fitted_beam(run: Run, article: str | None) -> tuple[Any, str]:
+    """(BeamProperties, where from) of the beam the fit models: the run's test article,
+    else the ``article`` given for a run that records none; ValueError (one line) for a
+    run that records none without one, or an article that is no beam."""
+    if run.sample is not None:
+        if article is not None:
+            raise ValueError(
+                "the run records its test article: --article is for runs that record none (imported files)"
+            )
+        return beam_of(run)
+    if article is None:
+        raise ValueError(
+            f"{NO_BEAM_MODEL}: it records no test article (an imported file), and daq fit fits a beam's "
+            "Ritz model; if it is a run of the seed's beam, give --article seed-beam (or an article file)"
+        )
+    beam = article_beam(read_article(article))
+    if beam is None:
+        raise ValueError(f"article {article}: a free structure has no beam model to fit")
+    return beam, f"the article given with --article ({article})"
+
+
+def model_of(run: Run, n_functions: int, article: str | None = None) -> tuple[Any, str]:
     """The Ritz model of the run's beam with force and sensor where the run says."""
-    beam, origin = beam_of(run)
+    beam, origin = fitted_beam(run, article)
     force_at = run.sample.force_position_m if run.sample is not None else None
     sensor_at = run.sample.sensor_position_m if run.sample is not None else None
     ritz = RitzBeam.build(beam, n_functions)
@@ -103,6 +128,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     from analysis.damping.identifiability import parameter_scale
 
     started = time.perf_counter()
+    fitted_beam(run, options.article)  # a run with no beam to model is refused first
     modes = analysis["modes"]
     ident_f = np.array([m["frequency_hz"] for m in modes], dtype=float)
     ident_z = np.array([np.nan if m["damping_ratio"] is None else m["damping_ratio"] for m in modes])
@@ -113,6 +139,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     in_band = usable & (ident_f >= low) & (ident_f <= high)
     searched = _searched_band(analysis, low, high)
     n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions, searched)
+    largest = None  # set where more functions would put a model mode outside the band
     while True:
         model, beam_origin, stiffness_info, start, matching, data, domain = _prepare(
             run, analysis, options, n, ident_f[usable], ident_z[usable]
@@ -125,6 +152,7 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
                 raise
             n -= 1  # the default: the largest model whose modes all lie in the band
             reason = f"{reason}; {n + 1} would put a model mode outside the band, so {n}"
+            largest = n
     objective, residual_fn, batched = _objective(data, domain)
     constraint = "R = L L^T" if options.psd else "unconstrained"
     if options.method == "modal":
@@ -189,7 +217,8 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
         "model": {"ritz_functions": n, "beam": beam_origin, "functions_reason": reason,
                   "functions_requested": options.n_functions, "modes_identified_in_band": int(in_band.sum()),
                   "band_hz": [float(low), float(high)],
-                  "analysis_band_hz": None if searched is None else [float(searched[0]), float(searched[1])]},
+                  "analysis_band_hz": None if searched is None else [float(searched[0]), float(searched[1])],
+                  "largest_in_band": largest},
         "uncertainty": {
             "names": list(ident.names),
             # The larger of the two figures below, term by term (std_source says which).
@@ -298,7 +327,7 @@ def _prepare(
     """The model of ``n`` functions with its stiffness updated, the modal start and the data."""
     from analysis import damping
 
-    model, beam_origin = model_of(run, n)
+    model, beam_origin = model_of(run, n, options.article)
     stiffness_info: dict[str, Any] = {"update": "none"}
     if options.stiffness in ("scale", "modes"):
         try:
@@ -436,13 +465,19 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
     diagonal term, a negative eigenvalue), modes it makes unstable or overdamped, a
     search range that cannot hold the answer, poles the iteration did not match."""
     out = []
+    if why := not_a_result(summary):
+        # Said where the fit is shown (JSON, report, page), not only in the exit status.
+        out.append(f"no damping matrix: {why}; the R shown is where the fit stopped, for a look only")
     n = summary["model"]["ritz_functions"]
     found = summary["model"].get("modes_identified_in_band", 0)
     low, high = summary["model"].get("band_hz", (0.0, 0.0))
+    # The default stepped down to the largest model whose modes lie in the band: more
+    # functions is no remedy there.
+    capped = summary["model"].get("largest_in_band") is not None
     more_modes = (
         f"{found} modes were identified in {low:.4g}-{high:.4g} Hz but the model has {n} Ritz functions: "
         f"try --functions {min(found, MAX_FUNCTIONS)}"
-        if found > n
+        if found > n and not capped
         else ""
     )
     tries = []
@@ -455,7 +490,7 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
         )
     if more_modes:
         tries.append(f"--functions {min(found, MAX_FUNCTIONS)} (one function per identified mode)")
-    elif summary["model"].get("functions_requested") is None and n < MAX_FUNCTIONS:
+    elif summary["model"].get("functions_requested") is None and n < MAX_FUNCTIONS and not capped:
         tries.append(f"--functions {n + 1} (if the analysis missed a mode in the band)")
     if summary["options"].get("stiffness") != "modes" and summary["stiffness"].get("update") != "none":
         tries.append("--stiffness modes (each mode at its identified frequency)")

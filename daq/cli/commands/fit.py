@@ -19,6 +19,23 @@ OPTION_NAMES = (
 )  # fmt: skip
 
 
+def _checked_article(spec: str) -> str:
+    """``spec`` as the fit's workers read it (a file as its absolute path), refused in one
+    line (exit 2) where it names no article or a structure with no beam model."""
+    from pathlib import Path
+
+    from daq.workflows.article import BUILT_IN_ARTICLES, article_beam, read_article
+    from daq.workflows.errors import WorkflowError
+
+    try:
+        beam = article_beam(read_article(spec))
+    except WorkflowError as exc:
+        raise UserError(f"--article: {exc}", exit_code=2) from None
+    if beam is None:
+        raise UserError(f"--article {spec}: a free structure has no beam model to fit", exit_code=2)
+    return spec if spec in BUILT_IN_ARTICLES else str(Path(spec).resolve())
+
+
 def register(app: typer.Typer) -> None:
     app.command(name="fit")(fit)
 
@@ -78,6 +95,15 @@ def fit(
             "identified in the fitted band].",
         ),
     ] = None,
+    article: Annotated[
+        str | None,
+        typer.Option(
+            metavar="<seed-beam|file.toml>",
+            show_default=False,
+            help="The beam to model for runs that record no test article (imported files) "
+            "[default: none: such runs are refused, no beam model].",
+        ),
+    ] = None,
     jobs: JobsOption = None,
     scheduler: SchedulerOption = None,
     recompute: Annotated[
@@ -102,6 +128,8 @@ def fit(
         raise UserError("name the runs to fit, or give --all", exit_code=2)
     if psd and unconstrained:
         raise UserError("--psd and --unconstrained contradict each other: give one", exit_code=2)
+    if article is not None:
+        article = _checked_article(article)
     try:
         options = FitOptions(
             method=method.lower(),
@@ -111,6 +139,7 @@ def fit(
             n_functions=functions,
             domain=domain.lower(),
             starts=starts,
+            article=article,
         )
     except ValueError as exc:
         text = str(exc)

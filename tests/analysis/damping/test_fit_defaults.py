@@ -88,6 +88,24 @@ def test_an_analysis_band_narrower_than_the_fit_is_named_with_the_remedy():
     )
 
 
+def test_a_fit_that_is_no_result_says_so_where_it_is_shown_and_a_capped_model_is_not_told_to_grow():
+    """A fifth user's trial: the report and the page showed Psi and R of a fit the terminal
+    called 'no damping matrix' (exit 1); and a default stepped down to 6 functions, because 7
+    put a model mode outside the band, was told to try --functions 7."""
+    (verdict, *_) = fit_cautions(_summary(psi_noise_floor=None, relative_residual=42.14))
+    assert verdict.startswith("no damping matrix: the model leaves 4.21e+03 % of the data unexplained")
+    model = {
+        "ritz_functions": 6,
+        "modes_identified_in_band": 7,
+        "band_hz": [0.0, 400.0],
+        "largest_in_band": 6,
+    }
+    (far,) = fit_cautions(_summary(psi=0.5, model=model))
+    assert "--functions" not in far
+    (fine,) = fit_cautions(_summary(model={**model, "largest_in_band": None}))
+    assert "try --functions 7" in fine
+
+
 def _summary(**changes):
     summary = {
         "method": "ls", "psd": True, "psi": 0.03, "psi_noise_floor": 0.024, "relative_residual": 0.01,
