@@ -443,12 +443,26 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         )
     if band is not None:
         margin = EDGE_FRACTION * (band.high_hz - band.low_hz)
+        lines = result.frequency_hz[np.isfinite(result.frequency_hz) & (result.frequency_hz > 0)]
+        step = float(np.median(np.diff(lines))) if lines.size > 1 else 0.0
         for m in result.modes:
-            if m.frequency_hz < band.low_hz + margin or m.frequency_hz > band.high_hz - margin:
-                out.append(
-                    f"the mode at {_at(m)} Hz lies at an edge of the band {span}: it may stand "
-                    "for modes outside; widen the band to check it"
+            low = m.frequency_hz < band.low_hz + margin
+            if not low and m.frequency_hz <= band.high_hz - margin:
+                continue
+            # A band that already reaches the run's first (last) line cannot be widened.
+            at_data = lines.size > 0 and (
+                band.low_hz <= lines[0] + step if low else band.high_hz >= lines[-1] - step
+            )
+            out.append(
+                f"the mode at {_at(m)} Hz lies at an edge of the band {span}: it may stand for modes "
+                + (
+                    f"outside the run's lines, which these data cannot show (they "
+                    f"{'begin' if low else 'end'} at {edge_text(float(lines[0] if low else lines[-1]))} Hz); "
+                    "take its values with care"
+                    if at_data
+                    else "outside; widen the band to check it"
                 )
+            )
     return out
 
 
