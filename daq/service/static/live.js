@@ -718,12 +718,14 @@
           el(
             "td",
             { class: "num frequency", title: m.uncertainty_from ? "± from " + m.uncertainty_from : null },
-            DAQ.withU(fmt.fixed(m.frequency_hz, 4), m.frequency_u_hz, fmt.sig(m.frequency_u_hz, 2))
+            DAQ.measured(m.frequency_hz, m.frequency_u_hz, fmt.fixed(m.frequency_hz, 4))
           ),
           el(
             "td",
             { class: "num damping", title: m.uncertainty_from ? "± from " + m.uncertainty_from : null },
-            DAQ.withU(fmt.pct(m.damping_ratio, 3), m.damping_u, fmt.sig(m.damping_u * 100, 2))
+            Number.isFinite(m.damping_ratio)
+              ? DAQ.measured(m.damping_ratio * 100, Number.isFinite(m.damping_u) ? m.damping_u * 100 : null, fmt.sig(m.damping_ratio * 100, 3))
+              : "n/a"
           )
         )
       )
@@ -822,7 +824,8 @@
     if (table.tHead) table.tHead.remove();
     if (!fit || !Array.isArray(fit.damping_matrix)) {
       body.replaceChildren();
-      summary.textContent = results.fitState === "failed" ? "The fit failed." : "No fit yet.";
+      summary.textContent =
+        results.fitState === "failed" ? "The fit failed" + (results.fitError ? ": " + results.fitError : ".") : "No fit yet.";
       return;
     }
     const R = fit.damping_matrix;
@@ -838,6 +841,15 @@
       });
     });
     const term = (i, j) => terms.get(i + "," + j) || terms.get(j + "," + i) || null;
+    // What ± is, in `daq fit`'s words (daq/cli/commands/fit.py): the Fisher std, or the
+    // larger of it and the per-hit refits' spread for the terms that had hits to refit.
+    const sources = Array.isArray(unc.std_source) ? unc.std_source : [];
+    const fromHits = (unc.names || []).filter((nm, k) => sources[k] === "hits");
+    const label = fromHits.length
+      ? "the larger of the Fisher std and the per-hit refits' spread / sqrt(n) (per-hit for " + fromHits.join(", ") + ")"
+      : "the Fisher (Cramér-Rao) std";
+    $("fit-std-note").textContent =
+      "Each cell: R (N s/m) ± " + label + "; a trailing ? marks a term the data do not determine.";
 
     const head = table.createTHead();
     head.append(el("tr", null, el("th", null, ""), ...R.map((_, j) => el("th", { class: "num" }, String(j + 1)))));
@@ -864,8 +876,11 @@
     );
     const parts = [];
     parts.push("method: " + (fit.method || name));
-    parts.push("Psi = " + fmt.sig(fit.psi, 4));
-    parts.push("noise floor = " + fmt.sig(fit.psi_noise_floor, 4));
+    // Psi in the unit of what was fitted, as the report says it: the response (time
+    // records) or the accelerance (the FRF).
+    const psiUnit = fit.domain === "frequency" ? " (m/s²)/N" : " m/s²";
+    parts.push("Psi = " + fmt.sig(fit.psi, 4) + psiUnit);
+    parts.push("noise floor = " + fmt.sig(fit.psi_noise_floor, 4) + psiUnit);
     if (Array.isArray(fit.modes) && fit.modes.length) {
       parts.push(
         "modes: " +
