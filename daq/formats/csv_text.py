@@ -315,6 +315,8 @@ class Table:
         self.header: list[str] | None = None  # the cells as written
         self.names: list[str] = []  # the cells without their units
         self.units: list[str | None] = []  # the units in the header, None where none
+        self.units_row: int | None = None  # the line of a units row under the header
+        self.from_units_row: set[int] = set()  # the columns whose unit it gave
         self.delimiter: str | None = None  # None: runs of whitespace
         self.decimal_comma = False
         # The first data line with a decimal comma, and the first cell that may hold a
@@ -418,6 +420,17 @@ class Table:
             raise FormatError(
                 f"{self.name} line {number}: {count(len(cells), 'column')}, expected {self.n_cols}"
             )
+        if self.header is not None and not self.values and self.units_row is None:
+            units = _units_row(cells)
+            if units is not None:
+                # A row of units under the names (LabVIEW, DEWESoft, Excel): each fills the
+                # unit its column's name lacks; a unit in the name wins.
+                self.from_units_row = {
+                    c for c, (own, row) in enumerate(zip(self.units, units, strict=True)) if row and not own
+                }
+                self.units = [own or row for own, row in zip(self.units, units, strict=True)]
+                self.units_row = number
+                return
         if self.keep_time_text and self.picked is None:
             self.complex_mode = self.columns is None and all(
                 self.find(n) is not None for n in COMPLEX_COLUMNS
@@ -428,6 +441,13 @@ class Table:
                 value = self._number(cell)
             except ValueError:
                 _refuse_complex(self.name, number, [cell])
+                if self.header is not None and not self.values and not any(map(self._is_number, cells)):
+                    raise FormatError(
+                        f"{self.name} line {number}: a row of words under the header is read as units "
+                        f"only where each is a unit of time, force, acceleration or voltage, and "
+                        f"{_show(next(c for c in cells if c.strip() and _units_row([c]) is None))} is none; "
+                        "write the units in the header instead, e.g. Time (s),Force (N),Accel (g)"
+                    ) from None
                 raise FormatError(
                     f"{self.name} line {number} column {col + 1}: {_show(cell)} is not a number"
                 ) from None
@@ -622,7 +642,8 @@ class Table:
                 f"sensitivity, e.g. {flag} {header_unit}{example[example.index('@') :]}"
             )
         try:
-            return header_unit, parse_unit(header_unit, quantity), "header"
+            where = "units row" if col in self.from_units_row else "header"
+            return header_unit, parse_unit(header_unit, quantity), where
         except FormatError:
             other_quantity = "response" if quantity == "force" else "force"
             if (order := self._order_by_units()) is not None or (
@@ -1079,3 +1100,24 @@ def _parses(unit: str, quantity: str) -> bool:
     except FormatError:
         return False
     return True
+
+
+def _units_row(cells: list[str]) -> list[str | None] | None:
+    """The units of a row of units (``s, N, g``, ``[s], [N], [m/s^2]``; a cell may be
+    empty), or None where the row is not one: a cell that is a number or no unit of
+    time, force, acceleration or voltage. None for a row of empty cells."""
+    units: list[str | None] = []
+    for cell in cells:
+        text = cell.strip().strip("\"'").strip()
+        if not text:
+            units.append(None)
+            continue
+        bare = text[1:-1].strip() if text[:1] + text[-1:] in ("[]", "()") else text
+        _, unit = header_name_unit(f"x ({bare})")
+        known = unit is not None and (
+            unit in TIME_UNITS or unit in ("V", "mV") or _parses(unit, "force") or _parses(unit, "response")
+        )
+        if not known:
+            return None
+        units.append(unit)
+    return units if any(u is not None for u in units) else None
