@@ -76,6 +76,12 @@ def test_sigterm_seals_the_capture_in_progress_and_stops_cleanly(tmp_path):
         assert not run.complete
         assert run.hits.accepted.tolist() == [True, False]
         assert "daq serve: stopped\n" in served.stderr_lines
+        # Said at once, before the half minute start-up can take on a loaded machine (a
+        # new user's redirected log stayed empty 18 s): the port the address line names.
+        port = served.url.rsplit(":", 1)[1]
+        assert served.stderr_lines[0] == (
+            f"daq serve: starting on port {port} of 127.0.0.1; the address to open follows once it is ready\n"
+        )
 
 
 def test_serve_refuses_to_guess_the_analyzer_and_a_second_service_on_one_store(tmp_path):

@@ -231,6 +231,14 @@ def run_service(
         sock.listen(2048)  # from now on connections queue until uvicorn accepts them
     except OSError as exc:
         raise UserError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
+    # Start-up (the analyzer, the workers, the store's index) can take half a minute on a
+    # loaded machine: say at once where the service will be, for a log read meanwhile.
+    shown = f"[{host}]" if ":" in host else host
+    sys.stderr.write(
+        f"daq serve: starting on port {sock.getsockname()[1]} of {shown}; the address to open follows "
+        "once it is ready\n"
+    )
+    sys.stderr.flush()
     spec = SimSpec(scenario, seed, time_scale, hammer=hammer, model=model) if resource is None else None
     config = ServiceConfig(
         store_dir=store_dir, resource=resource, sim=spec, host=host, port=sock.getsockname()[1],
