@@ -35,6 +35,8 @@ log = logging.getLogger(__name__)
 VERSION = "Prologix GPIB-USB Controller version 6.101"
 ESC = 0x1B
 POLL_S = 0.05
+#: The longest close() waits for the adapter's thread, s.
+CLOSE_WAIT_S = 2.0
 #: A host that stops reading for this long has gone; its output is dropped.
 WRITE_GIVE_UP_S = 10.0
 
@@ -77,9 +79,19 @@ class PrologixPty:
         self.close()
 
     def close(self) -> None:
+        """Stop the adapter's thread, waiting at most CLOSE_WAIT_S, and close the pty.
+
+        A thread computing a reply under the instrument's lock (e.g. 9999 averages at
+        time scale 0) looks up only when done: it is a daemon and is not waited for,
+        and the pty stays open for it (closing its descriptors under it could hand
+        their numbers to another file it would then write to).
+        """
         self._stop.set()
         if self._thread.is_alive():
-            self._thread.join()
+            self._thread.join(CLOSE_WAIT_S)
+        if self._thread.is_alive():
+            log.warning("closed with %s still busy after %g s; not waiting", self._thread.name, CLOSE_WAIT_S)
+            return
         for fd in (self._master, self._slave):
             with contextlib.suppress(OSError):
                 os.close(fd)

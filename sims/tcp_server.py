@@ -2,7 +2,10 @@
 
 Binds to 127.0.0.1 unless told otherwise. One thread accepts, one thread serves
 each client; all clients share the one instrument, as on a GPIB bus. Closing
-the server closes every client and joins every thread: nothing leaks.
+the server shuts every client's socket down and joins every thread, waiting at
+most ``CLOSE_WAIT_S`` in all: a thread still busy then (a client asked for a long
+measurement, computed in its thread) is a daemon, logged and left to finish or to
+end with the process, so a server told to stop stops promptly.
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ log = logging.getLogger(__name__)
 
 #: How often blocked threads look up to see whether the server is closing, s.
 POLL_S = 0.1
+#: The longest close() waits for the server's threads, s, all of them together.
+CLOSE_WAIT_S = 2.0
 
 
 class TcpServer:
@@ -62,17 +67,28 @@ class TcpServer:
         self.close()
 
     def close(self) -> None:
-        self._stop.set()
-        if self._accepter.is_alive():
-            self._accepter.join()
-        self._listener.close()
-        with self._lock:
+        """Stop accepting, end every connection and join the threads, in at most CLOSE_WAIT_S.
+
+        A client thread blocked in recv or send wakes when its socket is shut down and
+        polls the stop every POLL_S; one computing a reply under the instrument's lock
+        (e.g. 9999 averages at time scale 0) looks up only when done. It is not waited
+        for beyond the deadline: it is a daemon, and its socket is already shut down.
+        """
+        deadline = time.monotonic() + CLOSE_WAIT_S
+        with self._lock:  # the accept loop registers a client under this lock, or none
+            self._stop.set()
             clients = list(self._clients.items())
         for _, conn in clients:
             with contextlib.suppress(OSError):
                 conn.shutdown(socket.SHUT_RDWR)
+        if self._accepter.is_alive():
+            self._accepter.join(max(0.0, deadline - time.monotonic()))
+        self._listener.close()
         for thread, _ in clients:
-            thread.join()
+            thread.join(max(0.0, deadline - time.monotonic()))
+        busy = [thread.name for thread, _ in clients if thread.is_alive()]
+        if busy:
+            log.warning("closed with %s still busy after %g s; not waiting for them", busy, CLOSE_WAIT_S)
 
     @property
     def active_connections(self) -> int:
@@ -90,10 +106,13 @@ class TcpServer:
             conn.settimeout(POLL_S)
             thread = threading.Thread(target=self._serve, args=(conn, peer), daemon=True)
             with self._lock:
+                if self._stop.is_set():  # close() has taken its list of clients
+                    conn.close()
+                    return
                 self._clients[thread] = conn
                 self.connections_served += 1
-            thread.name = f"sim-tcp-client-{self.connections_served}"
-            thread.start()
+                thread.name = f"sim-tcp-client-{self.connections_served}"
+                thread.start()
 
     def _serve(self, conn: socket.socket, peer: object) -> None:
         session = Session(self.analyzer, self.faults)
