@@ -91,16 +91,26 @@ def printed_half_units(texts: list[str]) -> np.ndarray:
         return out
     finest_quantum = int(quantum[known].min())  # most decimals shown: fixed-point writers
     most_sig = int(sig[known].max())  # most significant digits: %e / %g writers
-    fixed = 0.5 * 10.0**finest_quantum
-    relative = 0.5 * 10.0 ** (lead - most_sig + 1).astype(np.float64)
+    fixed = _half_unit(np.array([finest_quantum]))[0]
+    relative = _half_unit(lead - most_sig + 1)
     model = np.where(zero, fixed, np.maximum(fixed, relative))
-    literal = 0.5 * 10.0 ** quantum.astype(np.float64)
+    literal = _half_unit(quantum)
     for notation in (exponent, ~exponent):
         if np.any(padded & known & notation):
             # Not a zero: "0.00E+00" is 0 s exactly, not 0 +- 0.005 s.
             model = np.where(notation & ~zero, literal, model)
     out[known] = np.minimum(literal, model)[known]
     return out
+
+
+def _half_unit(exponents: np.ndarray) -> np.ndarray:
+    """0.5 x 10**k for each integer k of ``exponents`` (n,), correctly rounded: the same k
+    gives the same float whichever way it was reached (``10.0 ** -5`` and numpy's power of
+    -5.0 differ in the last bit, and a zero's half unit then came out above its
+    neighbour's)."""
+    k = np.clip(np.asarray(exponents, dtype=np.int64), -400, 400)
+    powers, where = np.unique(k, return_inverse=True)
+    return np.array([float(f"5e{int(p) - 1}") for p in powers], dtype=np.float64)[where.reshape(k.shape)]
 
 
 def fit_regular(values: np.ndarray, half_units: np.ndarray | None = None) -> AxisFit:

@@ -89,3 +89,12 @@ def test_repr_printed_columns_keep_the_columns_precision(rate, n, start, whole):
     whole_values = np.array([v == round(v) for v in t])
     if whole_values.any() and not whole_values.all():
         assert half[whole_values].max() <= half[~whole_values].max()
+
+
+def test_a_zeros_half_unit_is_the_columns_finest_to_the_last_bit():
+    """'0.00E+00' takes the column's finest half unit (0.5 x 10**-5 s from '1.00E-03'),
+    reached by another power than its neighbour's: the two are one float, not 5e-06
+    against 4.9999999999999996e-06 (hypothesis found the zero a bit looser)."""
+    texts = ["0.00E+00", "1.00E-03", "2.00E-03", "0.01", "0.011"]
+    half = printed_half_units(texts)
+    assert half[0] == half[1] == 5e-06
