@@ -90,18 +90,27 @@ class Service:
         self._results = _ResultCache(self.store)
         # The lock lives in the store: every process finds it whatever its environment.
         self._store_lock = store_lock(config.store_dir, holder=f"daq serve at {config.url}")
+        self._store_claimed = False
         self._reports: dict[str, tuple[Any, str]] = {}
         self._reports_lock = threading.Lock()
         self._listing_lock = threading.Lock()
         self._listing: tuple[Any, bytes] | None = None
         self.reads = BoundedReads()
 
-    def start(self) -> None:
-        """Take the instrument (ResourceBusy if someone has it), start the workers and
-        queue the store's backlog."""
+    def claim_store(self) -> None:
+        """Check that the store is writable and take its lock (StoreError if another
+        service holds it): quick, so that a refusal comes before anything slow starts."""
+        if self._store_claimed:
+            return
         self.store.ensure_writable()
         # One service per store: two would analyse every run twice.
         self._store_lock.acquire()
+        self._store_claimed = True
+
+    def start(self) -> None:
+        """Claim the store (claim_store), take the instrument (ResourceBusy if someone
+        has it), start the workers and queue the store's backlog."""
+        self.claim_store()
         self.link.start()
         try:
             self.jobs.start()

@@ -231,14 +231,6 @@ def run_service(
         sock.listen(2048)  # from now on connections queue until uvicorn accepts them
     except OSError as exc:
         raise UserError(f"cannot listen on {host}:{port}: {exc.strerror or exc}") from None
-    # Start-up (the analyzer, the workers, the store's index) can take half a minute on a
-    # loaded machine: say at once where the service will be, for a log read meanwhile.
-    shown = f"[{host}]" if ":" in host else host
-    sys.stderr.write(
-        f"daq serve: starting on port {sock.getsockname()[1]} of {shown}; the address to open follows "
-        "once it is ready\n"
-    )
-    sys.stderr.flush()
     spec = SimSpec(scenario, seed, time_scale, hammer=hammer, model=model) if resource is None else None
     config = ServiceConfig(
         store_dir=store_dir, resource=resource, sim=spec, host=host, port=sock.getsockname()[1],
@@ -257,6 +249,17 @@ def run_service(
         if _NOTED:
             raise _Shutdown  # a signal came while the service was being built
         try:
+            # A store another service holds is refused in one line, before the start line.
+            service.claim_store()
+            # Start-up (the analyzer, the workers, the store's index) can take half a minute
+            # on a loaded machine: say at once where the service will be, for a log read
+            # meanwhile.
+            shown = f"[{host}]" if ":" in host else host
+            sys.stderr.write(
+                f"daq serve: starting on port {config.port} of {shown}; the address to open follows "
+                "once it is ready\n"
+            )
+            sys.stderr.flush()
             service.start()
         except (DriverError, StoreError, ValueError) as exc:
             raise UserError(str(exc)) from None
