@@ -16,6 +16,7 @@ import numpy as np
 from analysis.band_choice import BandChoice, choose_band, edge_text
 from analysis.measurement_text import with_uncertainty
 from analysis.modal_id import ModalResult, identify_modes
+from analysis.modal_id.identify import UNEXPLAINED_SNR_DB
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.refine import refine_poles
 from analysis.pretrigger import cut_at_impact, impact_starts, moved, screen, single_hit_noise
@@ -412,6 +413,9 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         )
     if aside:
         out.append(_set_aside_caution(result, aside, options))
+    unexplained = _unexplained(result, aside)
+    if unexplained and not asked:
+        out.append(_unexplained_caution(result, unexplained))
     few = [m.n_hits_matched for m in result.modes if m.uncertainty_from.endswith(" hits")]
     if few and min(few) in FEW_HITS_COVERAGE:
         n = min(few)
@@ -510,6 +514,40 @@ def _set_aside_caution(
         f"{'it' if one else 'them'} on the report's stability diagram (dashed) before keeping "
         f"{'it' if one else 'them'} with {again}"
     )
+
+
+def _unexplained(result: RunAnalysis, aside: list[tuple[float, float]]) -> list[float]:
+    """The clear peaks of the FRF no mode accounts for (ModalResult.unexplained_peaks_hz),
+    but those a possible mode left out already names (within two lines)."""
+    peaks = getattr(result.modal, "unexplained_peaks_hz", None) or []
+    line = float(np.median(np.diff(result.modal.frequency_hz))) if result.modal.frequency_hz.size > 1 else 0.0
+    return [p for p in peaks if not any(abs(p - f) <= 2 * line for f, _ in aside)]
+
+
+def _unexplained_caution(result: RunAnalysis, peaks: list[float]) -> str:
+    """A clear peak without a mode, what it may be, and the --band that looks at it alone."""
+    one = len(peaks) == 1
+    line = float(np.median(np.diff(result.modal.frequency_hz)))
+    low, high = (float(v) for v in result.modal.frequency_hz[[0, -1]])
+    p = peaks[0]
+    reach = max(PEAK_BAND_LINES * line, PEAK_BAND_FRACTION * p)
+    band = f"{edge_text(max(low, p - reach))}:{edge_text(min(high, p + reach))}"
+    listed = ", ".join(f"{f:.4g}" for f in peaks)
+    what = "a mode" if one else "modes"
+    return (
+        f"{'a clear peak' if one else 'clear peaks'} of the FRF at {listed} Hz "
+        f"({UNEXPLAINED_SNR_DB:g} dB or more above the noise) {'has' if one else 'have'} no mode, even "
+        f"analysed in {'a zone of its own' if one else 'zones of their own'}: {what} the stability diagram "
+        "does not hold (one of a close pair, a mode narrower than a line, or a small mode beside a larger "
+        f"one); look at {'it' if one else 'each'} with --band"
+        + (f" {band}" if one else f", e.g. --band {band} for {p:.4g} Hz")
+    )
+
+
+#: The --band an unexplained peak's caution suggests spans this many lines either side of
+#: it, or this fraction of its frequency if more (analysis.modal_id.zones.around_peaks).
+PEAK_BAND_LINES = 25
+PEAK_BAND_FRACTION = 0.1
 
 
 def set_aside(result: RunAnalysis) -> list[tuple[float, float]]:

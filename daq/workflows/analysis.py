@@ -32,8 +32,10 @@ RESULT_NAME = "analysis"
 #: 4: records without windows cut at the impact where their pre-trigger biases a pole;
 #: 5: close modes' poles refined on the FRF, analysis.modal_id.refine;
 #: 6: a close group's pole its refined neighbours do as well without dropped, a pole
-#: it misses added, analysis.modal_id.refine redundant and missing).
-ANALYSIS_VERSION = 6
+#: it misses added, analysis.modal_id.refine redundant and missing; 7: a refined pole's
+#: damping may move by a factor 3, a second pass in zones of their own around clear peaks
+#: no mode accounts for, --frequencies takes the nearest chain).
+ANALYSIS_VERSION = 7
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
