@@ -232,8 +232,14 @@ def test_on_averaged_hits_only_chains_above_the_scatter_over_hits_are_named(anal
     """pyfrf-impact (5 hits) and lvm-2ch m2 (2 hits): the noise a possible mode is named
     against is the scatter over the hits. pyfrf-impact's 4700.7 Hz chain (which the peer's
     diagram does not hold) stood 18 times above the line-to-line noise and is no longer
-    named; lvm-2ch m2 still names 215.6 Hz, the peer's 215.1 Hz."""
-    assert analysed("pyfrf-impact")["set_aside"] == []
+    named; what is named stands on a peak the peer's peak picking lists (823.4 Hz, the
+    middle of the 810/824/851 Hz triple, seen in the zone of its own its clear peak gets).
+    lvm-2ch m2 still names 215.6 Hz, the peer's 215.1 Hz."""
+    ref, info = SETS["pyfrf-impact"], analysed("pyfrf-impact")
+    line = ref["frequency_step_hz"]
+    aside = [a["frequency_hz"] for a in info["set_aside"]]
+    assert not any(abs(f - 4700.7) < 5 for f in aside), aside
+    assert all(any(near(f, p, line) for p in ref["resonance_peaks_hz"]) for f in aside), aside
     name = "lvm-2ch-m2"
     ref, info = SETS[name], analysed(name)
     (peer,) = [p for p in ref["peer_modes"] if round(p["frequency_hz"]) == 215]
