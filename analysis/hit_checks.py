@@ -258,6 +258,16 @@ SWAP_MIN_SAMPLES = 128
 #:   from a right one, and is let through rather than a right one flagged.
 SWAP_PULSE_SHARE = 0.85
 SWAP_DECAY_SHARE = 0.6
+#: ... or, whatever the force's share, the force column swings to the other side of zero
+#: by SWAP_FORCE_SWING of its peak within the span and the response column by no more
+#: than SWAP_RESPONSE_SWING of its: a hammer pulse pushes one way (0.00-0.16 in every
+#: correctly ordered file above, the lvm-2ch hits' filter ringing the most), an
+#: acceleration swings both ways (0.49-1.00). This tells a swapped file of a more damped
+#: structure, whose response holds 0.66 of its energy in the span (a new user's, 1.5-2 %
+#: damping: the force column swung 0.91, the response 0.00, and every hit was reported as
+#: a double impact instead).
+SWAP_FORCE_SWING = 0.5
+SWAP_RESPONSE_SWING = 0.25
 
 
 def _peak_share(record: np.ndarray, half: int) -> float:
@@ -272,11 +282,25 @@ def _peak_share(record: np.ndarray, half: int) -> float:
     return float(energy[max(0, i - half) : i + half + 1].sum() / energy.sum())
 
 
+def _swing(record: np.ndarray, half: int) -> float:
+    """How far ``record`` (real) goes to the other side of zero from its largest magnitude,
+    within ``half`` samples of it, as a share of that magnitude; NaN for a zero record."""
+    x = np.asarray(record, dtype=float)
+    i = int(np.argmax(np.abs(x)))
+    peak = abs(float(x[i]))
+    if not peak > 0:
+        return float("nan")
+    window = x[max(0, i - half) : i + half + 1] * np.sign(x[i]) / peak
+    return float(max(0.0, -window.min()))
+
+
 def channels_swapped(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> HitCheck:
     """Failed when the response column looks like the hammer pulse (SWAP_PULSE_SHARE or
     more of its energy near its peak) and the force column like a decaying response
-    (SWAP_DECAY_SHARE or less of its): the file's columns were read the wrong way round
-    (a --columns matter). value: the response's share less the force's."""
+    (SWAP_DECAY_SHARE or less of its, or swinging to both sides of zero by
+    SWAP_FORCE_SWING while the response swings by SWAP_RESPONSE_SWING at most): the
+    file's columns were read the wrong way round (a --columns matter). value: the
+    response's share less the force's."""
     n = int(np.asarray(force_n).size)
     if n < SWAP_MIN_SAMPLES:
         return HitCheck(SWAPPED, True, f"not judged: {n} samples are too few", None)
@@ -289,6 +313,14 @@ def channels_swapped(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: 
         detail = (
             f"{r_share:.0%} of the response's energy lies within {span} of its peak, as a hammer "
             f"pulse's does, and {f_share:.0%} of the force's, as a decaying response's"
+        )
+        return HitCheck(SWAPPED, False, detail, r_share - f_share)
+    f_swing, r_swing = _swing(force_n, half), _swing(response, half)
+    if r_share >= SWAP_PULSE_SHARE and f_swing >= SWAP_FORCE_SWING and r_swing <= SWAP_RESPONSE_SWING:
+        detail = (
+            f"within {span} of its peak the response pushes one way, as a hammer pulse does (to "
+            f"{r_swing:.0%} of its peak the other way), and the force swings both ways, as a response "
+            f"does (to {f_swing:.0%})"
         )
         return HitCheck(SWAPPED, False, detail, r_share - f_share)
     detail = (
