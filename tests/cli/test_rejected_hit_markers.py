@@ -165,3 +165,17 @@ def test_a_run_imported_from_uff_is_told_to_go_through_a_csv_export(tmp_path):
     add_line(csv, "# rejected hit 1: double impact")
     assert invoke_daq("import", str(csv), "--store", str(uff_store)).returncode == 0
     assert accepted(uff_store) == [True, False, True, True]
+
+
+def test_the_import_note_of_a_hit_the_file_rejects_says_it_is_left_out(tmp_path):
+    """A new user's file marked its double hit rejected, and the import's note still said
+    'it is kept and averaged'. Notes now follow the marker; an unmarked hit is kept."""
+    _, result = imported(
+        tmp_path, "marked.csv", *_hits(double=(1, 2)), markers=("rejected hit 1: double impact",)
+    )
+    notes = [line for line in result.stdout.splitlines() if "failed the double impact check" in line]
+    assert len(notes) == 2, result.stdout
+    assert notes[0].startswith("note: hit 2 failed")
+    assert notes[0].endswith("the file rejects it, so it is left out of the average")
+    assert notes[1].startswith("note: hit 3 failed")
+    assert notes[1].endswith("it is kept and averaged, and daq analyze cautions about it")

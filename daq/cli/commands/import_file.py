@@ -364,7 +364,8 @@ def said_units(details: dict[str, Any]) -> list[str]:
 
 def failed_hit_checks(run) -> list[str]:
     """One line per hit whose checks failed (double impact, clipped), counted from 1:
-    kept and accepted, and `daq analyze` cautions about them."""
+    kept and accepted, and `daq analyze` cautions about them, unless the file rejects
+    the hit (then it says so)."""
     from daq.workflows.run_views import failed_check_names, swapped_columns
 
     if run.hits is None:
@@ -376,11 +377,15 @@ def failed_hit_checks(run) -> list[str]:
     for i, checks in enumerate(run.hits.checks):
         if swapped is not None and i in swapped[0]:
             continue
+        # A hit the file itself rejects (a '# rejected hit K' line) is already left out.
+        kept = bool(run.hits.accepted[i])
+        fate = (
+            "it is kept and averaged, and daq analyze cautions about it"
+            if kept
+            else "the file rejects it, so it is left out of the average"
+        )
         for name in failed_check_names(checks):
-            out.append(
-                f"hit {i + 1} failed the {name} check ({checks[name].get('detail', '')}); it is kept "
-                "and averaged, and daq analyze cautions about it"
-            )
+            out.append(f"hit {i + 1} failed the {name} check ({checks[name].get('detail', '')}); {fate}")
     return out
 
 
