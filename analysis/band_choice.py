@@ -107,6 +107,13 @@ def choose_band(
                 what = "it" if said_low else "the coherence"
                 why.append(f"{what} stays usable up to {edge_text(f[high])} Hz")
     if high - low + 1 < MIN_LINES:
+        if low == first and high == last:
+            # Nothing was cut: the run itself is that short (a new user's 30-sample file
+            # was told its whole span "suggested" a band too narrow, in two contradicting
+            # halves).
+            return BandChoice(float(f[first]), float(f[last]),
+                              f"every line above 0 Hz: the run holds only {lines.size} lines, fewer than the "
+                              f"{MIN_LINES} a band chosen from the data needs", coherence_ok)  # fmt: skip
         suggested = f"{edge_text(f[low])}-{edge_text(f[high])} Hz"
         return BandChoice(float(f[first]), float(f[last]),
                           f"every line above 0 Hz: the band the data suggest ({suggested}) "

@@ -306,10 +306,26 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band, noise=
         outside = [f for f in options.frequencies_hz if not low <= f <= high]
         if outside:
             said = "frequency {} Hz lies" if len(outside) == 1 else "frequencies {} Hz lie"
-            raise ValueError(
-                said.format(", ".join(f"{f:g}" for f in outside))
-                + f" outside the analysed lines ({edge_text(low)}-{edge_text(high)} Hz)"
+            lines = frequency_hz[np.isfinite(frequency_hz) & (frequency_hz > 0)]
+            first, last = float(lines.min()), float(lines.max())
+            given = options.band_hz is not None
+            text = said.format(", ".join(f"{f:g}" for f in outside)) + (
+                f" outside the band analysed, {edge_text(low)}-{edge_text(high)} Hz, "
+                + ("given with --band" if given else "which was chosen from the data")
             )
+            if not all(first <= f <= last for f in outside):
+                text += f"; the run has no lines there (they span {edge_text(first)}-{edge_text(last)} Hz)"
+            elif given:
+                text += f"; the run's lines span {edge_text(first)}-{edge_text(last)} Hz: widen --band"
+            else:
+                # The run has lines there; the band chosen from the data left them out.
+                wanted = sorted([low, high, *outside])
+                them = "it" if len(outside) == 1 else "them"
+                text += (
+                    f"; the run's lines span {edge_text(first)}-{edge_text(last)} Hz: give --band "
+                    f"{edge_text(wanted[0])}:{edge_text(wanted[-1])} to take {them} in"
+                )
+            raise ValueError(text)
     modal = identify_modes(
         frequency_hz[keep],
         frf[:, keep],

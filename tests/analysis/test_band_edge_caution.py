@@ -33,3 +33,30 @@ def test_a_band_at_the_first_line_cannot_be_widened():
     (caution,) = _edge_cautions((0.0, 300.0))
     assert "widen" not in caution
     assert "outside the run's lines, which these data cannot show (they begin at 0.25 Hz)" in caution
+
+
+def test_a_frequency_asked_for_beyond_the_chosen_band_gets_the_band_that_takes_it_in():
+    """A force that falls 20 dB by 1.3 kHz, in a run whose lines reach 3.2 kHz: a new
+    user's --frequencies beyond the chosen band was told only 'outside the analysed
+    lines', with no word of --band. It now says the band was chosen from the data and
+    which --band takes the frequency in; a frequency beyond the lines is told so."""
+    import numpy as np
+    import pytest
+
+    from analysis.run_analysis import AnalysisOptions, analyze_hits
+    from analysis.windows import WindowSpec
+    from tests.analysis.impact_synth import impact_hits
+
+    uniform = WindowSpec("uniform")
+    force, response = impact_hits([120.0, 410.0], [0.01, 0.02], [1.0, 1.0], 8192.0, 0.5, 3, 0.01, 1e-3, 1)
+    result = analyze_hits(force, response, 8192.0, np.ones(3, bool), uniform, uniform)
+    assert result.band.high_hz < 3000.0 < result.frequency_hz[-1]
+    said = (
+        r"band analysed, .* chosen from the data; the run's lines span .*: give --band 12:3000 to take it in$"
+    )
+    with pytest.raises(ValueError, match=said):
+        analyze_hits(force, response, 8192.0, np.ones(3, bool), uniform, uniform,
+                     options=AnalysisOptions(frequencies_hz=(3000.0,)))  # fmt: skip
+    with pytest.raises(ValueError, match=r"the run has no lines there \(they span 2-3200 Hz\)$"):
+        analyze_hits(force, response, 8192.0, np.ones(3, bool), uniform, uniform,
+                     options=AnalysisOptions(frequencies_hz=(5000.0,)))  # fmt: skip

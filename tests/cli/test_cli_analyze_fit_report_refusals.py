@@ -82,7 +82,8 @@ def test_frequencies_of_interest_outside_the_lines_are_refused(tmp_path):
     seal(run, tmp_path)
     assert_one_line_error(
         invoke_daq("analyze", run.run_id, "--frequencies", "500", "--store", str(tmp_path)),
-        "frequency 500 Hz lies outside the analysed lines",
+        "frequency 500 Hz lies outside the band analysed, 0.25-200 Hz, which was chosen from the data; "
+        "the run has no lines there (they span 0.25-200 Hz)",
     )
     assert_one_line_error(
         invoke_daq("analyze", run.run_id, "--frequencies", "500,600", "--store", str(tmp_path)),

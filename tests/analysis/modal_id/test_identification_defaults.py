@@ -86,6 +86,20 @@ def test_band_without_usable_coherence_is_said():
     assert (band.low_hz, band.high_hz) == (1.0, 500.0)
 
 
+def test_a_run_too_short_for_a_band_of_its_own_is_told_so_without_contradiction():
+    """A new user's 30-sample file: 'every line above 0 Hz: the band the data suggest
+    (136.5-1502 Hz) holds fewer than 40 lines', the suggestion being every line."""
+    f = np.arange(0, 16) * 136.5
+    band = choose_band(f, np.ones(f.size), np.full(f.size, 0.99))
+    assert (band.low_hz, band.high_hz) == (136.5, 2047.5)
+    assert band.reason == (
+        "every line above 0 Hz: the run holds only 15 lines, fewer than the 40 a band chosen from the "
+        "data needs"
+    )
+    cut = choose_band(np.arange(0, 60) * 1.0, np.ones(60), np.where(np.arange(60) < 30, 0.1, 0.99))
+    assert cut.reason.startswith("every line above 0 Hz: the band the data suggest (")
+
+
 def test_zones_follow_the_peaks():
     f = np.arange(1, 10001) * 1.0
     fn, zeta, amp = wideband_modes()
