@@ -22,7 +22,7 @@ from analysis.hit_checks import BAND_FRACTION, MAX_DROP_DB
 from daq.report.figures import QUALITY_HITS, psi_unit
 from daq.report.numbers import plain, span, with_uncertainty
 from daq.workflows.run_views import accepted_against_checks as _against
-from daq.workflows.run_views import failed_check_names, pretrigger_text
+from daq.workflows.run_views import failed_check_names, options_text, pretrigger_text, zones_text
 
 STYLE = """
 body { font: 14px/1.45 system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
@@ -543,8 +543,13 @@ def sections(
     )
     cut_text = pretrigger_text(s)
     cut_text = f"{cut_text[0].upper()}{cut_text[1:]}. " if cut_text else ""
+    # The options and zones the stored result was made with: a tuned analysis is told
+    # from a default one, and can be made again.
+    made = f"Analysed with {options_text(s.get('options'))}"
+    zones = zones_text(s.get("zones"))
+    made += f" ({zones}). " if zones else ". "
     note = (
-        f"From {source}.{band_text} Windows: {windows}{removed}{cut_text}"
+        f"From {source}.{band_text} {made}Windows: {windows}{removed}{cut_text}"
         + (f"± is the standard uncertainty of the value, from {', '.join(u_from)}. " if u_from else "")
         + (
             f"Synthesis error {plain(100 * s['synthesis_error'], '.3g')} %."

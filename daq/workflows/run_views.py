@@ -51,6 +51,36 @@ def accepted_against_checks(run) -> list[int]:
 _PLAIN_COLUMN = re.compile(r"[A-Za-z0-9_.+-]+")
 
 
+def options_text(options: dict[str, Any] | None) -> str:
+    """The analysis options a stored result was made with, as the `daq analyze` options that
+    make it again ("default options" for none): a reader of a report must be able to tell
+    a tuned analysis from a default one, and repeat it."""
+    options = options or {}
+    parts = []
+    band = options.get("band_hz")
+    if band:
+        parts.append(f"--band {band[0]:g}:{band[1]:g}")
+    if options.get("max_order") is not None:
+        parts.append(f"--max-order {options['max_order']}")
+    if options.get("frequencies_hz"):
+        parts.append("--frequencies " + ",".join(f"{f:g}" for f in options["frequencies_hz"]))
+    if options.get("estimator") not in (None, "h1"):
+        parts.append(f"--estimator {options['estimator']}")
+    return " ".join(parts) if parts else "default options"
+
+
+def zones_text(zones: list[dict[str, Any]] | None) -> str:
+    """'N frequency zones, LSCF orders a-b' (or 'one zone, LSCF order n') of a stored result."""
+    zones = zones or []
+    if not zones:
+        return ""
+    low, high = min(z["max_order"] for z in zones), max(z["max_order"] for z in zones)
+    if len(zones) == 1:
+        return f"one frequency zone, LSCF order {low}"
+    orders = f"LSCF order {low} in each" if low == high else f"LSCF orders {low}-{high}"
+    return f"{len(zones)} frequency zones, {orders}"
+
+
 def swapped_columns(run) -> tuple[list[int], str] | None:
     """(the 0-based indices of the hits whose response looks like the hammer pulse and
     force like a decaying response, analysis/hit_checks.py channels_swapped; one line

@@ -66,6 +66,7 @@ def test_report_of_an_frf_only_run_has_no_hits_figure(tmp_path):
     assert not (tmp_path / "r" / "hits.png").exists()
     assert not (tmp_path / "r" / "response_fit.png").exists()  # no time records to overlay
     page = (tmp_path / "r" / "index.html").read_text()
+    assert "Analysed with default options (one frequency zone, LSCF order 30)." in page
     # FRF, stability, synthesis; no damping fit is made behind the user's back: the page
     # says how to make one.
     assert page.count("data:image/png;base64,") == 3
@@ -97,6 +98,9 @@ def test_report_draws_the_stored_analysis_with_its_options_and_flags_a_stale_fit
     assert stored["options"]["frequencies_hz"] == [120.0]  # not re-analysed with defaults
     assert len(stored["modes"]) == 1
     assert "caution: this fit was made from an earlier analysis" in page
+    # The page says which options the stored analysis was made with (a new user's report
+    # of an analysis made with --max-order 60 read as a default one).
+    assert "Analysed with --frequencies 120 (one frequency zone, LSCF order 30)." in page
     # daq fit now fits the analysis the user made (one mode, one Ritz function).
     fitted = invoke_daq(*fit, "--json")
     assert fitted.returncode == 0, fitted.stderr

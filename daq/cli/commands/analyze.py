@@ -228,9 +228,9 @@ def _print(info: dict) -> None:
         typer.echo(f"  {pretrigger_text(info)}")
     zones = info.get("zones") or []
     if len(zones) > 1:
-        low, high = min(z["max_order"] for z in zones), max(z["max_order"] for z in zones)
-        orders = f"LSCF order {low} in each" if low == high else f"LSCF orders {low}-{high}"
-        typer.echo(f"  {len(zones)} frequency zones, {orders}")
+        from daq.workflows.run_views import zones_text
+
+        typer.echo(f"  {zones_text(zones)}")
     windows = str(info.get("windows", {}).get("from", ""))
     if windows.startswith("unknown") and f"windows {windows}" not in info.get("cautions", []):
         typer.echo(f"  caution: windows {windows}")  # an analysis stored before it was a caution
