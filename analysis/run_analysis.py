@@ -441,12 +441,20 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
             "5 or more hits"
         )
     vague = [m for m in result.modes if np.isfinite(m.damping_u) and m.damping_u > m.damping_ratio]
-    for m in vague:
+    if len(vague) == 1:
+        (m,) = vague
         value, u = with_uncertainty(100 * m.damping_ratio, 100 * m.damping_u)
         out.append(
             f"the damping of the mode at {_at(m)} Hz is not fixed by the data: its ± "
             f"({u} %) is larger than the value ({value} %); a finer "
             "frequency step, more hits or a --band around the mode may fix it"
+        )
+    elif vague:
+        # One line for them all: a noisy run has many, and a line each buried the rest.
+        listed = ", ".join(_at(m) for m in vague)
+        out.append(
+            f"the damping of the modes at {listed} Hz is not fixed by the data: the ± of each is larger "
+            "than its value; a finer frequency step, more hits or a --band around them may fix it"
         )
     line = float(np.median(np.diff(result.frequency_hz))) if result.frequency_hz.size > 1 else 0.0
     narrow = [

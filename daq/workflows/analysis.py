@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from analysis.beam import TABLE_1, BeamProperties
+from analysis.hit_checks import NO_IMPACT
 from analysis.modal_id import NORMALISATIONS
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits, set_aside
 from analysis.spectra import convert_form
@@ -181,6 +182,18 @@ def _averaged_against_checks(run: Run) -> str | None:
     if not against:
         return None
     checks = run.hits.checks
+    if set(against) == set(np.flatnonzero(run.hits.accepted)) and all(
+        NO_IMPACT in failed_check_names(checks[i]) for i in against
+    ):
+        # Not one hammer hit: the FRF is the noise's, and so are its "modes" (a new user's
+        # file of noise got 17 modes and 20 cautions, this one buried among them).
+        first = checks[against[0]][NO_IMPACT].get("detail", "no hammer pulse")
+        return (
+            f"no hit in the average is a hammer impact (hit {against[0] + 1} failed the no impact check: "
+            f"{first}): the FRF and its "
+            "modes are those of noise or of an excitation this analysis is not made for, not the "
+            "structure's; import the hits of a hammer test"
+        )
     said = "; ".join(
         f"hit {i + 1}: {name} ({checks[i][name].get('detail', 'failed')})"
         for i in against

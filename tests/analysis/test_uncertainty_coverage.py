@@ -111,6 +111,20 @@ def test_a_damping_whose_u_exceeds_it_is_said():
     assert said.startswith(f"the damping of the mode at {at} Hz is not fixed by the data")
 
 
+def test_several_dampings_not_fixed_by_the_data_are_said_in_one_line():
+    """A noisy run has many such modes, and a line each buried the other cautions."""
+    from analysis.run_analysis import _cautions
+
+    uniform = WindowSpec("uniform")
+    force, response = impact_hits(FN, ZETA, AMP, 1024.0, 4.0, 5, 0.02, 2e-3, 100)
+    result = analyze_hits(force, response, 1024.0, np.ones(5, bool), uniform, uniform)
+    for mode in result.modes[:2]:
+        mode.damping_u = 2 * mode.damping_ratio
+    (said,) = [c for c in _cautions(result) if "is not fixed by the data" in c]
+    at = [with_uncertainty(m.frequency_hz, m.frequency_u_hz)[0] for m in result.modes[:2]]
+    assert said.startswith(f"the damping of the modes at {at[0]}, {at[1]} Hz is not fixed by the data: ")
+
+
 def test_that_caution_writes_the_damping_as_the_mode_line_does():
     """Value to the decimal place of its u (two significant digits), as the mode line
     writes it: 0.47 % with u 1.4 % is "0.5 %", not "0.47 %" beside a mode line's 0.5 %."""

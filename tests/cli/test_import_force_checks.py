@@ -57,3 +57,9 @@ def test_noise_for_a_force_is_imported_with_a_failed_no_impact_check_that_analyz
     analysed = invoke_daq("analyze", "latest", "--json", "--store", str(tmp_path / "store"))
     (info,) = json.loads(analysed.stdout)
     assert any("no impact" in c for c in info["cautions"]), info["cautions"]
+    # Not one hammer hit: said first and plainly (a new user's file of noise got 17 modes
+    # and 20 cautions, this one among them).
+    assert info["cautions"][0].startswith(
+        "no hit in the average is a hammer impact (hit 1 failed the no impact"
+    )
+    assert "not the structure's" in info["cautions"][0]
