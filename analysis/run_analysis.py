@@ -471,10 +471,14 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         )
     if band is not None:
         margin = EDGE_FRACTION * (band.high_hz - band.low_hz)
+        # At the low edge no wider than the band's distance from 0 Hz, twice (a mode below
+        # twice the edge): 150 Hz in a band of 36.5-8658 Hz is no edge mode (a new user's
+        # file was told it was, 2 % of the width reaching 209 Hz).
+        low_margin = min(margin, 2 * band.low_hz)
         lines = result.frequency_hz[np.isfinite(result.frequency_hz) & (result.frequency_hz > 0)]
         step = float(np.median(np.diff(lines))) if lines.size > 1 else 0.0
         for m in result.modes:
-            low = m.frequency_hz < band.low_hz + margin
+            low = m.frequency_hz < band.low_hz + low_margin
             if not low and m.frequency_hz <= band.high_hz - margin:
                 continue
             # A band that already reaches the run's first (last) line cannot be widened.

@@ -16,11 +16,12 @@ def _accelerance(f_hz: np.ndarray, modes: list[tuple[float, float]]) -> np.ndarr
     return np.atleast_2d(h)
 
 
-def _edge_cautions(band_hz: tuple[float, float]) -> list[str]:
+def _edge_cautions(band_hz: tuple[float, float], first: tuple[float, float] = (6.0, 0.02)) -> list[str]:
     f = np.arange(1, 1601) * 0.25  # 0.25-400 Hz
-    h = _accelerance(f, [(6.0, 0.02), (80.0, 0.01), (210.0, 0.01)])
+    h = _accelerance(f, [first, (80.0, 0.01), (210.0, 0.01)])
     result = analyze_frfs(f, h, None, "measured_frf", AnalysisOptions(band_hz=band_hz))
-    assert any(abs(m.frequency_hz - 6.0) < 0.1 for m in result.modes), [m.frequency_hz for m in result.modes]
+    found = [m.frequency_hz for m in result.modes]
+    assert any(abs(m - first[0]) < 0.1 for m in found), found
     return [c for c in result.cautions if "lies at an edge of the band" in c]
 
 
@@ -29,8 +30,23 @@ def test_a_band_inside_the_lines_is_to_be_widened():
     assert caution.endswith("it may stand for modes outside; widen the band to check it")
 
 
+def test_a_mode_far_above_a_low_edge_near_0_hz_is_no_edge_mode():
+    """2 % of a wide band's width reached 209 Hz above its 36.5 Hz edge: a new user's
+    150 Hz mode was told it lay at an edge. At the low edge the margin is no wider than
+    twice the edge's distance from 0 Hz."""
+    f = np.arange(1, 8001) * 1.0
+    h = _accelerance(f, [(150.0, 0.01), (1000.0, 0.01), (3000.0, 0.01)])
+    result = analyze_frfs(f, h, None, "measured_frf", AnalysisOptions(band_hz=(36.5, 7900.0)))
+    assert any(abs(m.frequency_hz - 150.0) < 0.5 for m in result.modes)
+    assert not [c for c in result.cautions if "lies at an edge of the band" in c]
+    lower = analyze_frfs(f, h, None, "measured_frf", AnalysisOptions(band_hz=(70.0, 7900.0)))
+    (caution,) = [c for c in lower.cautions if "lies at an edge of the band" in c]
+    assert caution.startswith("the mode at 150")
+
+
 def test_a_band_at_the_first_line_cannot_be_widened():
-    (caution,) = _edge_cautions((0.0, 300.0))
+    # 0.6 Hz, 0.35 Hz above the first line: within twice the edge's distance from 0 Hz.
+    (caution,) = _edge_cautions((0.0, 300.0), first=(0.6, 0.2))
     assert "widen" not in caution
     assert "outside the run's lines, which these data cannot show (they begin at 0.25 Hz)" in caution
 
