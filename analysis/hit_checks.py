@@ -284,7 +284,10 @@ def _peak_share(record: np.ndarray, half: int) -> float:
 
 def _swing(record: np.ndarray, half: int) -> float:
     """How far ``record`` (real) goes to the other side of zero from its largest magnitude,
-    within ``half`` samples of it, as a share of that magnitude; NaN for a zero record."""
+    within ``half`` samples of it, as a share of that magnitude; NaN for a zero record
+    and for a complex one (a zoomed record, shifted to baseband, has no sides of zero)."""
+    if np.iscomplexobj(record):
+        return float("nan")
     x = np.asarray(record, dtype=float)
     i = int(np.argmax(np.abs(x)))
     peak = abs(float(x[i]))
