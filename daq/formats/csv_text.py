@@ -48,7 +48,7 @@ from daq.formats.imported import (
     open_checked,
     show_path,
 )
-from daq.formats.units import TIME_UNITS, accepted_forms, clean_label, parse_unit
+from daq.formats.units import TIME_UNITS, accepted_forms, clean_label, not_acceleration, parse_unit
 from daq.store.model import Run
 
 AXIS_TOLERANCE = 1e-9  # kept for callers; hits now share one axis within the time rule
@@ -659,6 +659,9 @@ class Table:
                     f"{_show(header_unit)} is {other} unit: the columns are in another order; give "
                     f"{example}--columns {order} (time, force, response)"
                 ) from None
+            if why := not_acceleration(header_unit):
+                # A velocity or displacement column: no --response-unit makes it one.
+                raise FormatError(f"{self.name}: column {_show(self.header[col])}: {why}") from None  # type: ignore[index]
             raise FormatError(
                 f"{self.name}: column {_show(self.header[col])}: unknown {quantity} unit "  # type: ignore[index]
                 f"{_show(header_unit)} in the header; use {accepted_forms(quantity)}, or give {flag}"
@@ -1114,8 +1117,14 @@ def _units_row(cells: list[str]) -> list[str | None] | None:
             continue
         bare = text[1:-1].strip() if text[:1] + text[-1:] in ("[]", "()") else text
         _, unit = header_name_unit(f"x ({bare})")
+        # A velocity or displacement unit is a unit too: its column is then refused as
+        # no acceleration, not the row as no units.
         known = unit is not None and (
-            unit in TIME_UNITS or unit in ("V", "mV") or _parses(unit, "force") or _parses(unit, "response")
+            unit in TIME_UNITS
+            or unit in ("V", "mV")
+            or _parses(unit, "force")
+            or _parses(unit, "response")
+            or bool(not_acceleration(unit))
         )
         if not known:
             return None

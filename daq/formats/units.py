@@ -68,6 +68,8 @@ def parse_unit(unit: str, quantity: str) -> float:
             f"{quantity} unit {_show(unit)} is a voltage: give the sensor's sensitivity after '@', "
             f"e.g. {text}{example[example.index('@') :]}"
         )
+    if quantity == "response" and (why := not_acceleration(text)):
+        raise FormatError(f"response unit {why}")
     raise FormatError(f"unknown {quantity} unit {_show(unit)}: use {accepted_forms(quantity)}")
 
 
@@ -137,6 +139,24 @@ _FRF_NUMERATORS: dict[str, tuple[str, float]] = {
     "mm/s": ("mobility", 1e-3),
     **{unit: ("accelerance", factor) for unit, factor in _PHYSICAL["response"].items()},
 }
+
+
+def not_acceleration(unit: str) -> str:
+    """Why a velocity or displacement unit ("m/s", "mm") cannot be a time record's response,
+    and what to do instead, as a clause for a one-line message; "" for any other unit.
+
+    Time records are read as acceleration over force (the analysis and its checks need
+    acceleration); an FRF table may hold mobility or receptance, which --frf-form says.
+    """
+    found = _FRF_NUMERATORS.get(clean_label(unit))
+    if found is None or found[0] == "accelerance":
+        return ""
+    what, times = ("a velocity", "once") if found[0] == "mobility" else ("a displacement", "twice")
+    return (
+        f"{_show(unit)} is {what}, and a time record's response must be an acceleration (daq analyses "
+        f"acceleration over force): differentiate it {times} to m/s^2 and import that, or, if you have "
+        f"the FRF as a table, import that with --format frf-text --frf-form {found[0]}"
+    )
 
 
 def clean_label(unit: str) -> str:

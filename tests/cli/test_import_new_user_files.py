@@ -1,0 +1,65 @@
+"""`daq import` of the files a new user brought, each in its exact shape (written here):
+a refusal is one line on stderr, exit status 1 and nothing in the store; a file whose
+meaning is plain is read, with a `note:` where the reader decided something."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from daq.store import Store
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+
+RATE_HZ = 4096.0
+
+
+def daq_import(store, *args: str):
+    return invoke_daq("import", *map(str, args), "--store", str(store))
+
+
+def runs_in(store) -> list[str]:
+    return [s.run_id for s in Store(store).list()] if store.exists() else []
+
+
+def refused(result, store, *fragments: str) -> str:
+    """One line on stderr with ``fragments``, exit status 1, no run in ``store``."""
+    assert_one_line_error(result, *fragments)
+    assert result.returncode == 1
+    assert runs_in(store) == [], "a refused import stored a run"
+    return result.stderr
+
+
+def notes(result) -> list[str]:
+    return [line for line in result.stdout.splitlines() if line.startswith("note: ")]
+
+
+def hit_rows(n: int = 1024) -> list[tuple[str, str, str]]:
+    """(time, force, response) as the user's files print them: time to 10 digits at
+    4096 Hz, a hammer pulse, a decaying response, 6 significant digits."""
+    t = np.arange(n) / RATE_HZ
+    force = np.where(np.arange(n) == 4, 50.0, 0.0) + 0.05 * np.sin(7.0 * np.arange(n))
+    response = np.exp(-3.0 * t) * np.sin(2 * np.pi * 45.0 * t)
+    return [(f"{a:.10g}", f"{b:.6g}", f"{c:.6g}") for a, b, c in zip(t, force, response, strict=True)]
+
+
+def write_rows(path, header: str, rows, cell: str = "{}", end: str = "\n", after: str = ""):
+    """``header`` then ``rows`` comma-separated, each cell as ``cell`` formats it, each
+    line ending in ``after`` and ``end``."""
+    lines = [header + after] + [",".join(cell.format(c) for c in row) + after for row in rows]
+    path.write_bytes((end.join(lines) + end).encode("utf-8"))
+    return path
+
+
+# --- 1: a velocity column in a time record ------------------------------------------------
+
+
+def test_a_velocity_response_is_refused_as_no_acceleration(tmp_path):
+    path = write_rows(tmp_path / "q_velocity.csv", "Time [s],Force [N],Velocity [m/s]", hit_rows())
+    store = tmp_path / "runs"
+    message = refused(
+        daq_import(store, path),
+        store,
+        "column 'Velocity [m/s]': 'm/s' is a velocity, and a time record's response must be an acceleration",
+        "differentiate it once to m/s^2 and import that",
+        "--format frf-text --frf-form mobility",
+    )
+    assert "unknown response unit" not in message
