@@ -33,6 +33,7 @@ from typing import IO
 import numpy as np
 
 from daq.formats.axis import fit_regular, printed_half_units, step_fits
+from daq.formats.cells import outside_quotes, split_line
 from daq.formats.errors import FormatError, count
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
@@ -83,7 +84,9 @@ def choose_delimiter(line: str) -> str | None:
     """The cell delimiter of a text table's line: ";" or tab where the line holds one,
     else "," unless the commas are decimal commas between runs of spaces ("0,001 1,0 2",
     "0 2,46e-07 0,025": every cell a number, one with a decimal comma; the table reader
-    refuses points and commas mixed), else None (runs of whitespace)."""
+    refuses points and commas mixed), else None (runs of whitespace). What is inside
+    quotes is no delimiter ("Force; N" is one cell)."""
+    line = outside_quotes(line)
     if ";" in line:
         return ";"
     if "\t" in line:
@@ -113,11 +116,11 @@ def decode_line(raw: bytes, first: bool = False) -> str:
 
 def split_cells(line: str, delimiter: str | None = None) -> tuple[list[str], str | None]:
     """(cells, delimiter) of a line: ";", tab or "," (found in the line when not given),
-    else runs of whitespace; cells stripped."""
+    else runs of whitespace; cells stripped, quoted cells without their quotes
+    (daq/formats/cells.py)."""
     if delimiter is None:
         delimiter = choose_delimiter(line)
-    cells = line.split(delimiter) if delimiter else line.split()
-    return [c.strip() for c in cells], delimiter
+    return split_line(line, delimiter), delimiter
 
 
 def is_number_text(cell: str) -> bool:
@@ -389,9 +392,9 @@ class Table:
                 return
 
     def _split(self, line: str) -> list[str]:
-        if self.delimiter is None:
-            return line.split()
-        return [cell.strip() for cell in line.split(self.delimiter)]
+        # Quoted cells ("0","-0.06") lose their quotes: a spreadsheet's quotes are no part
+        # of the number.
+        return split_line(line, self.delimiter)
 
     def _number(self, cell: str) -> float:
         # With ";", tab or spaces between the cells, a comma can only be a decimal comma.

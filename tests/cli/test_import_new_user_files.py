@@ -63,3 +63,20 @@ def test_a_velocity_response_is_refused_as_no_acceleration(tmp_path):
         "--format frf-text --frf-form mobility",
     )
     assert "unknown response unit" not in message
+
+
+# --- 2: every cell in double quotes -------------------------------------------------------
+
+
+def test_a_fully_quoted_csv_is_read(tmp_path):
+    rows = hit_rows()
+    path = write_rows(tmp_path / "q_quoted.csv", '"Time [s]","Force [N]","Accel [g]"', rows, cell='"{}"')
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    assert "(csv: 1 hit of 1024 samples at 4096 Hz)" in result.stdout
+    assert "units: time s, force N (header), response g (header)" in result.stdout
+    (run_id,) = runs_in(store)
+    hits = Store(store).open(run_id).hits
+    np.testing.assert_array_equal(hits.force_n[0], [float(r[1]) for r in rows])
+    np.testing.assert_array_equal(hits.response_m_s2[0], [float(r[2]) * 9.80665 for r in rows])

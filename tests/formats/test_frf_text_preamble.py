@@ -138,9 +138,12 @@ def test_a_first_row_of_numbers_is_data_never_a_header(tmp_path):
     got = read_frf_text(path)
     assert got.details["header"] is False
     assert got.measured_frfs.frequency_hz.tolist() == [1.0, 2.0, 3.0]
+    # Quoted numbers are numbers (RFC 4180): the row is data.
+    quoted = tmp_path / "quoted.txt"
+    quoted.write_text('"1","1","0"\n"2","0.5","-0.5"\n')
+    assert read_frf_text(quoted).measured_frfs.frequency_hz.tolist() == [1.0, 2.0]
     store = tmp_path / "store"
     for name, text in [
-        ("quoted.txt", '"1","1","0"\n"2","0.5","-0.5"\n'),
         ("trail.txt", "1;1;0;\n2;0,5;0;\n"),
     ]:
         path = tmp_path / name

@@ -554,7 +554,7 @@ def text_header(head: bytes) -> list[str]:
     """The cells of a text file's header row (its first line that is neither empty nor a
     comment nor in a preamble of metadata lines, when it is not all numbers), or [] when
     there is none or it is no text."""
-    from daq.formats.csv_text import COMMENT_MARKS, choose_delimiter, looks_complex, preamble_lines
+    from daq.formats.csv_text import COMMENT_MARKS, looks_complex, preamble_lines, split_cells
 
     if b"\0" in head:
         return []
@@ -564,10 +564,7 @@ def text_header(head: bytes) -> list[str]:
         stripped = line.strip()
         if not stripped or stripped.startswith(COMMENT_MARKS) or index in preamble:
             continue
-        delimiter = choose_delimiter(stripped)
-        cells = [
-            c.strip().strip("\"'") for c in (stripped.split(delimiter) if delimiter else stripped.split())
-        ]
+        cells = [c.strip("\"'") for c in split_cells(stripped)[0]]
         numeric = 0
         for cell in cells:
             try:
