@@ -49,6 +49,7 @@ from daq.formats.imported import (
     open_checked,
     show_path,
 )
+from daq.formats.line_ends import text_lines
 from daq.formats.units import TIME_UNITS, accepted_forms, clean_label, not_acceleration, parse_unit
 from daq.store.model import Run
 
@@ -210,7 +211,8 @@ def read_csv(
         raise FormatError(f"{name}: {exc}") from None
     with open_checked(path, max_bytes) as (handle, info):
         table = Table(name, columns=columns, keep_time_text=True)
-        table.read(_without_preamble(table, handle), max_bytes)
+        # text_lines: a file whose lines end in CR alone (classic Mac OS) is read line by line too.
+        table.read(_without_preamble(table, text_lines(handle)), max_bytes)
     if sample_rate_hz is not None:
         table.stated_rate = (float(sample_rate_hz), "--sample-rate")
     return table.build(path, columns, force_unit, response_unit, mtime_utc(info))

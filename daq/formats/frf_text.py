@@ -57,6 +57,7 @@ from daq.formats.csv_text import (
 )
 from daq.formats.errors import FormatError, count
 from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
+from daq.formats.line_ends import text_lines
 from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
 from daq.store.model import FRF_FORMS
 
@@ -199,7 +200,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     name = show_path(path)
     if frf_form is not None and frf_form not in FRF_FORMS:
         raise FormatError(f"FRF form {frf_form!r} is not one of {', '.join(FRF_FORMS)}")
-    with open_checked(path, max_bytes) as (handle, _):
+    with open_checked(path, max_bytes) as (raw_handle, _):
+        handle = text_lines(raw_handle)  # lines ending in CR alone are lines too
         head, _ = _head_lines(handle)
         texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
         layout = scan_layout(texts)

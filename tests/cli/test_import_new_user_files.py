@@ -80,3 +80,20 @@ def test_a_fully_quoted_csv_is_read(tmp_path):
     hits = Store(store).open(run_id).hits
     np.testing.assert_array_equal(hits.force_n[0], [float(r[1]) for r in rows])
     np.testing.assert_array_equal(hits.response_m_s2[0], [float(r[2]) * 9.80665 for r in rows])
+
+
+# --- 3: lines ending in CR alone (classic Mac OS) ------------------------------------------
+
+
+def test_a_csv_with_cr_line_ends_is_read(tmp_path):
+    rows = hit_rows() * 3  # three hits, the time starting over
+    path = write_rows(tmp_path / "b_cr.csv", "Time [s],Force [kN],Accel [g]", rows, end="\r")
+    assert b"\n" not in path.read_bytes()
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    assert "(csv: 3 hits of 1024 samples at 4096 Hz)" in result.stdout
+    (run_id,) = runs_in(store)
+    hits = Store(store).open(run_id).hits
+    np.testing.assert_array_equal(hits.force_n[2], [float(r[1]) * 1000.0 for r in rows[:1024]])
+    assert "no line end" not in result.stdout  # the last line ends in CR
