@@ -97,3 +97,27 @@ def test_a_csv_with_cr_line_ends_is_read(tmp_path):
     hits = Store(store).open(run_id).hits
     np.testing.assert_array_equal(hits.force_n[2], [float(r[1]) * 1000.0 for r in rows[:1024]])
     assert "no line end" not in result.stdout  # the last line ends in CR
+
+
+# --- 4: an Excel workbook renamed .csv ------------------------------------------------------
+
+
+def test_an_excel_workbook_renamed_csv_is_told_to_be_saved_as_csv(tmp_path):
+    import zipfile
+
+    path = tmp_path / "b_excel.csv"
+    with zipfile.ZipFile(path, "w") as archive:  # the user's file: the workbook part alone
+        archive.writestr("xl/workbook.xml", "<x/>")
+    store = tmp_path / "runs"
+    for forced in ([], ["--format", "csv"]):
+        message = refused(
+            daq_import(store, path, *forced),
+            store,
+            "b_excel.csv: an Excel workbook (.xlsx), which daq does not read; "
+            "save the sheet as CSV (or text) from the spreadsheet and import that",
+        )
+        assert "unpack" not in message
+    other = tmp_path / "hits.csv"
+    with zipfile.ZipFile(other, "w") as archive:
+        archive.writestr("hit1.csv", "t,F,a\n")
+    refused(daq_import(store, other), store, "hits.csv: a ZIP archive; unpack it and import the files inside")

@@ -499,6 +499,14 @@ def not_readable(path: Path, head: bytes) -> str:
             "as a CSV with one header row (time, force, response columns) and import that"
         )
     if zipped:
+        from daq.formats.zip_contents import is_excel_workbook, member_names
+
+        # Unpacked, a workbook gives XML parts, no table: it must be saved as CSV instead.
+        if is_excel_workbook(member_names(path, head)):
+            return (
+                f"{name}: an Excel workbook (.xlsx), which daq does not read; save the sheet as CSV "
+                "(or text) from the spreadsheet and import that"
+            )
         return f"{name}: a ZIP archive; unpack it and import the files inside"
     if head.startswith((b"\xff\xfe", b"\xfe\xff")):
         return f"{name}: text in UTF-16, which daq does not read; save it as UTF-8 and import it again"
