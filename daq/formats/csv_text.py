@@ -329,6 +329,10 @@ class Table:
         self.first_comma_line: int | None = None
         self.first_grouped: tuple[int, str] | None = None
         self.n_cols = 0
+        # Columns empty on every line, header cell included (a delimiter at the end of every
+        # line): no columns at all. Found at the first data row, holding 0.0 in ``values``.
+        self.empty_cols: frozenset[int] = frozenset()
+        self.first_data_line = 0
         self.values = array("d")
         self.lines = array("q")
         self.picked: list[int] | None = None
@@ -411,7 +415,9 @@ class Table:
             cells = self._split(line)
             self.n_cols = len(cells)
             _refuse_complex(self.name, number, cells)  # else a row of them reads as a header
-            if not all(self._is_number(cell) for cell in cells):
+            # Empty cells do not make a header: "0,1,2," is a row of numbers and a delimiter.
+            filled = [cell for cell in cells if cell]
+            if not filled or not all(self._is_number(cell) for cell in filled):
                 if self.delimiter is None:  # "Time (s) Force [N]": a unit is no column of its own
                     cells = join_units(cells)
                     self.n_cols = len(cells)
@@ -436,11 +442,15 @@ class Table:
                 self.units = [own or row for own, row in zip(self.units, units, strict=True)]
                 self.units_row = number
                 return
+        if not self.lines:
+            self._first_data_row(cells, number)
         if self.keep_time_text and self.picked is None:
             self.complex_mode = self.columns is None and all(
                 self.find(n) is not None for n in COMPLEX_COLUMNS
             )
             self.picked, self.hit_col = self._pick(self.columns, self.complex_mode)
+        if self.empty_cols:
+            cells = self._fill_empty(cells)
         for col, cell in enumerate(cells):
             try:
                 value = self._number(cell)
@@ -464,6 +474,57 @@ class Table:
         if self.picked is not None:
             self.time_texts.append(cells[self.picked[0]])
         self.lines.append(number)
+
+    def _first_data_row(self, cells: list[str], number: int) -> None:
+        """Note the columns that are no columns: empty in this, the first data row, with no
+        name or unit in the header (or no header). Every later row must leave them empty."""
+        self.first_data_line = number
+        names = self.names or [""] * len(cells)
+        units = self.units or [None] * len(cells)
+        self.empty_cols = frozenset(
+            c for c, cell in enumerate(cells) if not cell and not names[c].strip() and units[c] is None
+        )
+
+    def _fill_empty(self, cells: list[str]) -> list[str]:
+        """``cells`` with a "0" for each empty column's cell (it holds 0.0 in ``values``);
+        a cell there that is not empty makes the column one with empty cells, refused
+        where it was first empty, as any empty cell is."""
+        cells = list(cells)
+        for col in self.empty_cols:
+            if cells[col]:
+                raise FormatError(
+                    f"{self.name} line {self.first_data_line} column {col + 1}: '' is not a number"
+                )
+            cells[col] = "0"
+        return cells
+
+    def empty_note(self) -> list[str]:
+        """The note on the columns read as none (empty on every line), or none."""
+        if not self.empty_cols:
+            return []
+        cols = sorted(self.empty_cols)
+        several = len(cols) > 1
+        trailing = cols == list(range(self.n_cols - len(cols), self.n_cols))
+        return [
+            f"column{'s' if several else ''} {', '.join(str(c + 1) for c in cols)} "
+            f"{'are' if several else 'is'} empty on every line"
+            + (" (a delimiter at the end of every line)" if trailing else "")
+            + f": read without {'them' if several else 'it'}"
+        ]
+
+    def drop_empty_columns(self) -> list[str]:
+        """Take the empty columns (empty_cols) out of the table, so that its columns are
+        counted without them; the note saying so, or none."""
+        note = self.empty_note()
+        if note:
+            keep = [c for c in range(self.n_cols) if c not in self.empty_cols]
+            self.values = array("d", self.data()[:, keep].ravel().tolist())
+            if self.header is not None:
+                self.header = [self.header[c] for c in keep]
+                self.names = [self.names[c] for c in keep]
+                self.units = [self.units[c] for c in keep]
+            self.n_cols, self.empty_cols = len(keep), frozenset()
+        return note
 
     def _mixed_decimals(self, cells: list[str], number: int) -> None:
         """Refuse a cell like "1.500" in a file that writes decimal commas: where commas
@@ -527,12 +588,14 @@ class Table:
         if columns is None:
             if complex_mode:
                 wanted = [self.find(n) for n in COMPLEX_COLUMNS]
-                rest = [i for i in range(self.n_cols) if i not in wanted and i != hit]
+                rest = [
+                    i for i in range(self.n_cols) if i not in wanted and i != hit and i not in self.empty_cols
+                ]
                 time = self.find("time")
                 if time is None and not rest:
                     raise FormatError(f"{self.name} has complex columns but no time column")
                 return [time if time is not None else rest[0], *wanted], hit  # type: ignore[list-item]
-            rest = [i for i in range(self.n_cols) if i != hit]
+            rest = [i for i in range(self.n_cols) if i != hit and i not in self.empty_cols]
             if len(rest) < 3:
                 raise FormatError(
                     f"{self.name} has {count(len(rest), 'data column')}; need time, force and response"
@@ -578,6 +641,10 @@ class Table:
                     raise FormatError(
                         f"{self.name}: no column {_show(item)} in the header ({', '.join(header)})"
                     )
+            if index in self.empty_cols:
+                raise FormatError(
+                    f"{self.name}: column index {index} is empty on every line; it holds no data"
+                )
             picked.append(index)
         if len(set(picked)) != 3:
             raise FormatError(f"{self.name}: columns {_show(columns)} must be three different columns")
@@ -784,9 +851,13 @@ class Table:
         if self.picked_note and columns is None:
             notes.setdefault("notes", []).insert(0, self.picked_note)
         names = [header[i] if header else str(i) for i in picked]
-        ignored = [i for i in range(self.n_cols) if i not in picked and i != hit_col]
+        ignored = [
+            i for i in range(self.n_cols) if i not in picked and i != hit_col and i not in self.empty_cols
+        ]
         if ignored:
             notes.setdefault("notes", []).append(self._ignored_note(ignored, picked, complex_mode))
+        if said := self.empty_note():
+            notes.setdefault("notes", []).extend(said)
         if said := self.unended_note():
             notes.setdefault("notes", []).extend(said)
         if said := self._marker_notes(len(groups), None if ids is None else [int(ids[g[0]]) for g in groups]):

@@ -208,6 +208,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         _check_first_data(name, layout)
         table = Table(name)
         table.read(_fed_lines(head, texts, layout, handle), max_bytes)
+    # A delimiter at the end of every line makes a column empty on every line: none at all.
+    empty_note = table.drop_empty_columns()
     data = table.data()
     lines = np.frombuffer(table.lines, dtype=np.int64)
     if table.header is None:
@@ -320,6 +322,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         details["preamble"] = _kept_preamble(layout.metadata)
     if coherence and coh is None:
         details["notes"] = [f"{len(coherence)} coherence columns for {len(frfs)} FRFs: coherence ignored"]
+    if empty_note:
+        details.setdefault("notes", []).extend(empty_note)
     if said := table.unended_note():
         details.setdefault("notes", []).extend(said)
     measured = make_frfs(path, freq, frf, coh, labels, form)
@@ -393,13 +397,14 @@ def _form(
 
 def _check_first_data(name: str, layout: Layout) -> None:
     """A first row of numbers is data: refuse it in one line when the table reader would
-    take it for a header (a cell it cannot read as written, or a trailing delimiter)."""
+    take it for a header (a cell it cannot read as written). Empty cells are no header
+    (a delimiter at the end of the line): the table reader reads past them."""
     if layout.header is not None or layout.first_data is None:
         return
     where = f"{name} line {layout.first_data + 1}: a row of numbers, so data, not a header"
     for cell in layout.data_cells:
         if not cell:
-            raise FormatError(f"{where}, but it has an empty cell (a delimiter too many at its end?)")
+            continue
         try:
             float(cell.replace(",", ".", 1) if cell.count(",") == 1 else cell)
         except ValueError:

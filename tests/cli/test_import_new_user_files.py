@@ -121,3 +121,26 @@ def test_an_excel_workbook_renamed_csv_is_told_to_be_saved_as_csv(tmp_path):
     with zipfile.ZipFile(other, "w") as archive:
         archive.writestr("hit1.csv", "t,F,a\n")
     refused(daq_import(store, other), store, "hits.csv: a ZIP archive; unpack it and import the files inside")
+
+
+# --- 5: a delimiter at the end of every line --------------------------------------------------
+
+
+def test_a_trailing_comma_on_every_line_is_no_column(tmp_path):
+    rows = hit_rows() * 3
+    path = write_rows(tmp_path / "q_trailing_comma.csv", "Time [s],Force [N],Accel [g]", rows, after=",")
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    assert "(csv: 3 hits of 1024 samples at 4096 Hz)" in result.stdout
+    assert notes(result) == [
+        "note: column 4 is empty on every line (a delimiter at the end of every line): read without it"
+    ]
+    (run_id,) = runs_in(store)
+    hits = Store(store).open(run_id).hits
+    np.testing.assert_array_equal(hits.response_m_s2[1], [float(r[2]) * 9.80665 for r in rows[:1024]])
+    # Filled on one line only, the column is a column with empty cells, refused as before.
+    text = path.read_text().splitlines()
+    text[500] += "7"
+    path.write_text("\n".join(text) + "\n")
+    refused(daq_import(tmp_path / "again", path), tmp_path / "again", "line 2 column 4: '' is not a number")

@@ -573,14 +573,17 @@ def text_header(head: bytes) -> list[str]:
         if not stripped or stripped.startswith(COMMENT_MARKS) or index in preamble:
             continue
         cells = [c.strip("\"'") for c in split_cells(stripped)[0]]
+        while cells and not cells[-1]:
+            cells.pop()  # "0,1,2,", "f,Re,Im,": a delimiter at the end of the line makes no cell
+        filled = [c for c in cells if c]  # nor does an empty cell make a row of numbers a header
         numeric = 0
-        for cell in cells:
+        for cell in filled:
             try:
                 float(cell.replace(",", "."))
                 numeric += 1
             except ValueError:
                 numeric += looks_complex(cell)  # numbers too: the reader says what they are
-        return cells if numeric < len(cells) else []
+        return cells if numeric < len(filled) else []
     return []
 
 
@@ -789,6 +792,8 @@ def _steady_first_column(head: bytes) -> tuple[Any, float] | None:
         if not line or line.startswith(COMMENT_MARKS):
             continue
         cells, delimiter = split_cells(line)
+        while cells and not cells[-1]:  # a delimiter at the end of the line: no cell
+            cells.pop()
         try:
             rows.append([float(c.replace(",", ".") if delimiter != "," else c) for c in cells])
         except ValueError:
