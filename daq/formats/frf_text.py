@@ -253,6 +253,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     if bad.size:
         raise FormatError(f"{name} line {lines[bad[0] + 1]}: frequency does not increase")
     frfs, labels, coherence, frf_units, layouts = [], [], [], [], set()
+    phase_notes: list[str] = []
     col = 1
     while col < table.n_cols:
         pair = tuple(kinds[col : col + 2])
@@ -281,6 +282,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
                 raise FormatError(
                     f"{name} line {lines[row]}: negative magnitude {first[row]:g} (dB? say [dB])"
                 )
+            if units[col + 1] is None and (said := _radians_note(table, col + 1, second)):
+                phase_notes.append(said)
             phase_unit = (units[col + 1] or "deg").lower()
             if phase_unit not in _PHASE_UNITS:
                 raise FormatError(f"{name}: unknown phase unit {phase_unit!r}; use deg or rad")
@@ -324,6 +327,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         details["notes"] = [f"{len(coherence)} coherence columns for {len(frfs)} FRFs: coherence ignored"]
     if empty_note:
         details.setdefault("notes", []).extend(empty_note)
+    if phase_notes:
+        details.setdefault("notes", []).extend(phase_notes)
     if said := table.unended_note():
         details.setdefault("notes", []).extend(said)
     measured = make_frfs(path, freq, frf, coh, labels, form)
@@ -355,6 +360,30 @@ def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
         kind = "phase"
     label = " ".join(t for t in tokens if t.lower() not in _KINDS)
     return kind, label
+
+
+#: A phase column with no unit whose values all lie within +-pi (with this slack for a
+#: rounded 3.1416) and span more than RADIANS_SPAN looks like radians read as degrees.
+RADIANS_SLACK = 1e-3
+RADIANS_SPAN = 1.0
+
+
+def _radians_note(table: Table, col: int, values: np.ndarray) -> str:
+    """The note on a phase column ``col`` with no unit that looks like radians, or "".
+
+    values: the column as read. Degrees stay the default (a unit-less phase is read as
+    degrees, as documented); a phase that never leaves +-pi yet spans more than a
+    radian is told, since read as degrees it would be a nearly real FRF. A small phase
+    in degrees (a span below 1) is not told."""
+    low, high = float(np.min(values)), float(np.max(values))
+    if max(-low, high) > np.pi * (1 + RADIANS_SLACK) or high - low <= RADIANS_SPAN:
+        return ""
+    name = (table.header or [""] * (col + 1))[col]
+    return (
+        f"column {col + 1} {name!r} has no unit and all its values lie within ±π ({low:.4g} to {high:.4g}): "
+        f"read as degrees, but it looks like radians; if it is, write the unit in the header, "
+        f"'{name} [rad]' ('{name} [deg]' says degrees)"
+    )
 
 
 def _label(table: Table, col: int) -> str:

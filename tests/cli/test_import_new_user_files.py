@@ -144,3 +144,31 @@ def test_a_trailing_comma_on_every_line_is_no_column(tmp_path):
     text[500] += "7"
     path.write_text("\n".join(text) + "\n")
     refused(daq_import(tmp_path / "again", path), tmp_path / "again", "line 2 column 4: '' is not a number")
+
+
+# --- 6: a phase in radians with no unit --------------------------------------------------------
+
+
+def test_a_unitless_phase_in_radians_is_noted(tmp_path):
+    f = 0.25 * np.arange(1, 4001)
+    h = 1.0 / (1.0 - (f / 45.0) ** 2 + 0.024j * f / 45.0) + 0.05 * np.exp(0.3j * np.arange(4000))
+    rows = [(f"{a:g}", f"{abs(b):.6e}", f"{np.angle(b):.6f}") for a, b in zip(f, h, strict=True)]
+    path = write_rows(tmp_path / "f_rad_unlabelled.csv", "Frequency (Hz),H11 mag,H11 phase", rows)
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    (note,) = [n for n in notes(result) if "radians" in n]
+    assert note.startswith("note: column 3 'H11 phase' has no unit and all its values lie within ±π (")
+    assert note.endswith(
+        "read as degrees, but it looks like radians; if it is, write the unit in the header, "
+        "'H11 phase [rad]' ('H11 phase [deg]' says degrees)"
+    )
+    (run_id,) = runs_in(store)
+    stored = Store(store).open(run_id).measured_frfs.frf[0]
+    np.testing.assert_allclose(np.angle(stored), np.deg2rad([float(r[2]) for r in rows]), atol=1e-12)
+    # Told, the reader takes radians.
+    said = write_rows(tmp_path / "f_rad.csv", "Frequency (Hz),H11 mag,H11 phase [rad]", rows)
+    again = daq_import(tmp_path / "runs2", said)
+    assert not [n for n in notes(again) if "radians" in n]
+    (run_id,) = runs_in(tmp_path / "runs2")
+    np.testing.assert_allclose(Store(tmp_path / "runs2").open(run_id).measured_frfs.frf[0], h, rtol=1e-5)
