@@ -50,7 +50,14 @@ from daq.formats.imported import (
     show_path,
 )
 from daq.formats.line_ends import text_lines
-from daq.formats.units import TIME_UNITS, accepted_forms, clean_label, not_acceleration, parse_unit
+from daq.formats.units import (
+    TIME_UNITS,
+    accepted_forms,
+    clean_label,
+    not_acceleration,
+    parse_unit,
+    spelled_as,
+)
 from daq.store.model import Run
 
 AXIS_TOLERANCE = 1e-9  # kept for callers; hits now share one axis within the time rule
@@ -715,6 +722,8 @@ class Table:
             )
         try:
             where = "units row" if col in self.from_units_row else "header"
+            if same := spelled_as(header_unit, quantity):  # "G": say how it was read
+                where += f", read as {same}"
             return header_unit, parse_unit(header_unit, quantity), where
         except FormatError:
             other_quantity = "response" if quantity == "force" else "force"

@@ -172,3 +172,23 @@ def test_a_unitless_phase_in_radians_is_noted(tmp_path):
     assert not [n for n in notes(again) if "radians" in n]
     (run_id,) = runs_in(tmp_path / "runs2")
     np.testing.assert_allclose(Store(tmp_path / "runs2").open(run_id).measured_frfs.frf[0], h, rtol=1e-5)
+
+
+# --- 7: G, g's and m/s/s for acceleration ------------------------------------------------------
+
+
+def test_g_gs_and_m_s_s_headers_are_read(tmp_path):
+    rows = hit_rows()
+    cases = [
+        ("q_sec_G.csv", "Time [sec],Force [lbf],Acceleration [G]", "response G (header, read as g)", 9.80665),
+        ("q_gs.csv", "Time (s),Force (N),Accel (g's)", "response g's (header, read as g)", 9.80665),
+        ("q_ms_sq.csv", "Time (s),Force (N),Accel (m/s/s)", "response m/s/s (header, read as m/s^2)", 1.0),
+    ]
+    for name, header, said, factor in cases:
+        store = tmp_path / f"runs-{name}"
+        result = daq_import(store, write_rows(tmp_path / name, header, rows))
+        assert result.returncode == 0, result.stderr
+        assert said in result.stdout
+        (run_id,) = runs_in(store)
+        hits = Store(store).open(run_id).hits
+        np.testing.assert_array_equal(hits.response_m_s2[0], [float(r[2]) * factor for r in rows])
