@@ -192,3 +192,39 @@ def test_g_gs_and_m_s_s_headers_are_read(tmp_path):
         (run_id,) = runs_in(store)
         hits = Store(store).open(run_id).hits
         np.testing.assert_array_equal(hits.response_m_s2[0], [float(r[2]) * factor for r in rows])
+
+
+# --- 8: an ASCII UFF 58 time record at 4096 Hz ----------------------------------------------
+
+
+def test_an_ascii_uff_at_4096_hz_comes_back_at_4096_hz(tmp_path):
+    import pyuff
+
+    n = 4096
+    rows = hit_rows(n)
+    force = np.array([float(r[1]) for r in rows])
+    accel = np.array([float(r[2]) for r in rows]) * 9.80665
+    sets = []
+    for k in range(3):  # hit k: force (node 1), then acceleration (node 2), as the user's file
+        for what, node, kind, unit, data in (("force", 1, 13, "N", force), ("accel", 2, 12, "m/s^2", accel)):
+            dset = pyuff.prepare_58(
+                binary=0, id1=f"hit {k} {what}", func_type=1, rsp_node=node, rsp_dir=3, ref_node=1, ref_dir=3,
+                abscissa_spacing=1, abscissa_spec_data_type=17, ordinate_spec_data_type=kind,
+                orddenom_spec_data_type=0, z_axis_spec_data_type=0, data=data, x=np.arange(n) / RATE_HZ,
+            )  # fmt: skip
+            dset.update(ordinate_axis_units_lab=unit, abscissa_axis_units_lab="s")
+            sets.append(dset)
+    path = tmp_path / "U1_time.uff"
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    assert "  2.44141e-04  " in path.read_text()  # the increment as the header prints it
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    assert "(uff: 3 hits of 4096 samples at 4096 Hz)" in result.stdout
+    assert notes(result) == [
+        "note: sample rate 4096 Hz: the abscissa increment 2.44141e-04 s, printed to 6 significant digits, "
+        "gives 4095.994 Hz, and any rate from 4095.985 to 4096.002 Hz lies within half a unit of its last "
+        "digit; 4096 Hz, the one whole number of hertz among them, is stored"
+    ]
+    (run_id,) = runs_in(store)
+    assert Store(store).open(run_id).hits.sample_rate_hz == 4096.0
