@@ -155,6 +155,23 @@ def step_fits(values: np.ndarray, half_units: np.ndarray | None, step: float) ->
     return float(np.max(resid - tol)) <= float(np.min(resid + tol))
 
 
+def whole_rate(step: float, half_unit: float) -> int | None:
+    """The one whole number of hertz among the rates a printed step allows, or None.
+
+    step: the step as read (s, > 0); half_unit: half a unit of its last printed digit (s).
+    The true step lies within step +- half_unit, so the rate within 1/(step + half_unit)
+    to 1/(step - half_unit). A rate of exactly 1/step that is already whole, no whole rate
+    in that range, or more than one, gives None: there is nothing to decide.
+    """
+    if not (step > 0 and 0 <= half_unit < step):
+        return None
+    low, high = 1.0 / (step + half_unit), 1.0 / (step - half_unit)
+    first, last = math.ceil(low), math.floor(high)
+    if first != last or first <= 0 or first == 1.0 / step:
+        return None
+    return int(first)
+
+
 def _tolerances(t: np.ndarray, half_units: np.ndarray | None) -> np.ndarray:
     """Each value's tolerance (see the module's docstring), in the values' unit."""
     typical = float(np.median(np.diff(t)))

@@ -33,6 +33,7 @@ from typing import IO
 import numpy as np
 
 from daq.formats.axis import fit_regular, printed_half_units, step_fits
+from daq.formats.cells import outside_quotes, split_line
 from daq.formats.errors import FormatError, count
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
@@ -48,7 +49,15 @@ from daq.formats.imported import (
     open_checked,
     show_path,
 )
-from daq.formats.units import TIME_UNITS, accepted_forms, clean_label, parse_unit
+from daq.formats.line_ends import text_lines
+from daq.formats.units import (
+    TIME_UNITS,
+    accepted_forms,
+    clean_label,
+    not_acceleration,
+    parse_unit,
+    spelled_as,
+)
 from daq.store.model import Run
 
 AXIS_TOLERANCE = 1e-9  # kept for callers; hits now share one axis within the time rule
@@ -83,7 +92,9 @@ def choose_delimiter(line: str) -> str | None:
     """The cell delimiter of a text table's line: ";" or tab where the line holds one,
     else "," unless the commas are decimal commas between runs of spaces ("0,001 1,0 2",
     "0 2,46e-07 0,025": every cell a number, one with a decimal comma; the table reader
-    refuses points and commas mixed), else None (runs of whitespace)."""
+    refuses points and commas mixed), else None (runs of whitespace). What is inside
+    quotes is no delimiter ("Force; N" is one cell)."""
+    line = outside_quotes(line)
     if ";" in line:
         return ";"
     if "\t" in line:
@@ -113,11 +124,11 @@ def decode_line(raw: bytes, first: bool = False) -> str:
 
 def split_cells(line: str, delimiter: str | None = None) -> tuple[list[str], str | None]:
     """(cells, delimiter) of a line: ";", tab or "," (found in the line when not given),
-    else runs of whitespace; cells stripped."""
+    else runs of whitespace; cells stripped, quoted cells without their quotes
+    (daq/formats/cells.py)."""
     if delimiter is None:
         delimiter = choose_delimiter(line)
-    cells = line.split(delimiter) if delimiter else line.split()
-    return [c.strip() for c in cells], delimiter
+    return split_line(line, delimiter), delimiter
 
 
 def is_number_text(cell: str) -> bool:
@@ -207,7 +218,8 @@ def read_csv(
         raise FormatError(f"{name}: {exc}") from None
     with open_checked(path, max_bytes) as (handle, info):
         table = Table(name, columns=columns, keep_time_text=True)
-        table.read(_without_preamble(table, handle), max_bytes)
+        # text_lines: a file whose lines end in CR alone (classic Mac OS) is read line by line too.
+        table.read(_without_preamble(table, text_lines(handle)), max_bytes)
     if sample_rate_hz is not None:
         table.stated_rate = (float(sample_rate_hz), "--sample-rate")
     return table.build(path, columns, force_unit, response_unit, mtime_utc(info))
@@ -324,6 +336,10 @@ class Table:
         self.first_comma_line: int | None = None
         self.first_grouped: tuple[int, str] | None = None
         self.n_cols = 0
+        # Columns empty on every line, header cell included (a delimiter at the end of every
+        # line): no columns at all. Found at the first data row, holding 0.0 in ``values``.
+        self.empty_cols: frozenset[int] = frozenset()
+        self.first_data_line = 0
         self.values = array("d")
         self.lines = array("q")
         self.picked: list[int] | None = None
@@ -389,9 +405,9 @@ class Table:
                 return
 
     def _split(self, line: str) -> list[str]:
-        if self.delimiter is None:
-            return line.split()
-        return [cell.strip() for cell in line.split(self.delimiter)]
+        # Quoted cells ("0","-0.06") lose their quotes: a spreadsheet's quotes are no part
+        # of the number.
+        return split_line(line, self.delimiter)
 
     def _number(self, cell: str) -> float:
         # With ";", tab or spaces between the cells, a comma can only be a decimal comma.
@@ -406,7 +422,9 @@ class Table:
             cells = self._split(line)
             self.n_cols = len(cells)
             _refuse_complex(self.name, number, cells)  # else a row of them reads as a header
-            if not all(self._is_number(cell) for cell in cells):
+            # Empty cells do not make a header: "0,1,2," is a row of numbers and a delimiter.
+            filled = [cell for cell in cells if cell]
+            if not filled or not all(self._is_number(cell) for cell in filled):
                 if self.delimiter is None:  # "Time (s) Force [N]": a unit is no column of its own
                     cells = join_units(cells)
                     self.n_cols = len(cells)
@@ -431,11 +449,15 @@ class Table:
                 self.units = [own or row for own, row in zip(self.units, units, strict=True)]
                 self.units_row = number
                 return
+        if not self.lines:
+            self._first_data_row(cells, number)
         if self.keep_time_text and self.picked is None:
             self.complex_mode = self.columns is None and all(
                 self.find(n) is not None for n in COMPLEX_COLUMNS
             )
             self.picked, self.hit_col = self._pick(self.columns, self.complex_mode)
+        if self.empty_cols:
+            cells = self._fill_empty(cells)
         for col, cell in enumerate(cells):
             try:
                 value = self._number(cell)
@@ -459,6 +481,57 @@ class Table:
         if self.picked is not None:
             self.time_texts.append(cells[self.picked[0]])
         self.lines.append(number)
+
+    def _first_data_row(self, cells: list[str], number: int) -> None:
+        """Note the columns that are no columns: empty in this, the first data row, with no
+        name or unit in the header (or no header). Every later row must leave them empty."""
+        self.first_data_line = number
+        names = self.names or [""] * len(cells)
+        units = self.units or [None] * len(cells)
+        self.empty_cols = frozenset(
+            c for c, cell in enumerate(cells) if not cell and not names[c].strip() and units[c] is None
+        )
+
+    def _fill_empty(self, cells: list[str]) -> list[str]:
+        """``cells`` with a "0" for each empty column's cell (it holds 0.0 in ``values``);
+        a cell there that is not empty makes the column one with empty cells, refused
+        where it was first empty, as any empty cell is."""
+        cells = list(cells)
+        for col in self.empty_cols:
+            if cells[col]:
+                raise FormatError(
+                    f"{self.name} line {self.first_data_line} column {col + 1}: '' is not a number"
+                )
+            cells[col] = "0"
+        return cells
+
+    def empty_note(self) -> list[str]:
+        """The note on the columns read as none (empty on every line), or none."""
+        if not self.empty_cols:
+            return []
+        cols = sorted(self.empty_cols)
+        several = len(cols) > 1
+        trailing = cols == list(range(self.n_cols - len(cols), self.n_cols))
+        return [
+            f"column{'s' if several else ''} {', '.join(str(c + 1) for c in cols)} "
+            f"{'are' if several else 'is'} empty on every line"
+            + (" (a delimiter at the end of every line)" if trailing else "")
+            + f": read without {'them' if several else 'it'}"
+        ]
+
+    def drop_empty_columns(self) -> list[str]:
+        """Take the empty columns (empty_cols) out of the table, so that its columns are
+        counted without them; the note saying so, or none."""
+        note = self.empty_note()
+        if note:
+            keep = [c for c in range(self.n_cols) if c not in self.empty_cols]
+            self.values = array("d", self.data()[:, keep].ravel().tolist())
+            if self.header is not None:
+                self.header = [self.header[c] for c in keep]
+                self.names = [self.names[c] for c in keep]
+                self.units = [self.units[c] for c in keep]
+            self.n_cols, self.empty_cols = len(keep), frozenset()
+        return note
 
     def _mixed_decimals(self, cells: list[str], number: int) -> None:
         """Refuse a cell like "1.500" in a file that writes decimal commas: where commas
@@ -522,12 +595,14 @@ class Table:
         if columns is None:
             if complex_mode:
                 wanted = [self.find(n) for n in COMPLEX_COLUMNS]
-                rest = [i for i in range(self.n_cols) if i not in wanted and i != hit]
+                rest = [
+                    i for i in range(self.n_cols) if i not in wanted and i != hit and i not in self.empty_cols
+                ]
                 time = self.find("time")
                 if time is None and not rest:
                     raise FormatError(f"{self.name} has complex columns but no time column")
                 return [time if time is not None else rest[0], *wanted], hit  # type: ignore[list-item]
-            rest = [i for i in range(self.n_cols) if i != hit]
+            rest = [i for i in range(self.n_cols) if i != hit and i not in self.empty_cols]
             if len(rest) < 3:
                 raise FormatError(
                     f"{self.name} has {count(len(rest), 'data column')}; need time, force and response"
@@ -573,6 +648,10 @@ class Table:
                     raise FormatError(
                         f"{self.name}: no column {_show(item)} in the header ({', '.join(header)})"
                     )
+            if index in self.empty_cols:
+                raise FormatError(
+                    f"{self.name}: column index {index} is empty on every line; it holds no data"
+                )
             picked.append(index)
         if len(set(picked)) != 3:
             raise FormatError(f"{self.name}: columns {_show(columns)} must be three different columns")
@@ -643,6 +722,8 @@ class Table:
             )
         try:
             where = "units row" if col in self.from_units_row else "header"
+            if same := spelled_as(header_unit, quantity):  # "G": say how it was read
+                where += f", read as {same}"
             return header_unit, parse_unit(header_unit, quantity), where
         except FormatError:
             other_quantity = "response" if quantity == "force" else "force"
@@ -659,6 +740,9 @@ class Table:
                     f"{_show(header_unit)} is {other} unit: the columns are in another order; give "
                     f"{example}--columns {order} (time, force, response)"
                 ) from None
+            if why := not_acceleration(header_unit):
+                # A velocity or displacement column: no --response-unit makes it one.
+                raise FormatError(f"{self.name}: column {_show(self.header[col])}: {why}") from None  # type: ignore[index]
             raise FormatError(
                 f"{self.name}: column {_show(self.header[col])}: unknown {quantity} unit "  # type: ignore[index]
                 f"{_show(header_unit)} in the header; use {accepted_forms(quantity)}, or give {flag}"
@@ -776,9 +860,13 @@ class Table:
         if self.picked_note and columns is None:
             notes.setdefault("notes", []).insert(0, self.picked_note)
         names = [header[i] if header else str(i) for i in picked]
-        ignored = [i for i in range(self.n_cols) if i not in picked and i != hit_col]
+        ignored = [
+            i for i in range(self.n_cols) if i not in picked and i != hit_col and i not in self.empty_cols
+        ]
         if ignored:
             notes.setdefault("notes", []).append(self._ignored_note(ignored, picked, complex_mode))
+        if said := self.empty_note():
+            notes.setdefault("notes", []).extend(said)
         if said := self.unended_note():
             notes.setdefault("notes", []).extend(said)
         if said := self._marker_notes(len(groups), None if ids is None else [int(ids[g[0]]) for g in groups]):
@@ -1114,8 +1202,14 @@ def _units_row(cells: list[str]) -> list[str | None] | None:
             continue
         bare = text[1:-1].strip() if text[:1] + text[-1:] in ("[]", "()") else text
         _, unit = header_name_unit(f"x ({bare})")
+        # A velocity or displacement unit is a unit too: its column is then refused as
+        # no acceleration, not the row as no units.
         known = unit is not None and (
-            unit in TIME_UNITS or unit in ("V", "mV") or _parses(unit, "force") or _parses(unit, "response")
+            unit in TIME_UNITS
+            or unit in ("V", "mV")
+            or _parses(unit, "force")
+            or _parses(unit, "response")
+            or bool(not_acceleration(unit))
         )
         if not known:
             return None

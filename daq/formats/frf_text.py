@@ -57,6 +57,7 @@ from daq.formats.csv_text import (
 )
 from daq.formats.errors import FormatError, count
 from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
+from daq.formats.line_ends import text_lines
 from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
 from daq.store.model import FRF_FORMS
 
@@ -199,13 +200,16 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     name = show_path(path)
     if frf_form is not None and frf_form not in FRF_FORMS:
         raise FormatError(f"FRF form {frf_form!r} is not one of {', '.join(FRF_FORMS)}")
-    with open_checked(path, max_bytes) as (handle, _):
+    with open_checked(path, max_bytes) as (raw_handle, _):
+        handle = text_lines(raw_handle)  # lines ending in CR alone are lines too
         head, _ = _head_lines(handle)
         texts = [decode_line(raw, index == 0) for index, raw in enumerate(head)]
         layout = scan_layout(texts)
         _check_first_data(name, layout)
         table = Table(name)
         table.read(_fed_lines(head, texts, layout, handle), max_bytes)
+    # A delimiter at the end of every line makes a column empty on every line: none at all.
+    empty_note = table.drop_empty_columns()
     data = table.data()
     lines = np.frombuffer(table.lines, dtype=np.int64)
     if table.header is None:
@@ -249,6 +253,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
     if bad.size:
         raise FormatError(f"{name} line {lines[bad[0] + 1]}: frequency does not increase")
     frfs, labels, coherence, frf_units, layouts = [], [], [], [], set()
+    phase_notes: list[str] = []
     col = 1
     while col < table.n_cols:
         pair = tuple(kinds[col : col + 2])
@@ -277,6 +282,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
                 raise FormatError(
                     f"{name} line {lines[row]}: negative magnitude {first[row]:g} (dB? say [dB])"
                 )
+            if units[col + 1] is None and (said := _radians_note(table, col + 1, second)):
+                phase_notes.append(said)
             phase_unit = (units[col + 1] or "deg").lower()
             if phase_unit not in _PHASE_UNITS:
                 raise FormatError(f"{name}: unknown phase unit {phase_unit!r}; use deg or rad")
@@ -318,6 +325,10 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         details["preamble"] = _kept_preamble(layout.metadata)
     if coherence and coh is None:
         details["notes"] = [f"{len(coherence)} coherence columns for {len(frfs)} FRFs: coherence ignored"]
+    if empty_note:
+        details.setdefault("notes", []).extend(empty_note)
+    if phase_notes:
+        details.setdefault("notes", []).extend(phase_notes)
     if said := table.unended_note():
         details.setdefault("notes", []).extend(said)
     measured = make_frfs(path, freq, frf, coh, labels, form)
@@ -349,6 +360,30 @@ def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
         kind = "phase"
     label = " ".join(t for t in tokens if t.lower() not in _KINDS)
     return kind, label
+
+
+#: A phase column with no unit whose values all lie within +-pi (with this slack for a
+#: rounded 3.1416) and span more than RADIANS_SPAN looks like radians read as degrees.
+RADIANS_SLACK = 1e-3
+RADIANS_SPAN = 1.0
+
+
+def _radians_note(table: Table, col: int, values: np.ndarray) -> str:
+    """The note on a phase column ``col`` with no unit that looks like radians, or "".
+
+    values: the column as read. Degrees stay the default (a unit-less phase is read as
+    degrees, as documented); a phase that never leaves +-pi yet spans more than a
+    radian is told, since read as degrees it would be a nearly real FRF. A small phase
+    in degrees (a span below 1) is not told."""
+    low, high = float(np.min(values)), float(np.max(values))
+    if max(-low, high) > np.pi * (1 + RADIANS_SLACK) or high - low <= RADIANS_SPAN:
+        return ""
+    name = (table.header or [""] * (col + 1))[col]
+    return (
+        f"column {col + 1} {name!r} has no unit and all its values lie within ±π ({low:.4g} to {high:.4g}): "
+        f"read as degrees, but it looks like radians; if it is, write the unit in the header, "
+        f"'{name} [rad]' ('{name} [deg]' says degrees)"
+    )
 
 
 def _label(table: Table, col: int) -> str:
@@ -391,13 +426,14 @@ def _form(
 
 def _check_first_data(name: str, layout: Layout) -> None:
     """A first row of numbers is data: refuse it in one line when the table reader would
-    take it for a header (a cell it cannot read as written, or a trailing delimiter)."""
+    take it for a header (a cell it cannot read as written). Empty cells are no header
+    (a delimiter at the end of the line): the table reader reads past them."""
     if layout.header is not None or layout.first_data is None:
         return
     where = f"{name} line {layout.first_data + 1}: a row of numbers, so data, not a header"
     for cell in layout.data_cells:
         if not cell:
-            raise FormatError(f"{where}, but it has an empty cell (a delimiter too many at its end?)")
+            continue
         try:
             float(cell.replace(",", ".", 1) if cell.count(",") == 1 else cell)
         except ValueError:

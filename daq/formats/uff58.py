@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 import pyuff
 
-from daq.formats.axis import fit_regular
+from daq.formats.axis import fit_regular, printed_half_units, whole_rate
 from daq.formats.errors import FormatError
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
@@ -317,10 +317,42 @@ def _exact_axis(rec: _Record, start: float, step: float, details: dict) -> tuple
         out_rate = rate
     else:
         out_rate = 1.0 / step
+        if rec.even and (whole := _printed_increment_rate(rec.x_inc)):
+            out_rate = whole[0]
+            details["notes"].append(whole[1])
     if math.isfinite(exact_start) and abs(exact_start - start) <= HEADER_TOLERANCE * max(abs(start), step):
         start = exact_start
     details["exact_axis_from_id_lines"] = out_rate == rate and start == exact_start
     return out_rate, start
+
+
+#: Significant digits of the abscissa increment in a dataset 58 header: the format prints
+#: it as E13.5 (pyuff, and the writers that follow the format).
+HEADER_DIGITS = 6
+
+
+def _printed_increment_rate(increment: float) -> tuple[float, str] | None:
+    """(a whole rate, Hz, and the note saying why) where the header's increment (s), printed
+    to HEADER_DIGITS significant digits, allows exactly one whole number of hertz; else
+    None. 4096 Hz prints as 2.44141e-04 s, which read back is 4095.99 Hz: the printed
+    digits cannot say more, and a sampling rate is a whole number of hertz far more often
+    than not (the CSV reader states such a rate in a note too, for coarse time columns)."""
+    printed = f"{increment:.{HEADER_DIGITS - 1}e}"
+    # More digits than the format's (a writer that prints them) hold the step closer.
+    text = printed if float(printed) == increment else repr(increment)
+    half = float(printed_half_units([text])[0])
+    whole = whole_rate(increment, half)
+    if whole is None:
+        return None
+    low, high = 1.0 / (increment + half), 1.0 / (increment - half)
+    digits = max(0, 1 - math.floor(math.log10(high - low)))
+    digits_said = len(text.split("e")[0].replace(".", "").replace("-", "").lstrip("0"))
+    return float(whole), (
+        f"sample rate {whole} Hz: the abscissa increment {text} s, printed to {digits_said} significant "
+        f"digits, gives {1.0 / increment:.{digits}f} Hz, and any rate from {low:.{digits}f} to "
+        f"{high:.{digits}f} Hz lies within half a unit of its last digit; {whole} Hz, the one whole "
+        "number of hertz among them, is stored"
+    )
 
 
 def _to_si(rec: _Record, quantity: str, units: dict) -> np.ndarray:

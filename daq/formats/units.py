@@ -3,7 +3,8 @@
 A unit is either a physical unit or a voltage with the sensor's sensitivity:
 
 - force: ``N``, ``kN``, ``lbf``
-- response: ``m/s^2`` (also ``m/s2``), ``mm/s^2`` (also ``mm/s2``), ``g`` (9.80665 m/s^2)
+- response: ``m/s^2`` (also ``m/s2``, ``m/s/s``), ``mm/s^2`` (also ``mm/s2``, ``mm/s/s``),
+  ``g`` (9.80665 m/s^2; also ``G``, ``g's``, ``G's``, as accelerometer software prints it)
 - voltage: ``mV@10.2mV/g`` means "the column is in mV; the sensor gives 10.2 mV per g";
   ``V@2.25mV/N`` means "the column is in V; the sensor gives 2.25 mV per N".
   The column may be in ``V`` or ``mV``, the sensitivity in ``V/<unit>`` or ``mV/<unit>``
@@ -35,6 +36,10 @@ _PHYSICAL: dict[str, dict[str, float]] = {
         "g": STANDARD_GRAVITY_M_S2,
     },
 }
+# Other spellings of response units, matched whole and case-sensitively: "G" is g only as
+# an acceleration unit (no force or prefix reading: "GN" stays unknown, "G" for a force
+# is refused), and only "G" itself, never a lower-cased text ("mG", "Gm/s^2" stay unknown).
+_RESPONSE_SPELLINGS = {"G": "g", "g's": "g", "G's": "g", "m/s/s": "m/s^2", "mm/s/s": "mm/s^2"}
 _VOLTS = {"V": 1.0, "mV": 1e-3}
 _NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|[-+]?(?:nan|inf|infinity)", re.I)
 
@@ -58,6 +63,8 @@ def parse_unit(unit: str, quantity: str) -> float:
         raise FormatError(f"{quantity} unit must be text, got {type(unit).__name__}")
     text = unit.strip()
     table = _PHYSICAL[quantity]
+    if quantity == "response":
+        text = _RESPONSE_SPELLINGS.get(text, text)
     if text in table:
         return table[text]
     if "@" in text:
@@ -68,7 +75,16 @@ def parse_unit(unit: str, quantity: str) -> float:
             f"{quantity} unit {_show(unit)} is a voltage: give the sensor's sensitivity after '@', "
             f"e.g. {text}{example[example.index('@') :]}"
         )
+    if quantity == "response" and (why := not_acceleration(text)):
+        raise FormatError(f"response unit {why}")
     raise FormatError(f"unknown {quantity} unit {_show(unit)}: use {accepted_forms(quantity)}")
+
+
+def spelled_as(unit: str, quantity: str) -> str:
+    """The usual spelling of another spelling of a ``quantity`` unit ("g" for "G" or "g's",
+    "m/s^2" for "m/s/s"), or "" when ``unit`` is spelled as parse_unit lists it."""
+    text = unit.strip()
+    return _RESPONSE_SPELLINGS.get(text, "") if quantity == "response" else ""
 
 
 def to_si(values: np.ndarray, unit: str, quantity: str) -> np.ndarray:
@@ -100,6 +116,8 @@ def _voltage_factor(text: str, quantity: str) -> float:
     rest = sensitivity.strip()[number.end() :].strip()
     volts, slash, physical = rest.partition("/")
     volts, physical = volts.strip(), physical.strip()
+    if quantity == "response":
+        physical = _RESPONSE_SPELLINGS.get(physical, physical)
     if not slash or volts not in _VOLTS:
         raise FormatError(f"unknown {quantity} unit {_show(text)}: use {accepted_forms(quantity)}")
     if physical not in _PHYSICAL[quantity]:
@@ -136,7 +154,26 @@ _FRF_NUMERATORS: dict[str, tuple[str, float]] = {
     "m/s": ("mobility", 1.0),
     "mm/s": ("mobility", 1e-3),
     **{unit: ("accelerance", factor) for unit, factor in _PHYSICAL["response"].items()},
+    **{unit: ("accelerance", _PHYSICAL["response"][same]) for unit, same in _RESPONSE_SPELLINGS.items()},
 }
+
+
+def not_acceleration(unit: str) -> str:
+    """Why a velocity or displacement unit ("m/s", "mm") cannot be a time record's response,
+    and what to do instead, as a clause for a one-line message; "" for any other unit.
+
+    Time records are read as acceleration over force (the analysis and its checks need
+    acceleration); an FRF table may hold mobility or receptance, which --frf-form says.
+    """
+    found = _FRF_NUMERATORS.get(clean_label(unit))
+    if found is None or found[0] == "accelerance":
+        return ""
+    what, times = ("a velocity", "once") if found[0] == "mobility" else ("a displacement", "twice")
+    return (
+        f"{_show(unit)} is {what}, and a time record's response must be an acceleration (daq analyses "
+        f"acceleration over force): differentiate it {times} to m/s^2 and import that, or, if you have "
+        f"the FRF as a table, import that with --format frf-text --frf-form {found[0]}"
+    )
 
 
 def clean_label(unit: str) -> str:

@@ -138,10 +138,21 @@ def test_a_first_row_of_numbers_is_data_never_a_header(tmp_path):
     got = read_frf_text(path)
     assert got.details["header"] is False
     assert got.measured_frfs.frequency_hz.tolist() == [1.0, 2.0, 3.0]
+    # Quoted numbers are numbers (RFC 4180): the row is data.
+    quoted = tmp_path / "quoted.txt"
+    quoted.write_text('"1","1","0"\n"2","0.5","-0.5"\n')
+    assert read_frf_text(quoted).measured_frfs.frequency_hz.tolist() == [1.0, 2.0]
+    # A delimiter at the end of every line makes no column (and no header).
+    trail = tmp_path / "trail.txt"
+    trail.write_text("1;1;0;\n2;0,5;0;\n")
+    got = read_frf_text(trail)
+    assert got.measured_frfs.frf[0].tolist() == [1.0, 0.5]
+    assert got.details["notes"] == [
+        "column 4 is empty on every line (a delimiter at the end of every line): read without it"
+    ]
     store = tmp_path / "store"
     for name, text in [
-        ("quoted.txt", '"1","1","0"\n"2","0.5","-0.5"\n'),
-        ("trail.txt", "1;1;0;\n2;0,5;0;\n"),
+        ("fortran.txt", "1;1D0;0\n2;5D-1;0\n"),  # a number, but not as float() reads it
     ]:
         path = tmp_path / name
         path.write_text(text)

@@ -92,13 +92,21 @@ def test_time_records_in_volts_take_the_reference_channel_as_force(tmp_path):
     assert imported.details["force_channel"] == "Ch2"
 
 
-def test_time_records_in_force_and_acceleration_units_become_si(tmp_path):
-    g_unit = unit("g's", 9.80665, (0, 2, -4, 0, 0, 0, 0, 0))  # HP's label: known by its dimensions
+@pytest.mark.parametrize(
+    ("label", "factor"),
+    [
+        # HP's label for g, known as g by its label: exactly 9.80665 m/s^2.
+        ("g's", 9.80665),
+        # A label no reader knows: the SDF unit's dimensions and its own factor, a float32.
+        ("EU", float(np.float32(9.80665))),
+    ],
+)
+def test_time_records_in_force_and_acceleration_units_become_si(tmp_path, label, factor):
+    g_unit = unit(label, 9.80665, (0, 2, -4, 0, 0, 0, 0, 0))
     imported = read_sdf_run(write(tmp_path, _time_file(g_unit, unit("lbf", 4.4482), reference=0)))
     hits = imported.hits
     # Force is the lbf channel (2) although channel 1 is marked as reference: units first.
     np.testing.assert_array_equal(hits.force_n, np.array([[1.0, 1.5], [11.0, 11.5]]) * POUND_FORCE_N)
-    factor = float(np.float32(9.80665))  # the SDF unit's own factor, a float32
     np.testing.assert_array_equal(hits.response_m_s2, np.array([[0.0, 0.5], [10.0, 10.5]]) * factor)
 
 

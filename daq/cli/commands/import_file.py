@@ -504,6 +504,14 @@ def not_readable(path: Path, head: bytes) -> str:
             "as a CSV with one header row (time, force, response columns) and import that"
         )
     if zipped:
+        from daq.formats.zip_contents import is_excel_workbook, member_names
+
+        # Unpacked, a workbook gives XML parts, no table: it must be saved as CSV instead.
+        if is_excel_workbook(member_names(path, head)):
+            return (
+                f"{name}: an Excel workbook (.xlsx), which daq does not read; save the sheet as CSV "
+                "(or text) from the spreadsheet and import that"
+            )
         return f"{name}: a ZIP archive; unpack it and import the files inside"
     if head.startswith((b"\xff\xfe", b"\xfe\xff")):
         return f"{name}: text in UTF-16, which daq does not read; save it as UTF-8 and import it again"
@@ -559,7 +567,7 @@ def text_header(head: bytes) -> list[str]:
     """The cells of a text file's header row (its first line that is neither empty nor a
     comment nor in a preamble of metadata lines, when it is not all numbers), or [] when
     there is none or it is no text."""
-    from daq.formats.csv_text import COMMENT_MARKS, choose_delimiter, looks_complex, preamble_lines
+    from daq.formats.csv_text import COMMENT_MARKS, looks_complex, preamble_lines, split_cells
 
     if b"\0" in head:
         return []
@@ -569,18 +577,18 @@ def text_header(head: bytes) -> list[str]:
         stripped = line.strip()
         if not stripped or stripped.startswith(COMMENT_MARKS) or index in preamble:
             continue
-        delimiter = choose_delimiter(stripped)
-        cells = [
-            c.strip().strip("\"'") for c in (stripped.split(delimiter) if delimiter else stripped.split())
-        ]
+        cells = [c.strip("\"'") for c in split_cells(stripped)[0]]
+        while cells and not cells[-1]:
+            cells.pop()  # "0,1,2,", "f,Re,Im,": a delimiter at the end of the line makes no cell
+        filled = [c for c in cells if c]  # nor does an empty cell make a row of numbers a header
         numeric = 0
-        for cell in cells:
+        for cell in filled:
             try:
                 float(cell.replace(",", "."))
                 numeric += 1
             except ValueError:
                 numeric += looks_complex(cell)  # numbers too: the reader says what they are
-        return cells if numeric < len(cells) else []
+        return cells if numeric < len(filled) else []
     return []
 
 
@@ -789,6 +797,8 @@ def _steady_first_column(head: bytes) -> tuple[Any, float] | None:
         if not line or line.startswith(COMMENT_MARKS):
             continue
         cells, delimiter = split_cells(line)
+        while cells and not cells[-1]:  # a delimiter at the end of the line: no cell
+            cells.pop()
         try:
             rows.append([float(c.replace(",", ".") if delimiter != "," else c) for c in cells])
         except ValueError:
