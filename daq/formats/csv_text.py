@@ -563,12 +563,17 @@ class Table:
 
     def find(self, name: str) -> int | None:
         """Index of column ``name``: the header cell as written, or its name without the unit;
-        exact match first, else a unique case-insensitive one."""
+        a unique exact match first, else a unique case-insensitive one; None where two
+        columns share the name (``Time (s),force,force,response`` says no one force column,
+        and the columns are taken in position)."""
         if self.header is None:
             return None
         for cells in (self.header, self.names):
-            if name in cells:
-                return cells.index(name)
+            exact = [i for i, h in enumerate(cells) if h == name]
+            if len(exact) > 1:
+                return None
+            if exact:
+                return exact[0]
         for cells in (self.header, self.names):
             folded = [i for i, h in enumerate(cells) if h.lower() == name.lower()]
             if len(folded) == 1:

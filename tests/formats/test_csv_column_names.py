@@ -257,3 +257,16 @@ def test_the_detected_line_quotes_the_header_after_a_preamble(tmp_path):
         "format csv: detected: the name ends in .csv, and the header's first column 'Time (s)' is no "
         "frequency" in result.stdout.splitlines()
     )
+
+
+def test_two_columns_of_one_exact_name_keep_the_columns_in_position(tmp_path):
+    """Hypothesis found it: 'Time (s),force,force,response' took its first 'force' by name
+    and the response by name, out of position; two forces name no one force."""
+    path = tmp_path / "two_forces.csv"
+    columns = [np.arange(N) / FS] + [(k + 1.0) * (1.0 + np.arange(N) % 5) for k in range(3)]
+    _write(path, ["Time (s)", "force", "force", "response"], columns)
+    result, run = _import(path)
+    assert result.returncode == 0, result.stderr
+    np.testing.assert_array_equal(run.hits.force_n[0], columns[1])
+    np.testing.assert_array_equal(run.hits.response_m_s2[0], columns[2])
+    assert NOTE not in result.stdout
