@@ -7,25 +7,9 @@ from __future__ import annotations
 import numpy as np
 
 from daq.store import Store
-from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.cli.test_import_trial_refusals import daq_import, refused, runs_in
 
 RATE_HZ = 4096.0
-
-
-def daq_import(store, *args: str):
-    return invoke_daq("import", *map(str, args), "--store", str(store))
-
-
-def runs_in(store) -> list[str]:
-    return [s.run_id for s in Store(store).list()] if store.exists() else []
-
-
-def refused(result, store, *fragments: str) -> str:
-    """One line on stderr with ``fragments``, exit status 1, no run in ``store``."""
-    assert_one_line_error(result, *fragments)
-    assert result.returncode == 1
-    assert runs_in(store) == [], "a refused import stored a run"
-    return result.stderr
 
 
 def notes(result) -> list[str]:
