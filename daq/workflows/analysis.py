@@ -258,8 +258,17 @@ def summary(run: Run, result: RunAnalysis, notes: dict[str, Any], options: Analy
         "pretrigger_range_s": list(result.pretrigger_range_s),
         "record_after_cut_s": result.record_after_cut_s,
         "band": _band(result),
+        # A zone whose core a clear peak's own zone cut in two is listed once per piece of
+        # its core (the same lines fitted, the modes kept from each piece).
         "zones": [
-            {"low_hz": z.low_hz, "high_hz": z.high_hz, "max_order": z.max_order, "basis": z.basis}
+            {
+                "low_hz": z.low_hz,
+                "high_hz": z.high_hz,
+                "core_low_hz": z.core_low_hz,
+                "core_high_hz": z.core_high_hz,
+                "max_order": z.max_order,
+                "basis": z.basis,
+            }
             for z in result.modal.zones
         ],
         "synthesis_error": _num(result.modal.synthesis_error),

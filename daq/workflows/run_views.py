@@ -70,8 +70,10 @@ def options_text(options: dict[str, Any] | None) -> str:
 
 
 def zones_text(zones: list[dict[str, Any]] | None) -> str:
-    """'N frequency zones, LSCF orders a-b' (or 'one zone, LSCF order n') of a stored result."""
-    zones = zones or []
+    """'N frequency zones, LSCF orders a-b' (or 'one zone, LSCF order n') of a stored result:
+    the zones fitted, a zone listed once per piece of its core counted once."""
+    fitted = {(z["low_hz"], z["high_hz"], z["max_order"], z.get("basis")): z for z in zones or []}
+    zones = list(fitted.values())
     if not zones:
         return ""
     low, high = min(z["max_order"] for z in zones), max(z["max_order"] for z in zones)

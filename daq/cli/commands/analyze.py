@@ -226,11 +226,11 @@ def _print(info: dict) -> None:
         from daq.workflows.run_views import pretrigger_text
 
         typer.echo(f"  {pretrigger_text(info)}")
-    zones = info.get("zones") or []
-    if len(zones) > 1:
-        from daq.workflows.run_views import zones_text
+    from daq.workflows.run_views import zones_text
 
-        typer.echo(f"  {zones_text(zones)}")
+    zones = zones_text(info.get("zones"))
+    if zones and not zones.startswith("one "):
+        typer.echo(f"  {zones}")
     windows = str(info.get("windows", {}).get("from", ""))
     if windows.startswith("unknown") and f"windows {windows}" not in info.get("cautions", []):
         typer.echo(f"  caution: windows {windows}")  # an analysis stored before it was a caution
