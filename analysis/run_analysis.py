@@ -655,7 +655,10 @@ def _zone_fits(
     normalised as ``normalisation``, at the top SCATTER_ORDERS orders of the zone."""
     f = result.modal.frequency_hz
     h = np.atleast_2d(frf)
-    for zone in result.modal.zones:
+    # A zone whose core a clear peak's own zone cut in two is listed once per piece: the
+    # same lines and order, fitted once.
+    fitted = {(z.low_hz, z.high_hz, z.max_order, z.basis): z for z in result.modal.zones}
+    for zone in fitted.values():
         if not np.any((wanted >= zone.low_hz) & (wanted <= zone.high_hz)):
             continue
         use = (f >= zone.low_hz) & (f <= zone.high_hz) & np.all(np.isfinite(h), axis=0)
