@@ -216,7 +216,11 @@ def identify_modes(
     second differences, right only where the noise is uncorrelated between lines.
     refine: the poles of close, lightly damped modes (refine.to_refine) refined by
     nonlinear least squares on the FRF, lines weighted alike (analysis.modal_id.refine);
-    a mode's frequency and damping are its pole's. Raises ValueError on bad inputs.
+    a mode's frequency and damping are its pole's. Where the zones were planned here and
+    no frequencies were asked for, a clear peak no mode accounts for (unexplained_peaks)
+    gets a zone of its own (zones.around_peaks) and the identification is made again;
+    the peaks still unexplained are the result's unexplained_peaks_hz. Raises ValueError
+    on bad inputs.
     """
     f, h, band, use = _check_inputs(frequency_hz, frf, band, max_order, form)
     fu, hu = f[use], h[:, use]
