@@ -9,7 +9,7 @@ calls this and stores what it returns beside the run.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -21,6 +21,7 @@ from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.refine import MAX_DAMPING as REFINE_MAX_DAMPING
 from analysis.modal_id.refine import refine_poles
 from analysis.modal_id.stability import overlapped
+from analysis.modal_id.zones import Zone
 from analysis.pretrigger import cut_at_impact, impact_starts, moved, screen, single_hit_noise
 from analysis.spectra import frf_estimate, linear_spectra, per_hit_frf
 from analysis.windows import WindowSpec, added_decay_rate, correct_pole, window
@@ -210,9 +211,12 @@ def _analyze_records(
         )
     if result.modes:
         if options.per_hit and estimate.n_averages >= 2:
-            _scatter(result, hit_frfs, options, decay)
+            # H1 averages the hits' FRFs weighted by their force power at each line.
+            weights = np.abs(spectra.force) ** 2 if options.estimator == "h1" else None
+            _scatter(result, hit_frfs, options, decay, weights)
         else:
             _bootstrap(result, decay)
+        _zone_spread(result, decay)
         _circular_pole_floor(result)
     result.cautions += _cautions(result, options)
     return result
@@ -237,6 +241,7 @@ def analyze_frfs(
     result = _identify(f, frf, coherence, source, options, added_decay_1_s, band)
     if result.modes:
         _bootstrap(result, added_decay_1_s)
+        _zone_spread(result, added_decay_1_s)
         _circular_pole_floor(result)
     result.cautions += _cautions(result, options)
     return result
@@ -648,16 +653,19 @@ def _tolerances(result: RunAnalysis) -> np.ndarray:
 
 
 def _zone_fits(
-    result: RunAnalysis, frf: np.ndarray, weights: np.ndarray | None, normalisation: str, wanted: np.ndarray
-):
+    result: RunAnalysis, frf: np.ndarray, weights: np.ndarray | None, normalisation: str, wanted: np.ndarray,
+    zones: list[Zone] | None = None,
+):  # fmt: skip
     """Per zone holding one of the ``wanted`` modes (Hz): the LSCF poles of ``frf``
     (n_lines_used,) or (n_frf, n_lines_used), all FRFs sharing one denominator
-    normalised as ``normalisation``, at the top SCATTER_ORDERS orders of the zone."""
+    normalised as ``normalisation``, at the top SCATTER_ORDERS orders of the zone
+    (``zones``, default the result's)."""
     f = result.modal.frequency_hz
     h = np.atleast_2d(frf)
     # A zone whose core a clear peak's own zone cut in two is listed once per piece: the
     # same lines and order, fitted once.
-    fitted = {(z.low_hz, z.high_hz, z.max_order, z.basis): z for z in result.modal.zones}
+    zones = result.modal.zones if zones is None else zones
+    fitted = {(z.low_hz, z.high_hz, z.max_order, z.basis): z for z in zones}
     for zone in fitted.values():
         if not np.any((wanted >= zone.low_hz) & (wanted <= zone.high_hz)):
             continue
@@ -673,10 +681,10 @@ def _zone_fits(
         yield [fit.poles[o - 1] for o in orders]
 
 
-def _estimates(result: RunAnalysis, frf: np.ndarray, decay: float, weights=None) -> np.ndarray:
+def _estimates(result: RunAnalysis, frf: np.ndarray, decay: float, weights=None, zones=None) -> np.ndarray:
     """(n_modes, 2): each mode's (frequency, damping) in ``frf`` (one FRF, or several
-    sharing their poles), the median over the top orders of its zone of the pole nearest
-    it (NaN: not found)."""
+    sharing their poles), the median over the top orders of its zone (``zones``, default
+    the result's) of the pole nearest it (NaN: not found)."""
     wanted = np.array([m.frequency_hz for m in result.modes])
     tol = _tolerances(result)
     # Each mode is found again with the normalisation it was read with.
@@ -684,7 +692,7 @@ def _estimates(result: RunAnalysis, frf: np.ndarray, decay: float, weights=None)
     found = []
     for norm in dict.fromkeys(normalisation):
         mine = normalisation == norm
-        for per_order in _zone_fits(result, frf, weights, norm, wanted[mine]):
+        for per_order in _zone_fits(result, frf, weights, norm, wanted[mine], zones):
             for p in per_order:
                 row = np.full((wanted.size, 2), np.nan)
                 row[mine] = _match(p, wanted[mine], tol[mine], decay)
@@ -704,7 +712,10 @@ def _order_spread(result: RunAnalysis, k: int) -> tuple[float, float]:
     return (float(f) if np.isfinite(f) else 0.0, float(z) if np.isfinite(z) else 0.0)
 
 
-def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions, decay: float) -> None:
+def _scatter(
+    result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions, decay: float,
+    hit_weights: np.ndarray | None = None,
+) -> None:  # fmt: skip
     """Each mode's spread over the accepted hits, each hit's FRF fitted alone, and its
     standard uncertainty.
 
@@ -712,7 +723,9 @@ def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions
     mode; each mode takes, at each order, the hit's pole nearest to it, and the median
     over the orders (one order alone makes the spread depend on which order was picked).
     The standard uncertainty of the averaged result combines the spread over the hits
-    divided by sqrt(hits matched) with the spread of the mode's cluster over the orders.
+    with the spread of the mode's cluster over the orders. hit_weights (n_hits, n_lines):
+    how much each hit counts in the averaged FRF at each line (H1: its force power); the
+    hits' values are weighed alike where not given (_mean_u).
     """
     keep = np.isin(result.frequency_hz, result.modal.frequency_hz)
     found = np.array([_estimates(result, h[keep], decay) for h in hit_frfs])  # (n_hits, n_modes, 2)
@@ -724,12 +737,29 @@ def _scatter(result: RunAnalysis, hit_frfs: np.ndarray, options: AnalysisOptions
             mode.frequency_std_hz = float(np.std(found[ok, k, 0], ddof=1))
             mode.damping_std = float(np.std(found[ok, k, 1], ddof=1))
             f_order, z_order = _order_spread(result, k)
+            weights = None
+            if hit_weights is not None:
+                line = int(np.argmin(np.abs(result.frequency_hz - mode.frequency_hz)))
+                weights = hit_weights[ok, line]
             n = ok.sum()
-            mode.frequency_u_hz = float(np.hypot(mode.frequency_std_hz / np.sqrt(n), f_order))
-            mode.damping_u = float(np.hypot(mode.damping_std / np.sqrt(n), z_order))
+            mode.frequency_u_hz = float(np.hypot(_mean_u(found[ok, k, 0], weights), f_order))
+            mode.damping_u = float(np.hypot(_mean_u(found[ok, k, 1], weights), z_order))
             mode.uncertainty_from = f"{n} hits"
     if any(m.uncertainty_from == "" for m in result.modes):
         _bootstrap(result, decay, only_missing=True)
+
+
+def _mean_u(values: np.ndarray, weights: np.ndarray | None = None) -> float:
+    """The standard uncertainty of the weighted mean of ``values`` (n,), n >= 2, from
+    their own scatter: s sqrt(sum w_i^2), s their sample standard deviation, w summing
+    to 1 (equal weights: the familiar s / sqrt(n)). A weighted mean of n values counts
+    as (sum w)^2 / sum w^2 of them where each value is as noisy as the others (a
+    response whose noise grows with the hit); where the weak hits are the noisier ones
+    (a sensor's noise floor), H1's weights are the best and this reads high, never low."""
+    n = values.size
+    usable = weights is not None and np.all(np.isfinite(weights)) and weights.sum() > 0
+    w = weights / weights.sum() if usable else np.full(n, 1.0 / n)
+    return float(np.std(values, ddof=1) * np.sqrt(np.sum(w**2)))
 
 
 def _refine_per_hit(result: RunAnalysis, hit_frfs: np.ndarray, decay: float, found: np.ndarray) -> None:
@@ -761,6 +791,50 @@ def _refined_estimates(result: RunAnalysis, frf, frequency_hz, decay: float, fou
     # A mode added among close ones (refine.missing) has no LSCF pole to be found by.
     use = done & (np.isfinite(found[:, 0]) | added)
     found[use, 0], found[use, 1] = f_true[use], z_true[use]
+
+
+#: The zone ends' moves of _zone_spread, as a fraction of each zone's width.
+ZONE_SHIFT = 0.1
+#: Both ends out, both in, the zone slid down and up.
+ZONE_SHIFTS = ((-1, 1), (1, -1), (-1, -1), (1, 1))
+
+
+def _zone_spread(result: RunAnalysis, decay: float) -> None:
+    """Add to each mode's standard uncertainty the part the choice of band makes: the
+    mode read again (as _estimates, refined as the result's) with the ends of every zone
+    moved by ZONE_SHIFT of its width (ZONE_SHIFTS, within the lines analysed); the
+    sample standard deviation of those readings and the mode's own value.
+
+    Why: the scatter over hits and the bootstrap over lines see the noise, not the
+    modes the model leaves out. Where those matter (heavily damped modes among
+    smaller ones, a synthesis error of 30 %) a mode moves with the band by many times
+    its noise: the tool holder's 1968.0 Hz read 1965.4-1972.7 Hz as the band changed,
+    with ± 0.7 Hz. Where the model holds, the readings agree and nothing is added."""
+    f = result.modal.frequency_hz
+    if not result.modes or f.size < 2:
+        return
+    keep = np.isin(result.frequency_hz, f)
+    frf = result.frf[:, keep]
+    readings = []
+    for low_sign, high_sign in ZONE_SHIFTS:
+        zones = []
+        for z in result.modal.zones:
+            width = z.high_hz - z.low_hz
+            low = max(f[0], z.low_hz + low_sign * ZONE_SHIFT * width)
+            high = min(f[-1], z.high_hz + high_sign * ZONE_SHIFT * width)
+            zones.append(replace(z, low_hz=float(low), high_hz=float(high)))
+        found = _estimates(result, frf, decay, zones=zones)
+        _refined_estimates(result, frf, f, decay, found)
+        readings.append(found)
+    readings = np.array(readings)  # (len(ZONE_SHIFTS), n_modes, 2)
+    for k, mode in enumerate(result.modes):
+        ok = np.all(np.isfinite(readings[:, k, :]), axis=1)
+        if not ok.any() or not (np.isfinite(mode.frequency_u_hz) and np.isfinite(mode.damping_u)):
+            continue
+        values = np.vstack([readings[ok, k, :], [[mode.frequency_hz, mode.damping_ratio]]])
+        spread_f, spread_zeta = np.std(values, axis=0, ddof=1)
+        mode.frequency_u_hz = float(np.hypot(mode.frequency_u_hz, spread_f))
+        mode.damping_u = float(np.hypot(mode.damping_u, spread_zeta))
 
 
 #: How far apart the pole's two uncertainties may be before the smaller is raised

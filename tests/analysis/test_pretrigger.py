@@ -59,8 +59,8 @@ def test_the_bias_measure_is_the_theory():
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_a_long_pretrigger_no_longer_biases_the_damping(seed):
     """0.2 s of pre-trigger in 0.5 s records: the 45 Hz mode has 28 % of its amplitude left
-    at the end. Analysed whole its damping reads about 1.9 % for 1.5 %, many u off; cut at
-    the impact it holds the truth within 3 u."""
+    at the end. Analysed whole its damping reads about 1.85 % for 1.5 %; cut at the impact
+    it holds the truth within 3 u and within 5 %."""
     force, response = _hits(0.2, 0.5, seed)
     result = analyze_hits(force, response, 1024.0, np.ones(3, bool), UNIFORM, UNIFORM)
     assert result.pretrigger_cut_s == pytest.approx(0.2, abs=0.005)
@@ -68,18 +68,21 @@ def test_a_long_pretrigger_no_longer_biases_the_damping(seed):
     for f, z in zip(FN, ZETA, strict=True):
         m = found[round(f)]
         assert abs(m.damping_ratio - z) <= 3 * m.damping_u, (f, m.damping_ratio, m.damping_u)
+        assert abs(m.damping_ratio - z) <= 0.05 * z, (f, m.damping_ratio)
         assert abs(m.frequency_hz - f) <= 3 * m.frequency_u_hz, (f, m.frequency_hz, m.frequency_u_hz)
 
 
 def test_the_whole_records_were_biased(monkeypatch):
     """The test above can fail: the same hits analysed whole (the cut switched off) miss
-    the 45 Hz mode's damping by many u."""
+    the 45 Hz mode's damping by over 20 %. Its u says the reading is shaky (it moves with
+    the zones' ends, analysis.run_analysis._zone_spread), many times the cut's."""
     monkeypatch.setattr("analysis.pretrigger.SCREEN_LIMIT", np.inf)
     force, response = _hits(0.2, 0.5, 1)
     whole = analyze_hits(force, response, 1024.0, np.ones(3, bool), UNIFORM, UNIFORM)
     assert whole.pretrigger_cut_s == 0.0
     (m,) = [m for m in whole.modes if abs(m.frequency_hz - 45) < 1]
-    assert m.damping_ratio - 0.015 > 5 * m.damping_u, (m.damping_ratio, m.damping_u)
+    assert m.damping_ratio > 1.2 * 0.015, m.damping_ratio
+    assert m.damping_u > 5 * 0.0004, m.damping_u  # the cut records' u: 0.024-0.034 %
 
 
 def test_a_short_pretrigger_or_a_dead_response_is_analysed_whole():
