@@ -35,8 +35,10 @@ RESULT_NAME = "analysis"
 #: 6: a close group's pole its refined neighbours do as well without dropped, a pole
 #: it misses added, analysis.modal_id.refine redundant and missing; 7: a refined pole's
 #: damping may move by a factor 3, a second pass in zones of their own around clear peaks
-#: no mode accounts for, --frequencies takes the nearest chain).
-ANALYSIS_VERSION = 7
+#: no mode accounts for, --frequencies takes the nearest chain; 8: the ± carry the
+#: zones' ends and the hits' force weights, a clear peak near a band's low edge that
+#: starts near 0 Hz gets its second pass).
+ANALYSIS_VERSION = 8
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
