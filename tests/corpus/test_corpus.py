@@ -65,11 +65,11 @@ KNOWN_SHORT = {
     ("found", "lvm-2ch-m1"): "the peer's 146.2 and 182.9 Hz (2.3 %, 1.2 %, no peak in m1) move with the band "
     "by more than 0.2 %: the peer's own LSCF gives 147.06 and 181.57 Hz on 5-400 Hz (ours: 1.75-400 Hz); "
     "the close pairs' poles, refined on the FRF (analysis/modal_id/refine.py), read 163.2 Hz at "
-    "0.67 +- 0.03 % and 233.67 Hz at 0.129 +- 0.007 %, below the peer's LSCF spreads "
+    "0.666 +- 0.013 % and 233.67 Hz at 0.129 +- 0.016 %, below the peer's LSCF spreads "
     "(0.77-0.85 %, 0.155-0.30 %), which carry LSCF's noise bias on overlapping modes",
     ("found", "lvm-2ch-m2"): "7 of 10: on 5-250 Hz the peer splits the one 160.8 Hz peak (half power 0.48 %) "
     "into 159.92 and 160.75 Hz from order 38 up (one mode, 160.1-160.3 Hz 0.43-0.45 %, on 5-300 and "
-    "5-400 Hz); ours, 160.45 Hz 0.444 %, is matched to 160.75 Hz and outside its 0.27-0.37 %; 143.7 Hz "
+    "5-400 Hz); ours, 160.45 Hz 0.44 +- 0.13 %, is matched to 160.75 Hz (0.27-0.37 %); 143.7 Hz "
     "(2.8 %) and 215.1 Hz (gone on 5-300 Hz; a possible mode left out, 215.6 Hz) have no peak in m2; "
     "the close pair refined on the FRF: 233.68 Hz 0.132 +- 0.003 % against the peer's LSCF 0.141-0.244 %, "
     "235.83 Hz 0.182 +- 0.006 % against 0.201-0.416 %",
