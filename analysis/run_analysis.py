@@ -439,14 +439,25 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
     unexplained = _unexplained(result, aside)
     if unexplained and not asked:
         out.append(_unexplained_caution(result, unexplained))
-    few = [m.n_hits_matched for m in result.modes if m.uncertainty_from.endswith(" hits")]
-    if few and min(few) in FEW_HITS_COVERAGE:
-        n = min(few)
-        out.append(
-            f"the ± come from the spread over {n} hits: so few that the spread is itself uncertain, and "
-            f"the truth may lie within ±2 u only about {FEW_HITS_COVERAGE[n]} % of the time, not 95 %; take "
-            "5 or more hits"
+    over_hits = [m for m in result.modes if m.uncertainty_from.endswith(" hits")]
+    few = [m for m in over_hits if m.n_hits_matched in FEW_HITS_COVERAGE]
+    if few:
+        n = min(m.n_hits_matched for m in few)
+        uncertain = (
+            f"so few that the spread is itself uncertain, and the truth may lie within ±2 u only about "
+            f"{FEW_HITS_COVERAGE[n]} % of the time, not 95 %"
         )
+        if result.n_averages in FEW_HITS_COVERAGE:
+            out.append(f"the ± come from the spread over {n} hits: {uncertain}; take 5 or more hits")
+        else:
+            # Hits enough, but some modes were found in only a few of them.
+            which = ", ".join(f"{_at(m)} Hz" for m in few)
+            them = "mode at" if len(few) == 1 else "modes at"
+            out.append(
+                f"the ± of the {them} {which} come from the spread over only {n} of the {result.n_averages} "
+                f"hits (the others hold no pole near them): {uncertain}; a --band around them may read "
+                "them in every hit"
+            )
     vague = [m for m in result.modes if np.isfinite(m.damping_u) and m.damping_u > m.damping_ratio]
     if len(vague) == 1:
         (m,) = vague
@@ -744,7 +755,7 @@ def _scatter(
             n = ok.sum()
             mode.frequency_u_hz = float(np.hypot(_mean_u(found[ok, k, 0], weights), f_order))
             mode.damping_u = float(np.hypot(_mean_u(found[ok, k, 1], weights), z_order))
-            mode.uncertainty_from = f"{n} hits"
+            mode.uncertainty_from = f"{n} hits" if n == len(hit_frfs) else f"{n} of {len(hit_frfs)} hits"
     if any(m.uncertainty_from == "" for m in result.modes):
         _bootstrap(result, decay, only_missing=True)
 

@@ -611,6 +611,12 @@ class Table:
             if len(rest) < 3:
                 raise FormatError(
                     f"{self.name} has {count(len(rest), 'data column')}; need time, force and response"
+                    + (
+                        " (a file of force and response alone needs a time column, t = k / sample rate, "
+                        "before them: docs/import-export.md)"
+                        if len(rest) == 2
+                        else ""
+                    )
                 )
             named = [self.find(n) for n in ("time", "force", "response")]
             said = "names"

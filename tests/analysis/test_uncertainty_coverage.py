@@ -83,6 +83,25 @@ def test_a_spread_over_two_or_three_hits_says_how_little_its_u_covers(hits, shar
         ]
 
 
+def test_modes_found_in_only_3_of_5_hits_are_named_not_the_hits_taken():
+    """A new user's 5-hit plate test: the top 3 modes were matched in 3 hits only, and the
+    caution said "take 5 or more hits" of a run of 5, naming no mode."""
+    from analysis.run_analysis import _cautions
+
+    uniform = WindowSpec("uniform")
+    force, response = impact_hits(FN, ZETA, AMP, 1024.0, 4.0, 5, 0.02, 2e-3, 100)
+    result = analyze_hits(force, response, 1024.0, np.ones(5, bool), uniform, uniform)
+    assert not [c for c in result.cautions if "spread over" in c]
+    top = result.modes[-1]
+    top.n_hits_matched, top.uncertainty_from = 3, "3 of 5 hits"
+    (said,) = [c for c in _cautions(result) if "spread over" in c]
+    assert said.startswith(
+        f"the ± of the mode at {with_uncertainty(top.frequency_hz, top.frequency_u_hz, '.6g')[0]} Hz"
+    )
+    assert "only 3 of the 5 hits" in said
+    assert "take 5 or more hits" not in said
+
+
 def test_two_frequencies_asked_for_that_find_one_mode_are_said():
     """--frequencies 23,24 on a run with one mode near both: one mode, and a caution
     saying that 24 Hz found the mode 23 Hz found."""
