@@ -24,7 +24,7 @@ from analysis.ritz import RitzBeam
 from analysis.run_analysis import AnalysisOptions
 from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
-from daq.workflows.analysis import NO_BEAM_MODEL, analyze_stored, beam_of, stored_options
+from daq.workflows.analysis import NO_BEAM_MODEL, analyze_stored, beam_of, stored_options, window_specs
 from daq.workflows.analysis import RESULT_NAME as ANALYSIS_RESULT
 from daq.workflows.article import article_beam, read_article
 from daq.workflows.outcome import RunOutcome, failure_reason
@@ -177,8 +177,18 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     jac, res = central_jacobian(batched, r)
     theta = damping.matrix_to_theta(r)
     ident = damping.identifiability(jac, res, theta, n)
-    per_hit = per_hit_std(data, r, psd=options.psd) if domain == "time" else None
+    per_hit = per_hit_std(data, r, psd=options.psd) if hasattr(data, "force_n") else None
     std, std_source = combined_std(ident.std, per_hit)
+    time_reading = _time_reading(data, r, options.psd) if domain == "frequency" else None
+    between = None
+    if time_reading is not None:
+        # The FRF's errors are not the time records': where the two readings of the same
+        # hits differ by more than the FRF fit's own figures, the difference is the honest u.
+        between = np.abs(theta - damping.matrix_to_theta(time_reading))
+        own = std.copy()
+        wider = np.isfinite(between) & (between > std) & ~np.isinf(std)
+        std = np.where(wider, between, std)
+        std_source = ["readings" if w else src for w, src in zip(wider, std_source, strict=True)]
     relative_std = std / parameter_scale(theta, n)
     global_check = (
         multi_start_check(residual_fn, batched, r, result.psi, options.starts, options.seed, options.psd)
@@ -232,6 +242,11 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
             # R refitted to each hit alone; the spread of those fits over sqrt(n_hits)
             # is the uncertainty of the mean (None: frequency domain, or < 3 hits).
             "std_from_hits": None if per_hit is None else [_num(v) for v in per_hit],
+            # Frequency domain on a run with hits: R fitted to the same hits' time records
+            # (from this fit), and |this R - that R| per term (None otherwise).
+            "time_reading": None if time_reading is None else _matrix_json(time_reading),
+            "std_between_domains": None if between is None else [_num(v) for v in between],
+            "std_own": None if between is None else [_num(v) for v in own],
         },
         "options": {"method": options.method, "seed": options.seed, "psd": options.psd,
                     "n_functions": n, "stiffness": options.stiffness, "domain": options.domain},
@@ -382,6 +397,59 @@ def _pilkey_inman(damping: Any, model: Any, f_hz: np.ndarray, zeta: np.ndarray, 
 POLE_MATCH = 1e-3
 
 
+def _time_reading(data: Any, r: np.ndarray, psd: bool) -> np.ndarray | None:
+    """R fitted (least squares from ``r``) to the time records of the hits behind a
+    frequency-domain fit's FRF (analysis/damping/hit_frf.py); None for an FRF without hits."""
+    from analysis.damping import bandlimited, fit_least_squares
+    from analysis.damping.hit_frf import HitFrfData
+
+    if not isinstance(data, HitFrfData):
+        return None
+    records = bandlimited.BandLimitedData(data.model, data.force_n, data.response_m_s2, data.sample_rate_hz)
+    fit = fit_least_squares(
+        lambda m: bandlimited.residuals(records, m), r, psd=psd,
+        batched_residuals=lambda m: bandlimited.batched_residuals(records, m),
+    )  # fmt: skip
+    t = np.asarray(fit.damping_matrix, dtype=float)
+    return 0.5 * (t + t.T)
+
+
+#: A frequency-domain fit whose R differs from the time records' reading by more than this
+#: many of its own u (Fisher, per-hit refits) is cautioned.
+READINGS_APART_U = 2.0
+
+
+def _readings_apart(summary: dict[str, Any]) -> str | None:
+    """The caution of a frequency-domain fit that the same hits' time records contradict,
+    or of one whose ± is the Fisher figure alone; None otherwise."""
+    if summary.get("domain") != "frequency":
+        return None
+    unc = summary.get("uncertainty") or {}
+    reading = unc.get("time_reading")
+    if reading is None:
+        return (
+            "the ± is the Fisher figure alone (the FRF's lines taken as independent, no hits to refit or "
+            "compare with): on simulated seed-beam runs R's terms spread up to 7 times wider over the noise; "
+            "take the ± as a lower bound"
+        )
+    names, own = unc.get("names", []), unc.get("std_own") or []
+    r = np.asarray(summary["damping_matrix"], dtype=float)[np.triu_indices(len(summary["damping_matrix"]))]
+    t = np.asarray(reading, dtype=float)[np.triu_indices(len(reading))]
+    apart = [
+        f"{name} {a:.4g} against {b:.4g}"
+        for name, a, b, u in zip(names, r, t, own, strict=False)
+        if u is not None and abs(a - b) > READINGS_APART_U * u
+    ]
+    if not apart:
+        return None
+    return (
+        "the FRF and the time records of the same hits give different R (" + "; ".join(apart) + "): "
+        "more than the FRF fit's own ± (Fisher, per-hit refits) allows, so the ± shown is at least the "
+        "difference; R's poorly determined terms follow small model errors (a stiffness factor 0.1 % off "
+        "moves R33 of the seed beam by about 10 N s/m on the FRF); prefer the time domain (the default)"
+    )
+
+
 def _relative_residual(data: Any, domain: str, residual: np.ndarray) -> float | None:
     """||measured - model|| / ||measured|| over what the fit compares (weighted FRF lines,
     or the compared samples)."""
@@ -468,6 +536,8 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
     if why := not_a_result(summary):
         # Said where the fit is shown (JSON, report, page), not only in the exit status.
         out.append(f"no damping matrix: {why}; the R shown is where the fit stopped, for a look only")
+    if readings := _readings_apart(summary):
+        out.append(readings)
     n = summary["model"]["ritz_functions"]
     found = summary["model"].get("modes_identified_in_band", 0)
     low, high = summary["model"].get("band_hz", (0.0, 0.0))
@@ -620,6 +690,20 @@ def _data(run: Run, analysis: dict[str, Any], model: Any, options: FitOptions) -
         return BandLimitedData(
             model, hits.force_n[pick], hits.response_m_s2[pick], hits.sample_rate_hz
         ), "time"
+    if hits is not None and not hits.is_zoom and hits.accepted.any() and np.isrealobj(hits.force_n):
+        # The hits' own FRF against the one the model's response to the same hits gives
+        # through the same windows (analysis/damping/hit_frf.py): exact, where the
+        # windowed model below leaves errors R absorbs.
+        from analysis.damping.hit_frf import HitFrfData
+        from analysis.windows import window
+
+        force_window, response_window, _ = window_specs(run)
+        pick = hits.accepted
+        n, fs = hits.force_n.shape[1], hits.sample_rate_hz
+        return HitFrfData(
+            model, hits.force_n[pick], hits.response_m_s2[pick], fs,
+            window(force_window, n, fs), window(response_window, n, fs),
+        ), "frequency"  # fmt: skip
     arrays = analysis["arrays"]
     coherence = arrays.get("coherence")
     imported = run.provenance.get("imported_from", {})
@@ -639,9 +723,10 @@ def _objective(data: Any, domain: str):
     """Psi (eq 17's form) and the residuals, single and batched: band-limited time
     records (analysis/damping/bandlimited.py) or the windowed FRF
     (analysis/damping/windowed_frf.py)."""
-    from analysis.damping import bandlimited, windowed_frf
+    from analysis.damping import bandlimited, hit_frf, windowed_frf
+    from analysis.damping.hit_frf import HitFrfData
 
-    module = bandlimited if domain == "time" else windowed_frf
+    module = bandlimited if domain == "time" else hit_frf if isinstance(data, HitFrfData) else windowed_frf
 
     def objective(r: np.ndarray) -> np.ndarray:
         return module.psi(data, r)
