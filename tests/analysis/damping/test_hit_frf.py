@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from analysis.beam import TABLE_1
 from analysis.damping import bandlimited, fit_least_squares, hit_frf, windowed_frf
 from analysis.ritz import RitzBeam
-from analysis.beam import TABLE_1
 from analysis.seed import eq18_damping_matrix
 from analysis.windows import WindowSpec, window
 
@@ -54,7 +54,8 @@ def test_noise_free_hits_give_eq18_back_through_force_and_exponential_windows(hi
         window(WindowSpec("force", force_width_s=0.125), N, FS),
         window(WindowSpec("exponential", exp_decay_s=DECAY_S), N, FS),
     )  # fmt: skip
-    assert data.frequency_hz[0] == pytest.approx(0.5) and data.frequency_hz[-1] == pytest.approx(200.0)
+    assert data.frequency_hz[0] == pytest.approx(0.5)
+    assert data.frequency_hz[-1] == pytest.approx(200.0)
     assert np.max(np.abs(hit_frf.residuals(data, eq18_damping_matrix()))) < 1e-9 * np.max(np.abs(data.frf))
     assert _fit(hit_frf, data) == pytest.approx(eq18_damping_matrix(), abs=1e-4)
 
@@ -95,5 +96,7 @@ def test_per_hit_refits_run_in_the_frequency_domain(hits):
     w = np.ones(N)
     data = hit_frf.HitFrfData(model, force, noisy, FS, w, w)
     std = per_hit_std(data, eq18_damping_matrix(), psd=False)
-    assert std is not None and std.shape == (6,)
-    assert np.all(np.isfinite(std)) and np.all(std > 0)
+    assert std is not None
+    assert std.shape == (6,)
+    assert np.all(np.isfinite(std))
+    assert np.all(std > 0)
