@@ -138,7 +138,12 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     low, high = _band(run, analysis, options)
     in_band = usable & (ident_f >= low) & (ident_f <= high)
     searched = _searched_band(analysis, low, high)
-    n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions, searched)
+    unsearched = (
+        _model_modes_unsearched(run, options, low, high, searched, ident_f[in_band])
+        if options.n_functions is None
+        else []
+    )
+    n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions, searched, unsearched)
     largest = None  # set where more functions would put a model mode outside the band
     while True:
         model, beam_origin, stiffness_info, start, matching, data, domain = _prepare(
@@ -279,17 +284,49 @@ PSI_CAUTION = 3.0
 RESIDUAL_CAUTION = 0.1
 
 
+def _model_modes_unsearched(
+    run: Run,
+    options: FitOptions,
+    low_hz: float,
+    high_hz: float,
+    searched_hz: tuple[float, float] | None,
+    identified_hz: np.ndarray,
+) -> list[float]:
+    """Hz of the beam model's modes (as built, MAX_FUNCTIONS Ritz functions) that lie in
+    the fitted band but outside the band the analysis looked for modes in: no one
+    counted them, and a model without them cannot pair its modes with the run's. Only
+    where every identified mode lies within PARTNER_TOLERANCE of a model mode: a run
+    whose modes are not the beam's is refused as before, not fitted with more functions."""
+    if searched_hz is None or not identified_hz.size:
+        return []
+    from analysis.damping import undamped_modes
+
+    try:
+        model, _ = model_of(run, MAX_FUNCTIONS, options.article)
+    except ValueError:
+        return []
+    hz = undamped_modes(model)[0] / (2 * np.pi)
+    nearest = np.min(np.abs(hz[None, :] / np.asarray(identified_hz, dtype=float)[:, None] - 1.0), axis=1)
+    if np.any(nearest > PARTNER_TOLERANCE):
+        return []
+    inside = (hz >= low_hz) & (hz <= high_hz) & ((hz < searched_hz[0]) | (hz > searched_hz[1]))
+    return [float(f) for f in hz[inside]]
+
+
 def resolve_functions(
     identified_in_band: int,
     low_hz: float,
     high_hz: float,
     requested: int | None,
     searched_hz: tuple[float, float] | None = None,
+    unsearched_model_hz: list[float] | None = None,
 ) -> tuple[int, str]:
     """(N, why): the Ritz functions of the fit. An explicit ``requested`` wins;
     otherwise one per mode the analysis identified in the fitted band, 1..MAX_FUNCTIONS.
     searched_hz: the analysis's band (Hz) where it is narrower than the fitted one
-    (_searched_band): the why then says that modes were looked for there only."""
+    (_searched_band): the why then says that modes were looked for there only.
+    unsearched_model_hz: the beam model's modes in the fitted band outside searched_hz
+    (_model_modes_unsearched): the default adds one function for each."""
     band = f"{low_hz:.4g}-{high_hz:.4g} Hz"
     found = f"{identified_in_band} mode{'' if identified_in_band == 1 else 's'} identified in {band}"
     if searched_hz is not None:
@@ -299,8 +336,16 @@ def resolve_functions(
         )
     if requested is not None:
         return requested, f"{requested} Ritz function{'' if requested == 1 else 's'} (--functions); {found}"
-    n = min(max(identified_in_band, 1), MAX_FUNCTIONS)
-    note = "" if n == identified_in_band else f" (at least 1, at most {MAX_FUNCTIONS})"
+    extra = list(unsearched_model_hz or [])
+    wanted = identified_in_band + len(extra)
+    n = min(max(wanted, 1), MAX_FUNCTIONS)
+    if extra:
+        shown = ", ".join(f"{f:.4g}" for f in extra)
+        found = (
+            f"{found}, and {len(extra)} of the beam model's modes ({shown} Hz) in the fitted band outside "
+            "the analysis's"
+        )
+    note = "" if n == wanted else f" (at least 1, at most {MAX_FUNCTIONS})"
     return n, f"{n} Ritz function{'' if n == 1 else 's'}: {found}{note}"
 
 
