@@ -69,6 +69,13 @@ class FitOptions:
             raise ValueError(f"n_functions must be 1..{MAX_FUNCTIONS}, got {self.n_functions}")
         if not 0 <= self.starts <= 100:
             raise ValueError(f"starts must be 0..100, got {self.starts}")
+        if self.method == "modal" and not self.psd:
+            # The proportional estimate is dissipative by construction: no constraint to drop,
+            # and a second result file would hold the same matrix.
+            raise ValueError(
+                "--unconstrained means nothing for --method modal (the proportional estimate is "
+                "dissipative by construction): drop it"
+            )
         if not 0 <= self.seed < 2**63:
             # numpy's generators take none else, and would say so naming no option.
             raise ValueError(f"seed must be a whole number from 0 to 2^63 - 1, got {self.seed}")
@@ -76,10 +83,14 @@ class FitOptions:
     @property
     def result_name(self) -> str:
         """``fit-<method>`` for the defaults (R = L L^T, the functions the run's modes
-        ask for: the number is in the result), ``-unconstrained`` for a raw R, ``-n<N>``
-        for an explicit number of functions."""
+        ask for: the number is in the result, the time domain, --stiffness modes),
+        ``-unconstrained`` for a raw R, ``-n<N>`` for an explicit number of functions,
+        ``-frequency`` for --domain frequency and ``-stiffness-<scale|none>`` for another
+        stiffness: a fit with other options never replaces the default one."""
         size = "" if self.n_functions is None else f"-n{self.n_functions}"
-        return f"fit-{self.method}{'' if self.psd else '-unconstrained'}{size}"
+        domain = "" if self.domain == "time" else f"-{self.domain}"
+        stiffness = "" if self.stiffness == "modes" else f"-stiffness-{self.stiffness}"
+        return f"fit-{self.method}{'' if self.psd else '-unconstrained'}{size}{domain}{stiffness}"
 
 
 def fitted_beam(run: Run, article: str | None) -> tuple[Any, str]:
