@@ -105,13 +105,28 @@ def fitted_beam(run: Run, article: str | None) -> tuple[Any, str]:
         return beam_of(run)
     if article is None:
         raise ValueError(
-            f"{NO_BEAM_MODEL}: it records no test article (an imported file), and daq fit fits a beam's "
-            "Ritz model; if it is a run of the seed's beam, give --article seed-beam (or an article file)"
+            f"{NO_BEAM_MODEL}: it records no test article ({_without_article(run)}), and daq fit fits "
+            "a beam's Ritz model; if it is a run of the seed's beam, give --article seed-beam (or an "
+            "article file)"
         )
     beam = article_beam(read_article(article))
     if beam is None:
         raise ValueError(f"article {article}: a free structure has no beam model to fit")
     return beam, f"the article given with --article ({article})"
+
+
+def _without_article(run: Run) -> str:
+    """What a run that records no test article is: an imported file, a replay of one, or a run."""
+    provenance = getattr(run, "provenance", None) or {}
+    replayed = provenance.get("replayed_from")
+    if getattr(run, "kind", None) == "replayed" or isinstance(replayed, dict):
+        original = replayed.get("kind") if isinstance(replayed, dict) else None
+        return (
+            "a replay of an imported file"
+            if original == "imported"
+            else "a replay of a run that records none"
+        )
+    return "an imported file" if getattr(run, "kind", "imported") == "imported" else "a run that records none"
 
 
 def model_of(run: Run, n_functions: int, article: str | None = None) -> tuple[Any, str]:
