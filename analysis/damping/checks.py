@@ -9,7 +9,9 @@ from dataclasses import replace
 
 import numpy as np
 
+from analysis.damping import hit_frf
 from analysis.damping.bandlimited import BandLimitedData, batched_residuals, residuals
+from analysis.damping.hit_frf import HitFrfData
 from analysis.damping.local import fit_least_squares, multi_start
 from analysis.damping.params import matrix_to_theta, theta_to_matrix
 
@@ -45,11 +47,13 @@ def multi_start_check(
     }
 
 
-def per_hit_std(data: BandLimitedData, r: np.ndarray, psd: bool = False) -> np.ndarray | None:
+def per_hit_std(data: BandLimitedData | HitFrfData, r: np.ndarray, psd: bool = False) -> np.ndarray | None:
     """(P,) standard deviation of each term of R (upper triangle, row-major) over
     least-squares fits to each accepted hit alone (started from the joint fit ``r``,
     R = L L^T with ``psd``), divided by sqrt(n_hits): the spread of the mean of the
     refits, the figure comparable with the joint fit's. None with fewer than 3 hits.
+    ``data``: the time records (bandlimited) or the hits' FRF (hit_frf: each hit's own
+    FRF against the model's for that hit).
     """
     n_hits = data.force_n.shape[0]
     if n_hits < 3:
@@ -61,13 +65,20 @@ def per_hit_std(data: BandLimitedData, r: np.ndarray, psd: bool = False) -> np.n
         start = _nearest_psd(start)
         start = start + PER_HIT_LIFT * np.max(np.linalg.eigvalsh(start)) * np.eye(start.shape[0])
     thetas = []
+    frequency = isinstance(data, HitFrfData)
+    single, batched = (
+        (hit_frf.residuals, hit_frf.batched_residuals) if frequency else (residuals, batched_residuals)
+    )
     for k in range(n_hits):
-        one = replace(data, force_n=data.force_n[k : k + 1], response_m_s2=data.response_m_s2[k : k + 1])
+        if frequency:
+            one = data.hit(k)
+        else:
+            one = replace(data, force_n=data.force_n[k : k + 1], response_m_s2=data.response_m_s2[k : k + 1])
         fit = fit_least_squares(
-            lambda m, d=one: residuals(d, m),
+            lambda m, d=one: single(d, m),
             start,
             psd=psd,
-            batched_residuals=lambda m, d=one: batched_residuals(d, m),
+            batched_residuals=lambda m, d=one: batched(d, m),
             max_nfev=PER_HIT_MAX_NFEV,
         )
         thetas.append(matrix_to_theta(np.asarray(fit.damping_matrix)))

@@ -621,6 +621,19 @@ def sections(
     return out
 
 
+def _stiffness_text(summary: dict) -> str:
+    """The model's stiffness as `daq fit` prints it: 'stiffness scaled by 0.98443 to the
+    run's frequencies, then each mode at its identified frequency'."""
+    info = summary.get("stiffness") or {}
+    scale = info.get("scale")
+    if info.get("update", "none") == "none" or scale is None:
+        return "stiffness as built (--stiffness none)"
+    modes = info.get("mode_frequencies") or {}
+    then = ", then each mode at its identified frequency" if modes.get("applied") else ""
+    kept = "" if modes.get("applied") or not modes.get("reason") else f" (modes kept: {modes['reason']})"
+    return f"stiffness scaled by {scale:.5f} to the run's frequencies{then}{kept}"
+
+
 def _fit_sections(fits: dict[str, dict], figures: Any) -> list[Section]:
     """The damping matrix of each fit with its uncertainty, the modes it implies, its
     cautions, and the figures of the fit."""
@@ -630,11 +643,9 @@ def _fit_sections(fits: dict[str, dict], figures: Any) -> list[Section]:
         unit = psi_unit(s)
         floor = s.get("psi_noise_floor")
         floor_text = f"; noise floor {plain(floor, '.3g')} {unit}" if floor is not None else ""
-        scale = s["stiffness"].get("scale")
-        stiffness = s["stiffness"].get("update", "") + ("" if scale is None else f" x {scale:.5f}")
         section.blocks.append(Para(
             f"Fit {name}: Psi (eq 17) = {plain(s['psi'], '.4g')} {unit}{floor_text}, "
-            f"{s['n_evaluations']} model evaluations, stiffness: {stiffness}."
+            f"{s['n_evaluations']} model evaluations, {_stiffness_text(s)}."
         ))  # fmt: skip
         unc = s["uncertainty"]
         by_name = dict(zip(unc["names"], zip(unc["std"], unc["determined"], strict=True), strict=True))

@@ -24,7 +24,7 @@ from analysis.ritz import RitzBeam
 from analysis.run_analysis import AnalysisOptions
 from daq.store import Run, Store, StoreError
 from daq.store.model import SOFTWARE
-from daq.workflows.analysis import NO_BEAM_MODEL, analyze_stored, beam_of, stored_options
+from daq.workflows.analysis import NO_BEAM_MODEL, analyze_stored, beam_of, stored_options, window_specs
 from daq.workflows.analysis import RESULT_NAME as ANALYSIS_RESULT
 from daq.workflows.article import article_beam, read_article
 from daq.workflows.outcome import RunOutcome, failure_reason
@@ -69,6 +69,13 @@ class FitOptions:
             raise ValueError(f"n_functions must be 1..{MAX_FUNCTIONS}, got {self.n_functions}")
         if not 0 <= self.starts <= 100:
             raise ValueError(f"starts must be 0..100, got {self.starts}")
+        if self.method == "modal" and not self.psd:
+            # The proportional estimate is dissipative by construction: no constraint to drop,
+            # and a second result file would hold the same matrix.
+            raise ValueError(
+                "--unconstrained means nothing for --method modal (the proportional estimate is "
+                "dissipative by construction): drop it"
+            )
         if not 0 <= self.seed < 2**63:
             # numpy's generators take none else, and would say so naming no option.
             raise ValueError(f"seed must be a whole number from 0 to 2^63 - 1, got {self.seed}")
@@ -76,10 +83,14 @@ class FitOptions:
     @property
     def result_name(self) -> str:
         """``fit-<method>`` for the defaults (R = L L^T, the functions the run's modes
-        ask for: the number is in the result), ``-unconstrained`` for a raw R, ``-n<N>``
-        for an explicit number of functions."""
+        ask for: the number is in the result, the time domain, --stiffness modes),
+        ``-unconstrained`` for a raw R, ``-n<N>`` for an explicit number of functions,
+        ``-frequency`` for --domain frequency and ``-stiffness-<scale|none>`` for another
+        stiffness: a fit with other options never replaces the default one."""
         size = "" if self.n_functions is None else f"-n{self.n_functions}"
-        return f"fit-{self.method}{'' if self.psd else '-unconstrained'}{size}"
+        domain = "" if self.domain == "time" else f"-{self.domain}"
+        stiffness = "" if self.stiffness == "modes" else f"-stiffness-{self.stiffness}"
+        return f"fit-{self.method}{'' if self.psd else '-unconstrained'}{size}{domain}{stiffness}"
 
 
 def fitted_beam(run: Run, article: str | None) -> tuple[Any, str]:
@@ -94,13 +105,28 @@ def fitted_beam(run: Run, article: str | None) -> tuple[Any, str]:
         return beam_of(run)
     if article is None:
         raise ValueError(
-            f"{NO_BEAM_MODEL}: it records no test article (an imported file), and daq fit fits a beam's "
-            "Ritz model; if it is a run of the seed's beam, give --article seed-beam (or an article file)"
+            f"{NO_BEAM_MODEL}: it records no test article ({_without_article(run)}), and daq fit fits "
+            "a beam's Ritz model; if it is a run of the seed's beam, give --article seed-beam (or an "
+            "article file)"
         )
     beam = article_beam(read_article(article))
     if beam is None:
         raise ValueError(f"article {article}: a free structure has no beam model to fit")
     return beam, f"the article given with --article ({article})"
+
+
+def _without_article(run: Run) -> str:
+    """What a run that records no test article is: an imported file, a replay of one, or a run."""
+    provenance = getattr(run, "provenance", None) or {}
+    replayed = provenance.get("replayed_from")
+    if getattr(run, "kind", None) == "replayed" or isinstance(replayed, dict):
+        original = replayed.get("kind") if isinstance(replayed, dict) else None
+        return (
+            "a replay of an imported file"
+            if original == "imported"
+            else "a replay of a run that records none"
+        )
+    return "an imported file" if getattr(run, "kind", "imported") == "imported" else "a run that records none"
 
 
 def model_of(run: Run, n_functions: int, article: str | None = None) -> tuple[Any, str]:
@@ -138,7 +164,12 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     low, high = _band(run, analysis, options)
     in_band = usable & (ident_f >= low) & (ident_f <= high)
     searched = _searched_band(analysis, low, high)
-    n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions, searched)
+    unsearched = (
+        _model_modes_unsearched(run, options, low, high, searched, ident_f[in_band])
+        if options.n_functions is None
+        else []
+    )
+    n, reason = resolve_functions(int(in_band.sum()), low, high, options.n_functions, searched, unsearched)
     largest = None  # set where more functions would put a model mode outside the band
     while True:
         model, beam_origin, stiffness_info, start, matching, data, domain = _prepare(
@@ -177,8 +208,18 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     jac, res = central_jacobian(batched, r)
     theta = damping.matrix_to_theta(r)
     ident = damping.identifiability(jac, res, theta, n)
-    per_hit = per_hit_std(data, r, psd=options.psd) if domain == "time" else None
+    per_hit = per_hit_std(data, r, psd=options.psd) if hasattr(data, "force_n") else None
     std, std_source = combined_std(ident.std, per_hit)
+    time_reading = _time_reading(data, r, options.psd) if domain == "frequency" else None
+    between = None
+    if time_reading is not None:
+        # The FRF's errors are not the time records': where the two readings of the same
+        # hits differ by more than the FRF fit's own figures, the difference is the honest u.
+        between = np.abs(theta - damping.matrix_to_theta(time_reading))
+        own = std.copy()
+        wider = np.isfinite(between) & (between > std) & ~np.isinf(std)
+        std = np.where(wider, between, std)
+        std_source = ["readings" if w else src for w, src in zip(wider, std_source, strict=True)]
     relative_std = std / parameter_scale(theta, n)
     global_check = (
         multi_start_check(residual_fn, batched, r, result.psi, options.starts, options.seed, options.psd)
@@ -232,6 +273,11 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
             # R refitted to each hit alone; the spread of those fits over sqrt(n_hits)
             # is the uncertainty of the mean (None: frequency domain, or < 3 hits).
             "std_from_hits": None if per_hit is None else [_num(v) for v in per_hit],
+            # Frequency domain on a run with hits: R fitted to the same hits' time records
+            # (from this fit), and |this R - that R| per term (None otherwise).
+            "time_reading": None if time_reading is None else _matrix_json(time_reading),
+            "std_between_domains": None if between is None else [_num(v) for v in between],
+            "std_own": None if between is None else [_num(v) for v in own],
         },
         "options": {"method": options.method, "seed": options.seed, "psd": options.psd,
                     "n_functions": n, "stiffness": options.stiffness, "domain": options.domain},
@@ -264,17 +310,49 @@ PSI_CAUTION = 3.0
 RESIDUAL_CAUTION = 0.1
 
 
+def _model_modes_unsearched(
+    run: Run,
+    options: FitOptions,
+    low_hz: float,
+    high_hz: float,
+    searched_hz: tuple[float, float] | None,
+    identified_hz: np.ndarray,
+) -> list[float]:
+    """Hz of the beam model's modes (as built, MAX_FUNCTIONS Ritz functions) that lie in
+    the fitted band but outside the band the analysis looked for modes in: no one
+    counted them, and a model without them cannot pair its modes with the run's. Only
+    where every identified mode lies within PARTNER_TOLERANCE of a model mode: a run
+    whose modes are not the beam's is refused as before, not fitted with more functions."""
+    if searched_hz is None or not identified_hz.size:
+        return []
+    from analysis.damping import undamped_modes
+
+    try:
+        model, _ = model_of(run, MAX_FUNCTIONS, options.article)
+    except ValueError:
+        return []
+    hz = undamped_modes(model)[0] / (2 * np.pi)
+    nearest = np.min(np.abs(hz[None, :] / np.asarray(identified_hz, dtype=float)[:, None] - 1.0), axis=1)
+    if np.any(nearest > PARTNER_TOLERANCE):
+        return []
+    inside = (hz >= low_hz) & (hz <= high_hz) & ((hz < searched_hz[0]) | (hz > searched_hz[1]))
+    return [float(f) for f in hz[inside]]
+
+
 def resolve_functions(
     identified_in_band: int,
     low_hz: float,
     high_hz: float,
     requested: int | None,
     searched_hz: tuple[float, float] | None = None,
+    unsearched_model_hz: list[float] | None = None,
 ) -> tuple[int, str]:
     """(N, why): the Ritz functions of the fit. An explicit ``requested`` wins;
     otherwise one per mode the analysis identified in the fitted band, 1..MAX_FUNCTIONS.
     searched_hz: the analysis's band (Hz) where it is narrower than the fitted one
-    (_searched_band): the why then says that modes were looked for there only."""
+    (_searched_band): the why then says that modes were looked for there only.
+    unsearched_model_hz: the beam model's modes in the fitted band outside searched_hz
+    (_model_modes_unsearched): the default adds one function for each."""
     band = f"{low_hz:.4g}-{high_hz:.4g} Hz"
     found = f"{identified_in_band} mode{'' if identified_in_band == 1 else 's'} identified in {band}"
     if searched_hz is not None:
@@ -284,8 +362,16 @@ def resolve_functions(
         )
     if requested is not None:
         return requested, f"{requested} Ritz function{'' if requested == 1 else 's'} (--functions); {found}"
-    n = min(max(identified_in_band, 1), MAX_FUNCTIONS)
-    note = "" if n == identified_in_band else f" (at least 1, at most {MAX_FUNCTIONS})"
+    extra = list(unsearched_model_hz or [])
+    wanted = identified_in_band + len(extra)
+    n = min(max(wanted, 1), MAX_FUNCTIONS)
+    if extra:
+        shown = ", ".join(f"{f:.4g}" for f in extra)
+        found = (
+            f"{found}, and {len(extra)} of the beam model's modes ({shown} Hz) in the fitted band outside "
+            "the analysis's"
+        )
+    note = "" if n == wanted else f" (at least 1, at most {MAX_FUNCTIONS})"
     return n, f"{n} Ritz function{'' if n == 1 else 's'}: {found}{note}"
 
 
@@ -382,6 +468,59 @@ def _pilkey_inman(damping: Any, model: Any, f_hz: np.ndarray, zeta: np.ndarray, 
 POLE_MATCH = 1e-3
 
 
+def _time_reading(data: Any, r: np.ndarray, psd: bool) -> np.ndarray | None:
+    """R fitted (least squares from ``r``) to the time records of the hits behind a
+    frequency-domain fit's FRF (analysis/damping/hit_frf.py); None for an FRF without hits."""
+    from analysis.damping import bandlimited, fit_least_squares
+    from analysis.damping.hit_frf import HitFrfData
+
+    if not isinstance(data, HitFrfData):
+        return None
+    records = bandlimited.BandLimitedData(data.model, data.force_n, data.response_m_s2, data.sample_rate_hz)
+    fit = fit_least_squares(
+        lambda m: bandlimited.residuals(records, m), r, psd=psd,
+        batched_residuals=lambda m: bandlimited.batched_residuals(records, m),
+    )  # fmt: skip
+    t = np.asarray(fit.damping_matrix, dtype=float)
+    return 0.5 * (t + t.T)
+
+
+#: A frequency-domain fit whose R differs from the time records' reading by more than this
+#: many of its own u (Fisher, per-hit refits) is cautioned.
+READINGS_APART_U = 2.0
+
+
+def _readings_apart(summary: dict[str, Any]) -> str | None:
+    """The caution of a frequency-domain fit that the same hits' time records contradict,
+    or of one whose ± is the Fisher figure alone; None otherwise."""
+    if summary.get("domain") != "frequency":
+        return None
+    unc = summary.get("uncertainty") or {}
+    reading = unc.get("time_reading")
+    if reading is None:
+        return (
+            "the ± is the Fisher figure alone (the FRF's lines taken as independent, no hits to refit or "
+            "compare with): on simulated seed-beam runs R's terms spread up to 7 times wider over the noise; "
+            "take the ± as a lower bound"
+        )
+    names, own = unc.get("names", []), unc.get("std_own") or []
+    r = np.asarray(summary["damping_matrix"], dtype=float)[np.triu_indices(len(summary["damping_matrix"]))]
+    t = np.asarray(reading, dtype=float)[np.triu_indices(len(reading))]
+    apart = [
+        f"{name} {a:.4g} against {b:.4g}"
+        for name, a, b, u in zip(names, r, t, own, strict=False)
+        if u is not None and abs(a - b) > READINGS_APART_U * u
+    ]
+    if not apart:
+        return None
+    return (
+        "the FRF and the time records of the same hits give different R (" + "; ".join(apart) + "): "
+        "more than the FRF fit's own ± (Fisher, per-hit refits) allows, so the ± shown is at least the "
+        "difference; R's poorly determined terms follow small model errors (a stiffness factor 0.1 % off "
+        "moves R33 of the seed beam by about 10 N s/m on the FRF); prefer the time domain (the default)"
+    )
+
+
 def _relative_residual(data: Any, domain: str, residual: np.ndarray) -> float | None:
     """||measured - model|| / ||measured|| over what the fit compares (weighted FRF lines,
     or the compared samples)."""
@@ -468,6 +607,8 @@ def fit_cautions(summary: dict[str, Any]) -> list[str]:
     if why := not_a_result(summary):
         # Said where the fit is shown (JSON, report, page), not only in the exit status.
         out.append(f"no damping matrix: {why}; the R shown is where the fit stopped, for a look only")
+    if readings := _readings_apart(summary):
+        out.append(readings)
     n = summary["model"]["ritz_functions"]
     found = summary["model"].get("modes_identified_in_band", 0)
     low, high = summary["model"].get("band_hz", (0.0, 0.0))
@@ -620,6 +761,20 @@ def _data(run: Run, analysis: dict[str, Any], model: Any, options: FitOptions) -
         return BandLimitedData(
             model, hits.force_n[pick], hits.response_m_s2[pick], hits.sample_rate_hz
         ), "time"
+    if hits is not None and not hits.is_zoom and hits.accepted.any() and np.isrealobj(hits.force_n):
+        # The hits' own FRF against the one the model's response to the same hits gives
+        # through the same windows (analysis/damping/hit_frf.py): exact, where the
+        # windowed model below leaves errors R absorbs.
+        from analysis.damping.hit_frf import HitFrfData
+        from analysis.windows import window
+
+        force_window, response_window, _ = window_specs(run)
+        pick = hits.accepted
+        n, fs = hits.force_n.shape[1], hits.sample_rate_hz
+        return HitFrfData(
+            model, hits.force_n[pick], hits.response_m_s2[pick], fs,
+            window(force_window, n, fs), window(response_window, n, fs),
+        ), "frequency"  # fmt: skip
     arrays = analysis["arrays"]
     coherence = arrays.get("coherence")
     imported = run.provenance.get("imported_from", {})
@@ -639,9 +794,10 @@ def _objective(data: Any, domain: str):
     """Psi (eq 17's form) and the residuals, single and batched: band-limited time
     records (analysis/damping/bandlimited.py) or the windowed FRF
     (analysis/damping/windowed_frf.py)."""
-    from analysis.damping import bandlimited, windowed_frf
+    from analysis.damping import bandlimited, hit_frf, windowed_frf
+    from analysis.damping.hit_frf import HitFrfData
 
-    module = bandlimited if domain == "time" else windowed_frf
+    module = bandlimited if domain == "time" else hit_frf if isinstance(data, HitFrfData) else windowed_frf
 
     def objective(r: np.ndarray) -> np.ndarray:
         return module.psi(data, r)

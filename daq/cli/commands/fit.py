@@ -195,12 +195,17 @@ def print_fit(info: dict) -> None:
     n = len(r)
     sources = unc.get("std_source") or ["fisher"] * len(unc["names"])
     from_hits = [name for name, src in zip(unc["names"], sources, strict=True) if src == "hits"]
+    from_readings = [name for name, src in zip(unc["names"], sources, strict=True) if src == "readings"]
     label = (
         "the Fisher (Cramér-Rao) std"
-        if not from_hits
-        else "the larger of the Fisher std and the per-hit refits' spread / sqrt(n) "
-        f"(per-hit for {', '.join(from_hits)})"
+        if not unc.get("std_from_hits")
+        else "the larger of the Fisher std and the per-hit refits' spread / sqrt(n)"
+        + (f" (per-hit for {', '.join(from_hits)})" if from_hits else "")
     )
+    if unc.get("time_reading") is not None:
+        label += ", and the difference from the time records' R" + (
+            f" (for {', '.join(from_readings)})" if from_readings else ""
+        )
     typer.echo(f"  R (N s/m), ± {label}; ? = not determined by the data:")
     for i in range(n):
         cells = []
