@@ -62,6 +62,9 @@ from daq.store.model import Run
 
 AXIS_TOLERANCE = 1e-9  # kept for callers; hits now share one axis within the time rule
 COMPLEX_COLUMNS = ("force_re", "force_im", "response_re", "response_im")
+#: The time "column" of a file of force and response alone, read with a stated rate: its
+#: times are k / rate, made here.
+NO_TIME = -1
 COMMENT_MARKS = ("#", "%", "//")
 # Header names (lower case, without their unit) that say which column is the force and
 # which the response, whatever their order (a header unit in N or g says so too). Only
@@ -218,10 +221,11 @@ def read_csv(
         raise FormatError(f"{name}: {exc}") from None
     with open_checked(path, max_bytes) as (handle, info):
         table = Table(name, columns=columns, keep_time_text=True)
+        if sample_rate_hz is not None:
+            # Before the rows: a file of force and response alone takes its times from it.
+            table.stated_rate = (float(sample_rate_hz), "--sample-rate")
         # text_lines: a file whose lines end in CR alone (classic Mac OS) is read line by line too.
         table.read(_without_preamble(table, text_lines(handle)), max_bytes)
-    if sample_rate_hz is not None:
-        table.stated_rate = (float(sample_rate_hz), "--sample-rate")
     return table.build(path, columns, force_unit, response_unit, mtime_utc(info))
 
 
@@ -270,7 +274,7 @@ def _without_preamble(table: Table, handle):
         rate = _RATE_VALUE.fullmatch(value.strip())
         if re.sub("[^a-z]", "", key.lower()) in RATE_KEYS and rate is not None:
             hz = float(rate.group(1)) * (1000.0 if (rate.group(2) or "").lower() == "khz" else 1.0)
-            if math.isfinite(hz) and hz > 0:
+            if math.isfinite(hz) and hz > 0 and table.stated_rate is None:  # --sample-rate wins
                 table.stated_rate = (hz, f"line {line} ({one_line(key)[:40]}: {one_line(value)[:40]})")
                 break
     for index, raw in enumerate(head):
@@ -478,7 +482,7 @@ class Table:
             self.values.append(value)
         if self.delimiter != ",":
             self._mixed_decimals(cells, number)
-        if self.picked is not None:
+        if self.picked is not None and self.picked[0] != NO_TIME:
             self.time_texts.append(cells[self.picked[0]])
         self.lines.append(number)
 
@@ -588,7 +592,11 @@ class Table:
         header = self.header or []
         hit = self.find("hit")
         picked, hit = self._pick_columns(columns, complex_mode, hit)
-        if self.header is not None and is_frequency_name(self.names[picked[0]], self.units[picked[0]]):
+        if (
+            self.header is not None
+            and picked[0] != NO_TIME
+            and is_frequency_name(self.names[picked[0]], self.units[picked[0]])
+        ):
             raise FormatError(
                 f"{self.name}: column {_show(header[picked[0]])} holds frequencies: this is a table of "
                 "FRFs, not time records; import it with --format frf-text"
@@ -608,12 +616,13 @@ class Table:
                     raise FormatError(f"{self.name} has complex columns but no time column")
                 return [time if time is not None else rest[0], *wanted], hit  # type: ignore[list-item]
             rest = [i for i in range(self.n_cols) if i != hit and i not in self.empty_cols]
+            if len(rest) == 2 and self.stated_rate is not None and self.find("time") is None:
+                return self._pick_without_time(rest), hit
             if len(rest) < 3:
                 raise FormatError(
                     f"{self.name} has {count(len(rest), 'data column')}; need time, force and response"
                     + (
-                        " (a file of force and response alone needs a time column, t = k / sample rate, "
-                        "before them: docs/import-export.md)"
+                        " (a file of force and response alone needs its sample rate: give --sample-rate HZ)"
                         if len(rest) == 2
                         else ""
                     )
@@ -669,6 +678,25 @@ class Table:
         if hit in picked:
             hit = None  # the user chose to read it as data
         return picked, hit
+
+    def _pick_without_time(self, rest: list[int]) -> list[int]:
+        """[NO_TIME, force, response] of a file with two data columns and a stated rate:
+        by the header's names or units where they say which is which, else in position
+        (force first), said in a note."""
+        by_name = [self.find("force"), self.find("response")]
+        if None not in by_name:
+            force, response = by_name
+        else:
+            kinds = {col: self._kind(col)[0] for col in rest} if self.header is not None else {}
+            forces = [c for c in rest if kinds.get(c) == "force"]
+            responses = [c for c in rest if kinds.get(c) == "response"]
+            if len(forces) == 1 and len(responses) == 1:
+                force, response = forces[0], responses[0]
+            else:
+                force, response = rest
+        if (force, response) == tuple(rest) and None in by_name and self.header is None:
+            self.picked_note = "no time column: columns taken in position, force then response"
+        return [NO_TIME, force, response]
 
     def _kind(self, col: int) -> tuple[str | None, str]:
         """What a header column holds, by its name and its unit: ("force", how),
@@ -801,13 +829,17 @@ class Table:
         assert picked is not None  # set with the first data row
         force = self._unit(picked[1], force_unit, "force")
         response = self._unit(picked[3 if complex_mode else 2], response_unit, "response")
-        time_unit, time_factor = self._time_unit(picked[0])
         factors = (force[1], response[1])
         data = self.data()
         lines = np.frombuffer(self.lines, dtype=np.int64)
-        time = data[:, picked[0]] * time_factor if time_factor != 1.0 else data[:, picked[0]]
-        groups = self._groups(data, lines, time, hit_col)
-        half = printed_half_units(self.time_texts) * time_factor
+        if picked[0] == NO_TIME:
+            time_unit = None
+            time, half, groups = self._made_time(data, lines, hit_col)
+        else:
+            time_unit, time_factor = self._time_unit(picked[0])
+            time = data[:, picked[0]] * time_factor if time_factor != 1.0 else data[:, picked[0]]
+            groups = self._groups(data, lines, time, hit_col)
+            half = printed_half_units(self.time_texts) * time_factor
         ids = None if hit_col is None else data[:, hit_col]
         starts, steps, tolerance = self._check_axes(time, half, lines, groups, ids)
         n = groups[0].size
@@ -832,7 +864,9 @@ class Table:
                 )
             sample_rate_hz = rate
             notes.setdefault("notes", []).append(
-                f"sample rate {rate:g} Hz as {said} gives it; the time column allows it"
+                f"no time column: sample k of each hit taken at k / {rate:g} Hz, the rate {said} gives"
+                if picked[0] == NO_TIME
+                else f"sample rate {rate:g} Hz as {said} gives it; the time column allows it"
             )
         elif sample_rate_hz == 1.0 / steps[0] and (
             coarse := self._coarse_note(time[groups[0]], half[groups[0]], steps[0])
@@ -870,7 +904,7 @@ class Table:
         hits = make_hits(path, force_n, response_m_s2, sample_rate_hz, start_s, center, stamp, self.rejected)
         if self.picked_note and columns is None:
             notes.setdefault("notes", []).insert(0, self.picked_note)
-        names = [header[i] if header else str(i) for i in picked]
+        names = [None if i == NO_TIME else header[i] if header else str(i) for i in picked]
         ignored = [
             i for i in range(self.n_cols) if i not in picked and i != hit_col and i not in self.empty_cols
         ]
@@ -976,6 +1010,17 @@ class Table:
         if self.header is not None:
             return "time"
         return "the first column (time or frequency)" if col == 0 else f"column {col + 1} (time)"
+
+    def _made_time(self, data, lines, hit_col) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+        """(time s, its half unit, the hits' rows) of a file without a time column: one hit,
+        or one per value of the hit column; sample k of each at k / the stated rate."""
+        assert self.stated_rate is not None
+        rows = data.shape[0]
+        groups = self._groups(data, lines, np.zeros(rows), hit_col)
+        time = np.empty(rows)
+        for g in groups:
+            time[g] = np.arange(g.size) / self.stated_rate[0]
+        return time, np.zeros(rows), groups
 
     def _groups(self, data, lines, time, hit_col) -> list[np.ndarray]:
         """Row indices of each hit, in order of first appearance; at most MAX_IMPORT_HITS

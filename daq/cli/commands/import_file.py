@@ -90,7 +90,8 @@ def import_file(
             metavar="<Hz>",
             show_default=False,
             help="CSV: the sample rate to store instead of the one fitted to the time column; refused "
-            "if the printed times do not allow it [default: the fitted rate, or a preamble's].",
+            "if the printed times do not allow it. A file of force and response alone (no time column) "
+            "takes its times from it, k / rate [default: the fitted rate, or a preamble's].",
         ),
     ] = None,
     frf_form: Annotated[
@@ -351,7 +352,8 @@ def said_units(details: dict[str, Any]) -> list[str]:
     if "units_from" in details:
         origin = details["units_from"]
         return [
-            f"units: time {details.get('time_unit', 's')}, force {details['force_unit']} "
+            f"units: time {details.get('time_unit', 's') or 's (made from the sample rate)'}, "
+            f"force {details['force_unit']} "
             f"({origin['force']}), response {details['response_unit']} ({origin['response']})"
         ]
     if "form_from" in details:

@@ -1,0 +1,103 @@
+"""Files of force and response alone, with no time column (a logger's export of hits at a
+rate stated elsewhere, as the spruce-plate hits of a public data set are: `force,acceleration`
+at 48 kHz): read with --sample-rate, sample k of each hit at k / rate; refused without it,
+in one line that says what to give."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from daq.formats.csv_text import read_csv
+from daq.store import Store
+from tests.cli_helpers import assert_one_line_error, invoke_daq
+
+
+def _pulse_rows(n: int = 256) -> tuple[list[float], list[float]]:
+    k = np.arange(n)
+    force = np.where(k < 8, 100 * np.sin(np.pi * k / 8), 0.0)
+    response = np.exp(-k / 40) * np.sin(2 * np.pi * k / 16)
+    return [float(f) for f in force], [float(a) for a in response]
+
+
+def test_force_and_response_alone_are_read_at_the_rate_given(tmp_path):
+    force, response = _pulse_rows()
+    path = tmp_path / "hit.csv"
+    path.write_text(
+        "force,acceleration\n" + "".join(f"{f!r},{a!r}\n" for f, a in zip(force, response, strict=True))
+    )
+    data = read_csv(path, sample_rate_hz=48000.0)
+    assert data.hits.sample_rate_hz == 48000.0
+    assert data.hits.force_n.shape == (1, len(force))
+    np.testing.assert_array_equal(data.hits.force_n[0], force)
+    np.testing.assert_array_equal(data.hits.response_m_s2[0], response)
+    assert any("no time column" in note for note in data.details["notes"])
+
+
+def test_the_header_units_say_which_column_is_the_force(tmp_path):
+    force, response = _pulse_rows()
+    path = tmp_path / "swapped.csv"
+    path.write_text(
+        "acc (g),Force [N]\n" + "".join(f"{a!r},{f!r}\n" for f, a in zip(force, response, strict=True))
+    )
+    data = read_csv(path, sample_rate_hz=1000.0)
+    np.testing.assert_array_equal(data.hits.force_n[0], force)
+    np.testing.assert_allclose(data.hits.response_m_s2[0], np.array(response) * 9.80665, rtol=1e-15)
+
+
+def test_a_hit_column_splits_the_hits(tmp_path):
+    force, response = _pulse_rows(64)
+    rows = "".join(f"{h},{f!r},{a!r}\n" for h in (1, 2) for f, a in zip(force, response, strict=True))
+    path = tmp_path / "hits.csv"
+    path.write_text("hit,force,response\n" + rows)
+    data = read_csv(path, sample_rate_hz=2048.0)
+    assert data.hits.force_n.shape == (2, 64)
+
+
+def test_without_a_rate_it_is_refused_in_one_line_saying_what_to_give(tmp_path):
+    force, response = _pulse_rows()
+    path = tmp_path / "hit.csv"
+    path.write_text(
+        "force,acceleration\n" + "".join(f"{f!r},{a!r}\n" for f, a in zip(force, response, strict=True))
+    )
+    store = tmp_path / "runs"
+    result = invoke_daq("import", str(path), "--store", str(store))
+    assert_one_line_error(
+        result, "hit.csv has 2 data columns; need time, force and response", "--sample-rate"
+    )
+    assert not store.exists() or not Store(store).list()
+    ok = invoke_daq("import", str(path), "--sample-rate", "48000", "--store", str(store))
+    assert ok.returncode == 0, ok.stderr
+    assert "units: time s (made from the sample rate)" in ok.stdout
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    values=st.lists(
+        st.tuples(
+            st.floats(-1e6, 1e6, allow_nan=False, allow_subnormal=False),
+            st.floats(-1e6, 1e6, allow_nan=False, allow_subnormal=False),
+        ),
+        min_size=4,
+        max_size=64,
+    ),
+    rate=st.sampled_from([1000.0, 2560.0, 25600.0, 48000.0, 51200.0]),
+    decimal_comma=st.booleans(),
+)
+def test_any_values_keep_every_bit_and_take_times_k_over_the_rate(
+    tmp_path_factory, values, rate, decimal_comma
+):
+    assume(any(f != 0 for f, _ in values))
+    path = tmp_path_factory.mktemp("two") / "hit.csv"
+    sep = ";" if decimal_comma else ","
+
+    def cell(x: float) -> str:
+        return repr(x).replace(".", ",") if decimal_comma else repr(x)
+
+    path.write_text(f"force{sep}response\n" + "".join(f"{cell(f)}{sep}{cell(a)}\n" for f, a in values))
+    data = read_csv(path, sample_rate_hz=rate)
+    expected = np.array(values)
+    np.testing.assert_array_equal(data.hits.force_n[0], expected[:, 0])
+    np.testing.assert_array_equal(data.hits.response_m_s2[0], expected[:, 1])
+    assert data.hits.sample_rate_hz == rate
