@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analysis.damping.bandlimited import BandLimitedData, model_response
+from analysis.damping.windowed_frf import psi_of, weighted_difference
 from analysis.spectra import ALIAS_FREE_FACTOR
 from analysis.structure import StructuralModel
 
@@ -115,8 +116,7 @@ def model_frf(data: HitFrfData, damping: np.ndarray) -> np.ndarray:
 
 def batched_residuals(data: HitFrfData, damping: np.ndarray) -> np.ndarray:
     """(B, 2 n_lines): weighted real then imaginary parts of measured minus model."""
-    diff = (data.frf[None] - model_frf(data, damping)) * data.weights[None]
-    return np.concatenate([diff.real, diff.imag], axis=1)
+    return weighted_difference(data.frf, model_frf(data, damping), data.weights)
 
 
 def residuals(data: HitFrfData, damping: np.ndarray) -> np.ndarray:
@@ -125,9 +125,4 @@ def residuals(data: HitFrfData, damping: np.ndarray) -> np.ndarray:
 
 def psi(data: HitFrfData, damping: np.ndarray) -> np.ndarray:
     """eq (17)'s form on the FRF residual, (...,) for damping (..., N, N); invalid -> inf."""
-    r = np.asarray(damping, dtype=float)
-    flat = r.reshape(-1, *r.shape[-2:])
-    res = batched_residuals(data, flat)
-    with np.errstate(all="ignore"):
-        value = np.sqrt(np.sum(res**2, axis=1)) / res.shape[1]
-    return np.where(np.isfinite(value), value, np.inf).reshape(r.shape[:-2])
+    return psi_of(lambda r: batched_residuals(data, r), damping)

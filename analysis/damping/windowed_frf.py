@@ -66,10 +66,27 @@ def model_frf(data: WindowedFrfData, damping: np.ndarray) -> np.ndarray:
     return h * np.exp(-data.decay_1_s * data.pulse_s)
 
 
+def weighted_difference(measured: np.ndarray, model: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """(B, 2 n_lines): weighted real then imaginary parts of ``measured`` (n_lines,) minus
+    ``model`` (B, n_lines), weights (n_lines,)."""
+    diff = (measured[None] - model) * weights[None]
+    return np.concatenate([diff.real, diff.imag], axis=1)
+
+
+def psi_of(batched_residuals_of, damping: np.ndarray) -> np.ndarray:
+    """eq (17)'s form on the FRF residual, (...,) for damping (..., N, N); invalid -> inf.
+    batched_residuals_of: damping (B, N, N) -> residuals (B, n)."""
+    r = np.asarray(damping, dtype=float)
+    flat = r.reshape(-1, *r.shape[-2:])
+    res = batched_residuals_of(flat)
+    with np.errstate(all="ignore"):
+        value = np.sqrt(np.sum(res**2, axis=1)) / res.shape[1]
+    return np.where(np.isfinite(value), value, np.inf).reshape(r.shape[:-2])
+
+
 def batched_residuals(data: WindowedFrfData, damping: np.ndarray) -> np.ndarray:
     """(B, 2 n_lines): weighted real then imaginary parts of measured minus model."""
-    diff = (data.frf[None] - model_frf(data, damping)) * data.weights[None]
-    return np.concatenate([diff.real, diff.imag], axis=1)
+    return weighted_difference(data.frf, model_frf(data, damping), data.weights)
 
 
 def residuals(data: WindowedFrfData, damping: np.ndarray) -> np.ndarray:
@@ -78,9 +95,4 @@ def residuals(data: WindowedFrfData, damping: np.ndarray) -> np.ndarray:
 
 def psi(data: WindowedFrfData, damping: np.ndarray) -> np.ndarray:
     """eq (17)'s form on the FRF residual, (...,) for damping (..., N, N); invalid -> inf."""
-    r = np.asarray(damping, dtype=float)
-    flat = r.reshape(-1, *r.shape[-2:])
-    res = batched_residuals(data, flat)
-    with np.errstate(all="ignore"):
-        value = np.sqrt(np.sum(res**2, axis=1)) / res.shape[1]
-    return np.where(np.isfinite(value), value, np.inf).reshape(r.shape[:-2])
+    return psi_of(lambda r: batched_residuals(data, r), damping)

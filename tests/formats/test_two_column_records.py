@@ -21,13 +21,16 @@ def _pulse_rows(n: int = 256) -> tuple[list[float], list[float]]:
     return [float(f) for f in force], [float(a) for a in response]
 
 
+def _write(path, header: str, first: list[float], second: list[float]):
+    path.write_text(header + "\n" + "".join(f"{x!r},{y!r}\n" for x, y in zip(first, second, strict=True)))
+    return path
+
+
 def test_force_and_response_alone_are_read_at_the_rate_given(tmp_path):
     force, response = _pulse_rows()
-    path = tmp_path / "hit.csv"
-    path.write_text(
-        "force,acceleration\n" + "".join(f"{f!r},{a!r}\n" for f, a in zip(force, response, strict=True))
+    data = read_csv(
+        _write(tmp_path / "hit.csv", "force,acceleration", force, response), sample_rate_hz=48000.0
     )
-    data = read_csv(path, sample_rate_hz=48000.0)
     assert data.hits.sample_rate_hz == 48000.0
     assert data.hits.force_n.shape == (1, len(force))
     np.testing.assert_array_equal(data.hits.force_n[0], force)
@@ -37,11 +40,9 @@ def test_force_and_response_alone_are_read_at_the_rate_given(tmp_path):
 
 def test_the_header_units_say_which_column_is_the_force(tmp_path):
     force, response = _pulse_rows()
-    path = tmp_path / "swapped.csv"
-    path.write_text(
-        "acc (g),Force [N]\n" + "".join(f"{a!r},{f!r}\n" for f, a in zip(force, response, strict=True))
+    data = read_csv(
+        _write(tmp_path / "swapped.csv", "acc (g),Force [N]", response, force), sample_rate_hz=1000.0
     )
-    data = read_csv(path, sample_rate_hz=1000.0)
     np.testing.assert_array_equal(data.hits.force_n[0], force)
     np.testing.assert_allclose(data.hits.response_m_s2[0], np.array(response) * 9.80665, rtol=1e-15)
 
@@ -57,10 +58,7 @@ def test_a_hit_column_splits_the_hits(tmp_path):
 
 def test_without_a_rate_it_is_refused_in_one_line_saying_what_to_give(tmp_path):
     force, response = _pulse_rows()
-    path = tmp_path / "hit.csv"
-    path.write_text(
-        "force,acceleration\n" + "".join(f"{f!r},{a!r}\n" for f, a in zip(force, response, strict=True))
-    )
+    path = _write(tmp_path / "hit.csv", "force,acceleration", force, response)
     store = tmp_path / "runs"
     result = invoke_daq("import", str(path), "--store", str(store))
     assert_one_line_error(
