@@ -641,10 +641,12 @@ class Table:
                 self.picked_note = f"columns taken by their {said}: {shown}"
             return named, hit  # type: ignore[return-value]
         items = [item.strip() for item in columns.split(",")]
-        if len(items) != 3 or not all(items):
+        without_time = len(items) == 2 and self.stated_rate is not None
+        if not (len(items) == 3 or without_time) or not all(items):
             raise FormatError(
                 f"{self.name}: columns {_show(columns)} must name three columns "
-                "(time, force, response), e.g. t,F,a or 0,2,1"
+                "(time, force, response), e.g. t,F,a or 0,2,1; or two (force, response) with "
+                "--sample-rate for a file without a time column"
             )
         picked = []
         for item in items:
@@ -673,11 +675,11 @@ class Table:
                     f"{self.name}: column index {index} is empty on every line; it holds no data"
                 )
             picked.append(index)
-        if len(set(picked)) != 3:
-            raise FormatError(f"{self.name}: columns {_show(columns)} must be three different columns")
+        if len(set(picked)) != len(picked):
+            raise FormatError(f"{self.name}: columns {_show(columns)} must be different columns")
         if hit in picked:
             hit = None  # the user chose to read it as data
-        return picked, hit
+        return ([NO_TIME, *picked] if without_time else picked), hit
 
     def _pick_without_time(self, rest: list[int]) -> list[int]:
         """[NO_TIME, force, response] of a file with two data columns and a stated rate:

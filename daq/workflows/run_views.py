@@ -107,9 +107,13 @@ def swapped_columns(run) -> tuple[list[int], str] | None:
     columns = imported.get("columns") if isinstance(imported, dict) else None
     from_csv = isinstance(imported, dict) and imported.get("format") == "csv" and not imported.get("zoom")
     if from_csv and isinstance(columns, list) and len(columns) == 3:
-        given = ",".join((columns[0], columns[2], columns[1]))
-        shown = given if all(_PLAIN_COLUMN.fullmatch(c) for c in columns) else f"'{given}'"
-        return bad, f"{text}; if so, import the file again with --columns {shown}"
+        # A file with no time column (its times made from --sample-rate) names two.
+        named = (columns[2], columns[1]) if columns[0] is None else (columns[0], columns[2], columns[1])
+        if all(isinstance(c, str) for c in named):
+            given = ",".join(named)
+            shown = given if all(_PLAIN_COLUMN.fullmatch(c) for c in named) else f"'{given}'"
+            rate = f" --sample-rate {float(hits.sample_rate_hz):g}" if columns[0] is None else ""
+            return bad, f"{text}; if so, import the file again with --columns {shown}{rate}"
     return bad, f"{text}; if so, swap the force and response records of the file and import it again"
 
 

@@ -235,7 +235,7 @@ def test_hand_written_zoom_file(tmp_path):
         ("0,1,2\n1,2,3\n", {"columns": "t,F,a"}, "no header row"),
         ("0,1,2\n1,2,3\n", {"columns": "0,1,3"}, "column index 3 is out of range"),
         ("0,1,2\n1,2,3\n", {"columns": "0,1"}, "must name three columns"),
-        ("0,1,2\n1,2,3\n", {"columns": "0,1,1"}, "three different columns"),
+        ("0,1,2\n1,2,3\n", {"columns": "0,1,1"}, "must be different columns"),
         ("0,1\n1,2\n", {}, "need time, force and response"),
         ("hit,t,F,a\n0.5,0,1,2\n0.5,1,2,3\n", {}, "line 2: hit 0.5 is not a whole number"),
         ("time,force_re,force_im,response_re,response_im\n0,1,2,3,4\n1,1,2,3,4\n", {}, "no '# center_hz"),

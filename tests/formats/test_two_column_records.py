@@ -99,3 +99,32 @@ def test_any_values_keep_every_bit_and_take_times_k_over_the_rate(
     np.testing.assert_array_equal(data.hits.force_n[0], expected[:, 0])
     np.testing.assert_array_equal(data.hits.response_m_s2[0], expected[:, 1])
     assert data.hits.sample_rate_hz == rate
+
+
+def test_swapped_columns_are_said_with_the_two_columns_that_read_them_right(tmp_path):
+    """A headerless file of response then force: the import said so, then stopped with an
+    internal error after storing the run, and every later command on it did too."""
+    force, response = _pulse_rows()
+    path = tmp_path / "swapped.csv"
+    path.write_text("".join(f"{a!r},{f!r}\n" for f, a in zip(force, response, strict=True)))
+    store = tmp_path / "runs"
+    result = invoke_daq("import", str(path), "--sample-rate", "2048", "--store", str(store))
+    assert result.returncode == 0, result.stderr
+    assert "import the file again with --columns 1,0 --sample-rate 2048" in result.stdout
+    analysed = invoke_daq("analyze", "latest", "--store", str(store))
+    assert analysed.returncode == 0, analysed.stderr
+    assert "--columns 1,0 --sample-rate 2048; until then" in analysed.stdout
+    again = invoke_daq(
+        "import", str(path), "--sample-rate", "2048", "--columns", "1,0", "--store", str(store)
+    )
+    assert again.returncode == 0, again.stderr
+    assert "look swapped" not in again.stdout
+
+
+def test_two_columns_named_without_a_rate_are_refused_saying_what_to_give(tmp_path):
+    force, response = _pulse_rows()
+    path = _write(tmp_path / "hit.csv", "force,acceleration", force, response)
+    result = invoke_daq(
+        "import", str(path), "--columns", "force,acceleration", "--store", str(tmp_path / "runs")
+    )
+    assert_one_line_error(result, "must name three columns", "or two (force, response) with --sample-rate")
