@@ -237,7 +237,7 @@ _RATE_VALUE = re.compile(r"([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(hz|khz|s/s|s
 def preamble_lines(texts: list[str]) -> list[tuple[int, tuple[str, str]]]:
     """(index, (key, value)) of each line of a preamble of metadata lines ("key: value",
     "key<TAB>value") among ``texts`` (a text file's first lines, decoded), before its
-    header row or, with none, before its numbers (a row of 3 numbers or more); [] without
+    header row or, with none, before its numbers (a row of 2 numbers or more); [] without
     one. Blank lines and comments may come between; indices count from 0."""
     rows: list[int] = []
     width = 0
@@ -255,7 +255,7 @@ def preamble_lines(texts: list[str]) -> list[tuple[int, tuple[str, str]]]:
     metas = [(i, _metadata(texts[i].strip(" \r\n"))) for i in rows]
     # Metadata lines right before the numbers: no header at all.
     body = metas if metas and metas[-1][1] is not None else metas[:-1]
-    if width >= 3 and body and len(body) <= 64 and all(meta is not None for _, meta in body):
+    if width >= 2 and body and len(body) <= 64 and all(meta is not None for _, meta in body):
         return body  # type: ignore[return-value]
     return []
 

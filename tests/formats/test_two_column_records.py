@@ -6,6 +6,7 @@ in one line that says what to give."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
@@ -128,3 +129,25 @@ def test_two_columns_named_without_a_rate_are_refused_saying_what_to_give(tmp_pa
         "import", str(path), "--columns", "force,acceleration", "--store", str(tmp_path / "runs")
     )
     assert_one_line_error(result, "must name three columns", "or two (force, response) with --sample-rate")
+
+
+@pytest.mark.parametrize(
+    ("preamble", "header"),
+    [
+        ("Sample rate: 2048 Hz", "force,response\n"),
+        ("fs: 2048", "force,response\n"),
+        ("Sampling frequency\t2048", "force,response\n"),
+        ("Sample rate: 2048 Hz\nOperator: me", ""),
+    ],
+)
+def test_a_preamble_gives_the_rate_of_a_file_of_force_and_response_alone(tmp_path, preamble, header):
+    """A preamble was looked for only before rows of 3 numbers or more: these files were
+    refused as "1 column, expected 4"."""
+    force, response = _pulse_rows()
+    path = tmp_path / "pre.csv"
+    path.write_text(
+        f"{preamble}\n{header}" + "".join(f"{f!r},{a!r}\n" for f, a in zip(force, response, strict=True))
+    )
+    data = read_csv(path)
+    assert data.hits.sample_rate_hz == 2048.0
+    np.testing.assert_array_equal(data.hits.force_n[0], force)
