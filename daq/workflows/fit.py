@@ -85,12 +85,15 @@ class FitOptions:
         """``fit-<method>`` for the defaults (R = L L^T, the functions the run's modes
         ask for: the number is in the result, the time domain, --stiffness modes),
         ``-unconstrained`` for a raw R, ``-n<N>`` for an explicit number of functions,
-        ``-frequency`` for --domain frequency and ``-stiffness-<scale|none>`` for another
-        stiffness: a fit with other options never replaces the default one."""
+        ``-frequency`` for --domain frequency, ``-stiffness-<scale|none>`` for another
+        stiffness and ``-seed<S>`` for ga and de with a seed other than 0: a fit with
+        other options never replaces the default one."""
         size = "" if self.n_functions is None else f"-n{self.n_functions}"
+        # The global searches' result depends on the seed: another seed, another file.
+        seed = f"-seed{self.seed}" if self.method in ("ga", "de") and self.seed != 0 else ""
         domain = "" if self.domain == "time" else f"-{self.domain}"
         stiffness = "" if self.stiffness == "modes" else f"-stiffness-{self.stiffness}"
-        return f"fit-{self.method}{'' if self.psd else '-unconstrained'}{size}{domain}{stiffness}"
+        return f"fit-{self.method}{seed}{'' if self.psd else '-unconstrained'}{size}{domain}{stiffness}"
 
 
 def fitted_beam(run: Run, article: str | None) -> tuple[Any, str]:
@@ -210,7 +213,10 @@ def fit_run(run: Run, analysis: dict[str, Any], options: FitOptions) -> tuple[di
     ident = damping.identifiability(jac, res, theta, n)
     per_hit = per_hit_std(data, r, psd=options.psd) if hasattr(data, "force_n") else None
     std, std_source = combined_std(ident.std, per_hit)
-    time_reading = _time_reading(data, r, options.psd) if domain == "frequency" else None
+    # Only a least-squares fit of the FRF has a time-records reading to compare with: the
+    # modal and Pilkey-Inman estimates do not fit either, and their R is no FRF fit's.
+    compare = domain == "frequency" and options.method in ("ls", "ga", "de")
+    time_reading = _time_reading(data, r, options.psd) if compare else None
     between = None
     if time_reading is not None:
         # The FRF's errors are not the time records': where the two readings of the same
@@ -493,7 +499,7 @@ READINGS_APART_U = 2.0
 def _readings_apart(summary: dict[str, Any]) -> str | None:
     """The caution of a frequency-domain fit that the same hits' time records contradict,
     or of one whose ± is the Fisher figure alone; None otherwise."""
-    if summary.get("domain") != "frequency":
+    if summary.get("domain") != "frequency" or summary.get("method") not in ("ls", "ga", "de"):
         return None
     unc = summary.get("uncertainty") or {}
     reading = unc.get("time_reading")

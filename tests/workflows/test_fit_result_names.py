@@ -46,3 +46,25 @@ def test_a_frequency_fit_is_stored_beside_the_default_and_both_are_listed(tmp_pa
     fits = stored_fits(Store(store), run_id)
     assert set(fits) == {"fit-ls", "fit-ls-frequency"}
     assert fits["fit-ls-frequency"]["summary"]["domain"] == "frequency"
+
+
+def test_a_global_search_with_another_seed_keeps_its_own_file():
+    """--method ga --seed 1 and --seed 2 shared fit-ga.h5: the second replaced the first
+    and the report's "Fit fit-ga" did not say which seed it was."""
+    from daq.workflows.fit import FitOptions
+
+    assert FitOptions(method="ga").result_name == "fit-ga"
+    assert FitOptions(method="ga", seed=1).result_name == "fit-ga-seed1"
+    assert FitOptions(method="de", seed=2, domain="frequency").result_name == "fit-de-seed2-frequency"
+    assert FitOptions(method="ls", seed=3).result_name == "fit-ls"  # ls takes no seed
+
+
+def test_the_modal_estimate_is_not_compared_with_a_least_squares_time_reading():
+    """--method modal --domain frequency was cautioned that "the FRF and the time records of
+    the same hits give different R": the proportional estimate against the least-squares
+    fit of the time records, not one domain against the other."""
+    from daq.workflows.fit import _readings_apart
+
+    for method in ("modal", "pilkey-inman"):
+        assert _readings_apart({"domain": "frequency", "method": method, "uncertainty": {}}) is None
+    assert "lower bound" in _readings_apart({"domain": "frequency", "method": "ls", "uncertainty": {}})
