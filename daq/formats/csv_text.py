@@ -694,6 +694,13 @@ class Table:
             responses = [c for c in rest if kinds.get(c) == "response"]
             if len(forces) == 1 and len(responses) == 1:
                 force, response = forces[0], responses[0]
+            elif len(forces) == 2 or len(responses) == 2:
+                said = "forces" if len(forces) == 2 else "responses"
+                names = ", ".join(_show(self.header[c]) for c in rest)  # type: ignore[index]
+                raise FormatError(
+                    f"{self.name}: both columns ({names}) are {said} by their names or units; a file of "
+                    "force and response alone needs one of each"
+                )
             else:
                 force, response = rest
         if (force, response) == tuple(rest) and None in by_name and self.header is None:

@@ -151,3 +151,21 @@ def test_a_preamble_gives_the_rate_of_a_file_of_force_and_response_alone(tmp_pat
     data = read_csv(path)
     assert data.hits.sample_rate_hz == 2048.0
     np.testing.assert_array_equal(data.hits.force_n[0], force)
+
+
+def test_a_rate_too_low_for_vibration_is_told_as_the_rate_given(tmp_path):
+    """--sample-rate 5 was refused as "its time column steps by 0.2 s ... if the first
+    column is a frequency ...": the file has no time column; the rate is what is wrong."""
+    force, response = _pulse_rows()
+    path = _write(tmp_path / "hit.csv", "force,acceleration", force, response)
+    store = tmp_path / "runs"
+    result = invoke_daq("import", str(path), "--sample-rate", "5", "--store", str(store))
+    assert_one_line_error(result, "a sampling rate of 5 Hz records no vibration", "--sample-rate HZ")
+    assert "time column" not in result.stderr
+
+
+def test_two_force_columns_are_told_as_such(tmp_path):
+    force, response = _pulse_rows()
+    path = _write(tmp_path / "ff.csv", "Force (N),Load (N)", force, response)
+    result = invoke_daq("import", str(path), "--sample-rate", "1000", "--store", str(tmp_path / "runs"))
+    assert_one_line_error(result, "both columns ('Force (N)', 'Load (N)') are forces", "needs one of each")

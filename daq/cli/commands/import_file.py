@@ -687,6 +687,13 @@ def check_read(path: Path, chosen: str, forced: bool, data: Any) -> None:
         step = 1.0 / float(hits.sample_rate_hz)
         if step * (1 + 1e-9) >= MIN_FREQUENCY_STEP:
             header = data.details.get("header")
+            if data.details.get("time_unit") is None:
+                # No time column: the rate was given, and is what is wrong.
+                raise UserError(
+                    f"{name}: a sampling rate of {hz(hits.sample_rate_hz)} Hz records no vibration (a time "
+                    f"record steps by less than {MIN_FREQUENCY_STEP:g} s); give the rate the file was "
+                    "recorded at with --sample-rate HZ"
+                )
             raise UserError(
                 f"{name}: its time column steps by {step:g} s, a sampling rate of "
                 f"{hz(hits.sample_rate_hz)} Hz, which records no vibration (a time record steps by less "
