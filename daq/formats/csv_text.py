@@ -703,7 +703,11 @@ class Table:
                 )
             else:
                 force, response = rest
-        if (force, response) == tuple(rest) and None in by_name and self.header is None:
+        if (force, response) != tuple(rest):
+            shown = f"force {self.header[force]!r}, response {self.header[response]!r}"  # type: ignore[index]
+            how = "names" if None not in by_name else "names or units"
+            self.picked_note = f"no time column: columns taken by their {how}: {shown}"
+        elif None in by_name:
             self.picked_note = "no time column: columns taken in position, force then response"
         return [NO_TIME, force, response]
 

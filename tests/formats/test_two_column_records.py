@@ -46,6 +46,10 @@ def test_the_header_units_say_which_column_is_the_force(tmp_path):
     )
     np.testing.assert_array_equal(data.hits.force_n[0], force)
     np.testing.assert_allclose(data.hits.response_m_s2[0], np.array(response) * 9.80665, rtol=1e-15)
+    assert (
+        "columns taken by their names or units: force 'Force [N]', response 'acc (g)'"
+        in data.details["notes"][0]
+    )
 
 
 def test_a_hit_column_splits_the_hits(tmp_path):
