@@ -16,7 +16,7 @@ import numpy as np
 from analysis.band_choice import BandChoice, choose_band, edge_text
 from analysis.measurement_text import with_uncertainty
 from analysis.modal_id import ModalResult, identify_modes
-from analysis.modal_id.identify import UNEXPLAINED_SNR_DB
+from analysis.modal_id.identify import UNEXPLAINED_SNR_DB, WEAK_PEAK_PROMINENCE_DB
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.refine import MAX_DAMPING as REFINE_MAX_DAMPING
 from analysis.modal_id.refine import refine_poles
@@ -439,6 +439,12 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
     unexplained = _unexplained(result, aside)
     if unexplained and not asked:
         out.append(_unexplained_caution(result, unexplained))
+    weak = [
+        p for p in getattr(result.modal, "weak_peaks_hz", None) or [] if p not in _unexplained(result, [])
+    ]
+    weak = [p for p in weak if not any(abs(p - f) <= 2 * _line(result) for f, _ in aside)]
+    if weak and not asked:
+        out.append(_weak_peaks_caution(result, weak))
     over_hits = [m for m in result.modes if m.uncertainty_from.endswith(" hits")]
     few = [m for m in over_hits if m.n_hits_matched in FEW_HITS_COVERAGE]
     if few:
@@ -613,6 +619,28 @@ def _unexplained_caution(result: RunAnalysis, peaks: list[float]) -> str:
         f"analysed in {'a zone of its own' if one else 'zones of their own'}: {what} the stability diagram "
         "does not hold (one of a close pair, a mode narrower than a line, or a small mode beside a larger "
         f"one); look at {'it' if one else 'each'} with --band"
+        + (f" {band}" if one else f", e.g. --band {band} for {p:.4g} Hz")
+    )
+
+
+def _line(result: RunAnalysis) -> float:
+    f = result.modal.frequency_hz
+    return float(np.median(np.diff(f))) if f.size > 1 else 0.0
+
+
+def _weak_peaks_caution(result: RunAnalysis, peaks: list[float]) -> str:
+    """A peak too shallow for the second pass, without a mode, and the --band for it."""
+    one = len(peaks) == 1
+    low, high = (float(v) for v in result.modal.frequency_hz[[0, -1]])
+    p = peaks[0]
+    reach = max(PEAK_BAND_LINES * _line(result), PEAK_BAND_FRACTION * p)
+    band = f"{edge_text(max(low, p - reach))}:{edge_text(min(high, p + reach))}"
+    listed = ", ".join(f"{f:.4g}" for f in peaks)
+    return (
+        f"{'a peak' if one else 'peaks'} of the FRF at {listed} Hz ({WEAK_PEAK_PROMINENCE_DB:g} dB or more "
+        f"above the dips beside {'it' if one else 'them'}, {UNEXPLAINED_SNR_DB:g} dB above the noise) "
+        f"{'has' if one else 'have'} no mode: the second of a close pair, or a small mode beside a larger "
+        "one, may be missing and the modes beside it read wrong; look with --band"
         + (f" {band}" if one else f", e.g. --band {band} for {p:.4g} Hz")
     )
 

@@ -83,11 +83,12 @@ def mode_indicator(frf: np.ndarray) -> np.ndarray:
     return (power / mean).sum(axis=0)
 
 
-def indicator_peaks(mif: np.ndarray) -> np.ndarray:
-    """Indices of the lines where the indicator peaks (see the module docstring)."""
+def indicator_peaks(mif: np.ndarray, prominence_db: float = PEAK_PROMINENCE_DB) -> np.ndarray:
+    """Indices of the lines where the indicator peaks by ``prominence_db`` (see the module
+    docstring)."""
     with np.errstate(divide="ignore"):
         level_db = 10 * np.log10(np.maximum(mif, np.finfo(float).tiny))
-    peaks, _ = find_peaks(level_db, prominence=PEAK_PROMINENCE_DB)
+    peaks, _ = find_peaks(level_db, prominence=prominence_db)
     return peaks
 
 

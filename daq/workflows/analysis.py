@@ -37,7 +37,8 @@ RESULT_NAME = "analysis"
 #: damping may move by a factor 3, a second pass in zones of their own around clear peaks
 #: no mode accounts for, --frequencies takes the nearest chain; 8: the ± carry the
 #: zones' ends and the hits' force weights, a clear peak near a band's low edge that
-#: starts near 0 Hz gets its second pass).
+#: starts near 0 Hz gets its second pass, a cluster asked for must be a feature, shallow
+#: peaks without a mode are named).
 ANALYSIS_VERSION = 8
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
