@@ -439,10 +439,11 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
     unexplained = _unexplained(result, aside)
     if unexplained and not asked:
         out.append(_unexplained_caution(result, unexplained))
+    # ModalResult.weak_peaks_hz leaves out the clear peaks already named above.
     weak = [
-        p for p in getattr(result.modal, "weak_peaks_hz", None) or [] if p not in _unexplained(result, [])
-    ]
-    weak = [p for p in weak if not any(abs(p - f) <= 2 * _line(result) for f, _ in aside)]
+        p for p in getattr(result.modal, "weak_peaks_hz", None) or []
+        if not any(abs(p - f) <= 2 * _line(result) for f, _ in aside)
+    ]  # fmt: skip
     if weak and not asked:
         out.append(_weak_peaks_caution(result, weak))
     over_hits = [m for m in result.modes if m.uncertainty_from.endswith(" hits")]
@@ -599,17 +600,15 @@ def _unexplained(result: RunAnalysis, aside: list[tuple[float, float]]) -> list[
     """The clear peaks of the FRF no mode accounts for (ModalResult.unexplained_peaks_hz),
     but those a possible mode left out already names (within two lines)."""
     peaks = getattr(result.modal, "unexplained_peaks_hz", None) or []
-    line = float(np.median(np.diff(result.modal.frequency_hz))) if result.modal.frequency_hz.size > 1 else 0.0
-    return [p for p in peaks if not any(abs(p - f) <= 2 * line for f, _ in aside)]
+    return [p for p in peaks if not any(abs(p - f) <= 2 * _line(result) for f, _ in aside)]
 
 
 def _unexplained_caution(result: RunAnalysis, peaks: list[float]) -> str:
     """A clear peak without a mode, what it may be, and the --band that looks at it alone."""
     one = len(peaks) == 1
-    line = float(np.median(np.diff(result.modal.frequency_hz)))
     low, high = (float(v) for v in result.modal.frequency_hz[[0, -1]])
     p = peaks[0]
-    reach = max(PEAK_BAND_LINES * line, PEAK_BAND_FRACTION * p)
+    reach = max(PEAK_BAND_LINES * _line(result), PEAK_BAND_FRACTION * p)
     band = f"{edge_text(max(low, p - reach))}:{edge_text(min(high, p + reach))}"
     listed = ", ".join(f"{f:.4g}" for f in peaks)
     what = "a mode" if one else "modes"
@@ -624,6 +623,7 @@ def _unexplained_caution(result: RunAnalysis, peaks: list[float]) -> str:
 
 
 def _line(result: RunAnalysis) -> float:
+    """The line spacing (Hz) of the lines analysed; 0 for fewer than 2."""
     f = result.modal.frequency_hz
     return float(np.median(np.diff(f))) if f.size > 1 else 0.0
 
