@@ -606,11 +606,8 @@ def _unexplained(result: RunAnalysis, aside: list[tuple[float, float]]) -> list[
 def _unexplained_caution(result: RunAnalysis, peaks: list[float]) -> str:
     """A clear peak without a mode, what it may be, and the --band that looks at it alone."""
     one = len(peaks) == 1
-    low, high = (float(v) for v in result.modal.frequency_hz[[0, -1]])
     p = peaks[0]
-    reach = max(PEAK_BAND_LINES * _line(result), PEAK_BAND_FRACTION * p)
-    band = f"{edge_text(max(low, p - reach))}:{edge_text(min(high, p + reach))}"
-    listed = ", ".join(f"{f:.4g}" for f in peaks)
+    band, listed = _look_band(result, p), ", ".join(f"{f:.4g}" for f in peaks)
     what = "a mode" if one else "modes"
     return (
         f"{'a clear peak' if one else 'clear peaks'} of the FRF at {listed} Hz "
@@ -622,6 +619,14 @@ def _unexplained_caution(result: RunAnalysis, peaks: list[float]) -> str:
     )
 
 
+def _look_band(result: RunAnalysis, peak_hz: float) -> str:
+    """The --band LOW:HIGH a peak's caution suggests: PEAK_BAND_LINES lines or
+    PEAK_BAND_FRACTION of its frequency either side, within the lines analysed."""
+    low, high = (float(v) for v in result.modal.frequency_hz[[0, -1]])
+    reach = max(PEAK_BAND_LINES * _line(result), PEAK_BAND_FRACTION * peak_hz)
+    return f"{edge_text(max(low, peak_hz - reach))}:{edge_text(min(high, peak_hz + reach))}"
+
+
 def _line(result: RunAnalysis) -> float:
     """The line spacing (Hz) of the lines analysed; 0 for fewer than 2."""
     f = result.modal.frequency_hz
@@ -631,11 +636,8 @@ def _line(result: RunAnalysis) -> float:
 def _weak_peaks_caution(result: RunAnalysis, peaks: list[float]) -> str:
     """A peak too shallow for the second pass, without a mode, and the --band for it."""
     one = len(peaks) == 1
-    low, high = (float(v) for v in result.modal.frequency_hz[[0, -1]])
     p = peaks[0]
-    reach = max(PEAK_BAND_LINES * _line(result), PEAK_BAND_FRACTION * p)
-    band = f"{edge_text(max(low, p - reach))}:{edge_text(min(high, p + reach))}"
-    listed = ", ".join(f"{f:.4g}" for f in peaks)
+    band, listed = _look_band(result, p), ", ".join(f"{f:.4g}" for f in peaks)
     return (
         f"{'a peak' if one else 'peaks'} of the FRF at {listed} Hz ({WEAK_PEAK_PROMINENCE_DB:g} dB or more "
         f"above the dips beside {'it' if one else 'them'}, {UNEXPLAINED_SNR_DB:g} dB above the noise) "
