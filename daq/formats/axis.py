@@ -172,6 +172,31 @@ def whole_rate(step: float, half_unit: float) -> int | None:
     return int(first)
 
 
+#: Sample rates acquisition hardware runs at (Hz): binary multiples (dynamic signal
+#: analyzers, NI DSA cards: 2048, 25600, 51200...), round decimal ones, and audio rates.
+COMMON_RATES_HZ = tuple(
+    sorted(
+        {float(2**k) for k in range(6, 21)}
+        | {
+            m * 10.0**k
+            for m in (1, 1.024, 1.28, 2, 2.048, 2.5, 2.56, 4, 4.096, 5, 5.12, 8, 8.192)
+            for k in range(2, 6)
+        }
+        | {8000.0, 11025.0, 16000.0, 22050.0, 32000.0, 44100.0, 48000.0, 96000.0, 192000.0}
+    )
+)
+
+
+def common_rate(step: float, half_unit: float) -> float | None:
+    """The one rate of COMMON_RATES_HZ that a printed step allows, or None (none, or more
+    than one). step, half_unit: as for whole_rate."""
+    if not (step > 0 and 0 <= half_unit < step):
+        return None
+    low, high = 1.0 / (step + half_unit), 1.0 / (step - half_unit)
+    inside = [rate for rate in COMMON_RATES_HZ if low <= rate <= high]
+    return inside[0] if len(inside) == 1 else None
+
+
 def _tolerances(t: np.ndarray, half_units: np.ndarray | None) -> np.ndarray:
     """Each value's tolerance (see the module's docstring), in the values' unit."""
     typical = float(np.median(np.diff(t)))

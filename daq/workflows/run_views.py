@@ -114,6 +114,13 @@ def swapped_columns(run) -> tuple[list[int], str] | None:
             shown = given if all(_PLAIN_COLUMN.fullmatch(c) for c in named) else f"'{given}'"
             rate = f" --sample-rate {float(hits.sample_rate_hz):g}" if columns[0] is None else ""
             return bad, f"{text}; if so, import the file again with --columns {shown}{rate}"
+    if isinstance(imported, dict) and imported.get("format") == "lvm" and isinstance(columns, list):
+        from daq.formats.csv_text import header_name_unit
+
+        names = [header_name_unit(str(c))[0] for c in columns[1:3]]
+        given = ",".join(reversed(names))
+        shown = given if all(_PLAIN_COLUMN.fullmatch(c) for c in names) else f"'{given}'"
+        return bad, f"{text}; if so, import the file again with --columns {shown} (force, response channels)"
     return bad, f"{text}; if so, swap the force and response records of the file and import it again"
 
 

@@ -179,7 +179,7 @@ def test_csv_options_on_a_uff_file_are_a_usage_error(tmp_path):
     path = tmp_path / "a.uff"
     path.write_text("    -1\n")
     result = daq_in(tmp_path / "s", "import", str(path), "--columns", "0,1,2")
-    assert_one_line_error(result, "CSV files only")
+    assert_one_line_error(result, "CSV and LVM files only")
     assert result.returncode == 2
 
 

@@ -301,18 +301,21 @@ LVM = (
 )
 
 
-@pytest.mark.parametrize(
-    ("name", "forced"), [("m.lvm", []), ("m.lvm", ["--format", "csv"]), ("m.txt", ["--format", "csv"])]
-)
-def test_a_labview_measurement_file_is_named_and_told_what_to_export(tmp_path, name, forced):
+@pytest.mark.parametrize(("name", "forced"), [("m.lvm", ["--format", "csv"]), ("m.txt", ["--format", "csv"])])
+def test_a_labview_measurement_file_given_as_csv_is_told_to_take_lvm(tmp_path, name, forced):
     path = tmp_path / name
     path.write_text(LVM)
     store = tmp_path / "runs"
-    message = refused(
-        daq_import(store, path, *forced), store, "a LabVIEW measurement file (.lvm), which daq does not read"
-    )
-    assert "as a CSV with one header row" in message
+    message = refused(daq_import(store, path, *forced), store, "a LabVIEW measurement file")
+    assert "--format lvm" in message
     assert "data column" not in message
+
+
+def test_a_labview_measurement_file_without_delta_x_asks_for_the_rate(tmp_path):
+    path = tmp_path / "m.lvm"
+    path.write_text(LVM)
+    store = tmp_path / "runs"
+    refused(daq_import(store, path), store, "has no Delta_X", "give --sample-rate HZ")
 
 
 @pytest.mark.parametrize("kind", ["npy", "npz"])

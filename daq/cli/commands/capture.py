@@ -195,6 +195,12 @@ def test_point(store: str | None, test: str, point: str | None, next_point: bool
 
 def join_test(store_dir: Path, where, run_id: str, accepted: bool = True) -> None:
     """Join the sealed run to its test and say so; UserError when it could not be joined."""
+    typer.echo(join_run(store_dir, where, run_id, accepted))
+
+
+def join_run(store_dir: Path, where, run_id: str, accepted: bool = True) -> str:
+    """Join the sealed run to its test; the line that says so (UserError when it could not
+    be joined)."""
     from daq.workflows.errors import WorkflowError
     from daq.workflows.test import join
 
@@ -203,13 +209,10 @@ def join_test(store_dir: Path, where, run_id: str, accepted: bool = True) -> Non
     except WorkflowError as exc:
         raise UserError(str(exc)) from None
     if not accepted:
-        typer.echo(
-            f"Run {run_id} listed in test {where.test} at point {where.point}, not counted (incomplete)"
-        )
-        return
+        return f"Run {run_id} listed in test {where.test} at point {where.point}, not counted (incomplete)"
     left = [p.name for p in test.points if test.counted_run(p.name) is None]
     rest = f"; next: {left[0]} ({len(left)} left)" if left else "; every point is measured"
-    typer.echo(f"Run {run_id} joined test {where.test} at point {where.point}{rest}")
+    return f"Run {run_id} joined test {where.test} at point {where.point}{rest}"
 
 
 def moved_points(force_at_m: float, sensor_at_m: float):

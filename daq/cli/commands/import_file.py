@@ -25,6 +25,8 @@ HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 SDF_SUFFIXES = (".sdf",)
 TEXT_SUFFIXES = (".csv", ".txt", ".tsv", ".dat", ".asc")
 UFF_SUFFIXES = (".uff", ".unv", ".uf")
+#: The formats of time records as text, which take --columns, the units and --sample-rate.
+TIME_TEXT = ("csv", "lvm")
 
 
 class FrfForm(enum.StrEnum):
@@ -36,6 +38,7 @@ class FrfForm(enum.StrEnum):
 class ImportFormat(enum.StrEnum):
     auto = "auto"
     csv = "csv"
+    lvm = "lvm"
     frf_text = "frf-text"
     uff = "uff"
     sdf = "sdf"
@@ -53,7 +56,8 @@ def import_file(
         typer.Option(
             "--format",
             "-f",
-            help="csv (time records as text), frf-text (a table of frequency and Re/Im or "
+            help="csv (time records as text), lvm (LabVIEW Measurement, a hit per segment), "
+            "frf-text (a table of frequency and Re/Im or "
             "magnitude/phase per FRF), uff (dataset 58), sdf (HP Standard Data Format), "
             "run (a run file of another store); auto decides from the content and the name, and says why.",
         ),
@@ -175,11 +179,15 @@ def import_file(
         how = f"detected: {why}"
     else:
         chosen, how = format.value, "given by --format"
-    if chosen != "csv" and (columns is not None or force_unit is not None or response_unit is not None):
-        raise UserError("--columns, --force-unit and --response-unit apply to CSV files only", exit_code=2)
-    if sample_rate is not None and chosen != "csv":
+    if chosen not in TIME_TEXT and (
+        columns is not None or force_unit is not None or response_unit is not None
+    ):
         raise UserError(
-            f"--sample-rate applies to CSV time records only, not {chosen} files"
+            "--columns, --force-unit and --response-unit apply to CSV and LVM files only", exit_code=2
+        )
+    if sample_rate is not None and chosen not in TIME_TEXT:
+        raise UserError(
+            f"--sample-rate applies to CSV and LVM time records only, not {chosen} files"
             + (" (an FRF table has no sample rate)" if chosen == "frf-text" else ""),
             exit_code=2,
         )
@@ -247,6 +255,13 @@ def import_file(
         path = Store(store_dir).seal(run)
     except StoreError as exc:
         raise UserError(str(exc)) from None
+    joined = ""
+    if where is not None:
+        # Joined before anything is printed: a closed pipe on stdout (| head) must not
+        # leave a sealed run outside the test it was imported for.
+        from daq.cli.commands.capture import join_run
+
+        joined = join_run(store_dir, where, run.run_id)
     what = []
     if run.hits is not None:
         what.append(
@@ -277,10 +292,8 @@ def import_file(
         )
     for warning in unit_warnings(provenance["imported_from"]):
         typer.echo(f"warning: {warning}", err=True)
-    if where is not None:
-        from daq.cli.commands.capture import join_test
-
-        join_test(store_dir, where, run.run_id)
+    if joined:
+        typer.echo(joined)
 
 
 def import_as_test(file: Path, name, article, format, operator, note, store, point_options: bool) -> None:
@@ -421,6 +434,12 @@ def detect_format(path: Path) -> tuple[str, str]:
         return "uff", f"the name ends in {suffix}"
     if suffix in SDF_SUFFIXES:
         return "sdf", f"the name ends in {suffix}"
+    from daq.formats.lvm import looks_like_lvm
+
+    if looks_like_lvm(head):
+        return "lvm", "it starts with LabVIEW's 'LabVIEW Measurement' line"
+    if suffix == ".lvm":
+        return "lvm", "the name ends in .lvm"
     if head.startswith(b"B\0"):
         # A NUL in the first two bytes is no text file: a damaged SDF file (HP analyzers
         # name theirs .DAT) gets the SDF reader's reason, not a CSV parse error.
@@ -451,7 +470,7 @@ def detect_format(path: Path) -> tuple[str, str]:
         return "csv", f"{why}, and the header's first column {header[0]!r} is no frequency" if header else why
     raise UserError(
         f"{show_path(path)}: cannot tell its format from its name or content; "
-        "give --format csv, frf-text, uff, sdf or run"
+        "give --format csv, lvm, frf-text, uff, sdf or run"
     )
 
 
@@ -479,6 +498,13 @@ def check_not_uff(path: Path, chosen: str) -> None:
             f"{show_path(path)}: looks like a UFF file (it starts with a UFF -1 delimiter line), "
             f"not {chosen}; import it with --format uff"
         )
+    from daq.formats.lvm import looks_like_lvm
+
+    if looks_like_lvm(head):
+        raise UserError(
+            f"{show_path(path)}: a LabVIEW measurement file (it starts with 'LabVIEW Measurement'), "
+            f"not {chosen}; import it with --format lvm"
+        )
     if refusal := not_readable(path, head):
         raise UserError(refusal)
 
@@ -499,11 +525,6 @@ def not_readable(path: Path, head: bytes) -> str:
             f"{name}: a binary NumPy file ({kind}), which daq does not read; write the arrays as "
             "text, e.g. numpy.savetxt with columns time, force, response (or frequency, then Re, Im "
             "per FRF), and import that"
-        )
-    if head.lstrip(b"\xef\xbb\xbf").startswith(b"LabVIEW Measurement") or suffix == ".lvm":
-        return (
-            f"{name}: a LabVIEW measurement file (.lvm), which daq does not read; export the channels "
-            "as a CSV with one header row (time, force, response columns) and import that"
         )
     if zipped:
         from daq.formats.zip_contents import is_excel_workbook, member_names
@@ -680,10 +701,10 @@ def check_read(path: Path, chosen: str, forced: bool, data: Any) -> None:
     name = show_path(path)
     hits = data.hits
     short = short_of_lines(hits, [data.measured_frfs])
-    if short is not None and chosen in ("csv", "frf-text") and short[0] < REFUSED_BELOW_LINES:
+    if short is not None and chosen in (*TIME_TEXT, "frf-text") and short[0] < REFUSED_BELOW_LINES:
         # First: a table of 2 rows is nothing at all, whatever its step.
         raise UserError(f"{name}: too short to analyse: {short[1]}")
-    if chosen == "csv" and hits is not None:
+    if chosen in TIME_TEXT and hits is not None:
         step = 1.0 / float(hits.sample_rate_hz)
         if step * (1 + 1e-9) >= MIN_FREQUENCY_STEP:
             header = data.details.get("header")
@@ -877,6 +898,10 @@ def _read(
         from daq.formats.csv_text import read_csv
 
         return read_csv(file, columns, force_unit, response_unit, sample_rate_hz=sample_rate)
+    if chosen == "lvm":
+        from daq.formats.lvm import read_lvm
+
+        return read_lvm(file, columns, force_unit, response_unit, sample_rate_hz=sample_rate)
     if chosen == "frf-text":
         from daq.formats.frf_text import read_frf_text
 

@@ -1,0 +1,413 @@
+"""LabVIEW Measurement files (.lvm): the channels of each segment as time records.
+
+What LabVIEW's "Write To Measurement File" writes, as text::
+
+    LabVIEW Measurement
+    Writer_Version  2
+    Separator       Tab            (or Comma)
+    Decimal_Separator  .           (or ,)
+    X_Columns       No             (One: one time column; Multi: one before each channel)
+    ***End_of_Header***
+
+    Channels        3
+    Samples         8192    8192    8192
+    Y_Unit_Label    N       m/s^2   m/s^2
+    Delta_X         0.000977        0.000977        0.000977
+    ***End_of_Header***
+    X_Value F       m_1     m_2     Comment
+    <samples, one row per time step>
+
+then, for a file appended to, more segments, each with its own header. Each segment is
+one hit. The samples go on to the time record reader of ``csv_text`` (its ``Table``) as
+rows of hit, time and the channels named with their unit labels (``F (N)``), so force
+and response are picked, units applied and every hit checked as in a CSV file, and every
+refusal there names the line of the .lvm file it is about.
+
+The sample rate: ``--sample-rate`` if given; else the time column's (X_Columns One or
+Multi), fitted over the first segment within its printed precision
+(``daq/formats/axis.py``); else 1 / Delta_X. LabVIEW prints Delta_X with 6 decimals by
+default, 1/1024 s as 0.000977: where that text allows exactly one whole number of hertz
+(1024 Hz here) that rate is taken and a note says so.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from daq.formats.axis import common_rate, fit_regular, printed_half_units, whole_rate
+from daq.formats.cells import split_line
+from daq.formats.csv_text import Table, decode_line, header_name_unit, is_number_text
+from daq.formats.errors import FormatError
+from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, mtime_utc, one_line, open_checked, show_path
+from daq.formats.line_ends import text_lines
+
+SIGNATURE = "LabVIEW Measurement"
+END_OF_HEADER = "***End_of_Header***"
+SEPARATORS = {"tab": "\t", "comma": ","}
+X_COLUMNS = ("no", "one", "multi")
+#: Delta_X printed so coarsely that 1 / Delta_X is off by more than this fraction gets a note.
+COARSE_STEP_FRACTION = 1e-5
+
+
+@dataclasses.dataclass
+class Segment:
+    """One segment's header as read: its first line, channel names and units, Delta_X text."""
+
+    line: int  # 1-based line of its first header row
+    names: list[str]
+    units: list[str]
+    delta_x: list[str]
+    data_start: int = 0  # 1-based line of its first sample row
+
+
+@dataclasses.dataclass
+class Layout:
+    """The file header's settings and the segments found by the first pass."""
+
+    separator: str = "\t"
+    decimal: str = "."
+    x_columns: str = "one"
+    segments: list[Segment] = dataclasses.field(default_factory=list)
+    x_texts: list[str] = dataclasses.field(default_factory=list)  # the first segment's times, as printed
+    file_header: dict[str, str] = dataclasses.field(default_factory=dict)
+
+
+def looks_like_lvm(head: bytes) -> bool:
+    """``head`` (a file's first bytes) starts with LabVIEW's signature line."""
+    return head.lstrip(b"\xef\xbb\xbf").startswith(SIGNATURE.encode())
+
+
+def read_lvm(
+    path: Path,
+    columns: str | None = None,
+    force_unit: str | None = None,
+    response_unit: str | None = None,
+    max_bytes: int = MAX_IMPORT_BYTES,
+    sample_rate_hz: float | None = None,
+) -> ImportedData:
+    """Read the hits of a LabVIEW Measurement file; force in N, response in m/s^2.
+
+    columns: None, or the force and response channels, comma-separated, by name (the
+        column headings row, with or without the unit) or 0-based channel index, e.g.
+        "F,m_2" or "0,2"; None picks them as csv_text.read_csv does (by names or units,
+        else the first two channels).
+    force_unit, response_unit: override the channels' Y_Unit_Label (daq.formats.units).
+    sample_rate_hz: the rate (Hz) to use instead of the file's (see the module docstring).
+    Returns ImportedData (format "lvm"), one hit per segment, hits of shape
+    (n_segments, n_samples). Any problem: FormatError, one line.
+    """
+    path = Path(path)
+    name = show_path(path)
+    with open_checked(path, max_bytes) as (handle, info):
+        layout = _scan(name, text_lines(handle))
+        rate, rate_note = _rate(name, layout, sample_rate_hz)
+        header = _column_names(layout.segments[0])
+        table = Table(name, columns=_table_columns(name, columns, header), keep_time_text=True)
+        handle.seek(0)
+        # The rows handed on are longer than the file's (hit and time added): the file's
+        # own size was checked above, so the table's running limit only guards growth.
+        table.read(_rows(name, layout, header, rate, text_lines(handle)), 4 * max_bytes + (1 << 20))
+    data = table.build(path, table.columns, force_unit, response_unit, mtime_utc(info))
+    details = dict(data.details)
+    notes = [_channel_note(n, details.get("columns", [])) for n in details.get("notes", [])]
+    notes = [n for n in notes if not n.startswith("sample rate ")]
+    details["notes"] = [rate_note, *notes] if rate_note else notes
+    details["lvm"] = {
+        "segments": len(layout.segments),
+        "channels": header,
+        "x_columns": layout.x_columns,
+        "header": {one_line(k)[:60]: one_line(v)[:200] for k, v in list(layout.file_header.items())[:32]},
+    }
+    return dataclasses.replace(data, format="lvm", details=details)
+
+
+def _channel_note(note: str, picked: list[str]) -> str:
+    """A table note about an ignored column, said of the .lvm's channels: the table's
+    column indices count the hit and time columns the file does not have."""
+    match = _IGNORED.match(note)
+    if match is None or len(picked) < 2:
+        return note
+    force = header_name_unit(picked[1])[0]
+    channel = header_name_unit(match.group(1))[0]
+    return (
+        f"channel {match.group(1)!r} ignored: a run holds one force and one response; give --columns "
+        f"with the two channels you mean (names or 0-based channel indices), e.g. --columns {force},{channel}"
+    )
+
+
+_IGNORED = re.compile(r"column \d+ '(.*)' ignored: ")
+
+
+def _scan(name: str, lines) -> Layout:
+    """First pass: the file header's settings and each segment's header (one line refusal
+    of anything that is no LabVIEW Measurement file)."""
+    layout = Layout()
+    state = "signature"
+    segment: Segment | None = None
+    rows: dict[str, list[str]] = {}
+    for number, raw in enumerate(lines, start=1):
+        text = decode_line(raw, number == 1)
+        if state == "signature":
+            if not text.strip():
+                continue
+            if not text.strip().startswith(SIGNATURE):
+                raise FormatError(
+                    f"{name} line {number}: no '{SIGNATURE}' line: not a LabVIEW measurement file"
+                )
+            state = "file header"
+            continue
+        stripped = text.strip()
+        if state == "file header":
+            if stripped.startswith(END_OF_HEADER):
+                state = "between"
+                continue
+            key, _, value = stripped.partition("\t")
+            if not value and "," in key:
+                key, _, value = stripped.partition(",")
+            layout.file_header[key.strip()] = value.strip()
+            _setting(name, number, layout, key.strip().lower(), value.strip())
+            continue
+        if not stripped:
+            continue
+        cells = split_line(text, layout.separator)
+        first = cells[0].strip()
+        if (
+            state in ("between", "data")
+            and (first and not _is_number(first, layout.decimal))
+            and (state == "between" or first != "X_Value")
+        ) and (state == "data" or first == "Channels" or not layout.segments):
+            segment, rows = Segment(number, [], [], []), {}
+            state = "segment header"
+        if state == "segment header":
+            if first.startswith(END_OF_HEADER):
+                segment = _segment(name, number, segment, rows)  # type: ignore[arg-type]
+                layout.segments.append(segment)
+                state = "names"
+                continue
+            rows[first] = [c.strip() for c in cells[1:]]
+            continue
+        if state == "names" and first == "X_Value":
+            names = [c.strip() for c in cells]
+            _names_row(layout, segment, names)  # type: ignore[arg-type]
+            continue
+        if state in ("names", "data", "between"):
+            if segment is None:
+                raise FormatError(f"{name} line {number}: samples before any segment header")
+            if state != "data":
+                segment.data_start = number
+                state = "data"
+            if len(layout.segments) == 1 and layout.x_columns != "no":
+                layout.x_texts.append(cells[0].strip())
+    if state in ("signature", "file header"):
+        raise FormatError(f"{name}: the file header has no '{END_OF_HEADER}' line: nothing after it to read")
+    if not layout.segments or not all(s.data_start for s in layout.segments):
+        raise FormatError(f"{name}: a segment has a header but no samples")
+    first = layout.segments[0]
+    for other in layout.segments[1:]:
+        if len(other.names) != len(first.names) or other.delta_x[:1] != first.delta_x[:1]:
+            raise FormatError(
+                f"{name} line {other.line}: this segment's channels or Delta_X differ from the first "
+                f"segment's (line {first.line}): one run holds one set of channels at one rate; "
+                "save the segments as separate files"
+            )
+    return layout
+
+
+def _setting(name: str, number: int, layout: Layout, key: str, value: str) -> None:
+    """Apply one row of the file header that decides how the samples are written."""
+    low = value.lower()
+    if key == "separator":
+        if low not in SEPARATORS:
+            raise FormatError(f"{name} line {number}: Separator {value!r}: LabVIEW writes Tab or Comma")
+        layout.separator = SEPARATORS[low]
+    elif key == "decimal_separator":
+        if value not in (".", ","):
+            raise FormatError(f"{name} line {number}: Decimal_Separator {value!r}: expected '.' or ','")
+        layout.decimal = value
+    elif key == "x_columns":
+        if low not in X_COLUMNS:
+            raise FormatError(f"{name} line {number}: X_Columns {value!r}: expected No, One or Multi")
+        layout.x_columns = low
+    if layout.decimal == "," and layout.separator == ",":
+        raise FormatError(f"{name} line {number}: both the separator and the decimal separator are ','")
+
+
+def _segment(name: str, number: int, segment: Segment, rows: dict[str, list[str]]) -> Segment:
+    """The segment's channels from its header rows, checked."""
+    channels_text = (rows.get("Channels") or [""])[0]
+    if not channels_text.isdigit() or not 1 <= int(channels_text) <= 64:
+        raise FormatError(
+            f"{name} line {segment.line}: the segment header has no Channels row with a count 1-64"
+        )
+    n = int(channels_text)
+    delta = [c for c in rows.get("Delta_X", []) if c][:n]
+    if len(set(delta)) > 1:
+        raise FormatError(
+            f"{name} line {segment.line}: the channels have different Delta_X ({', '.join(delta)}): "
+            "one run holds channels sampled at one rate"
+        )
+    units = (rows.get("Y_Unit_Label", []) + [""] * n)[:n]
+    segment.units = [u.strip() for u in units]
+    segment.delta_x = delta
+    segment.names = [f"channel {k}" for k in range(n)]
+    return segment
+
+
+def _names_row(layout: Layout, segment: Segment, cells: list[str]) -> None:
+    """Take the channels' names from the column headings row (X_Value, names, Comment)."""
+    n = len(segment.names)
+    names = cells[1 : 2 * n : 2] if layout.x_columns == "multi" else cells[1 : 1 + n]
+    for k, text in enumerate(names[:n]):
+        if text and text != "Comment":
+            segment.names[k] = text
+
+
+def _column_names(segment: Segment) -> list[str]:
+    """The table's column names for the channels: 'name (unit)', made safe for a header."""
+    out = []
+    for text, unit in zip(segment.names, segment.units, strict=True):
+        text = text.replace(",", " ").replace("(", " ").replace(")", " ").strip() or "channel"
+        out.append(f"{text} ({unit})" if unit else text)
+    return out
+
+
+def _table_columns(name: str, columns: str | None, header: list[str]) -> str | None:
+    """The --columns text for the table: time, then the force and response channels given
+    by name or 0-based channel index."""
+    if columns is None:
+        return None
+    items = [item.strip() for item in columns.split(",")]
+    if len(items) != 2 or not all(items):
+        raise FormatError(
+            f"{name}: --columns {one_line(columns)[:60]!r}: give two channels, force then response, "
+            f"by name or 0-based channel index, e.g. --columns 0,1 (the channels: {', '.join(header)})"
+        )
+    out = []
+    for item in items:
+        if item.isascii() and item.isdigit():
+            index = int(item) if len(item) <= 6 else 10**6
+            if index >= len(header):
+                raise FormatError(
+                    f"{name}: channel index {item[:8]} is out of range (the file has "
+                    f"{len(header)} channels, 0..{len(header) - 1})"
+                )
+            out.append(header[index])
+        else:
+            out.append(item)
+    return ",".join(["time", *out])
+
+
+def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str]:
+    """(sample rate Hz, the note saying where it came from)."""
+    step_text = (layout.segments[0].delta_x or [""])[0]
+    step = _number(step_text, layout.decimal)
+    if given is not None:
+        said = f" (the file's Delta_X is {step_text})" if step_text else ""
+        return float(given), f"sample rate {given:g} Hz from --sample-rate{said}"
+    texts = layout.x_texts
+    if len(texts) >= 2 and all(_is_number(t, layout.decimal) for t in texts):
+        values = np.array([_number(t, layout.decimal) for t in texts])
+        if np.all(np.diff(values) > 0):
+            fit = fit_regular(values, printed_half_units([t.replace(",", ".") for t in texts]))
+            if fit.bad is None:
+                return 1.0 / fit.step, f"sample rate {1.0 / fit.step:.8g} Hz fitted to the time column"
+    if not step_text:
+        raise FormatError(
+            f"{name}: the segment header (line {layout.segments[0].line}) has no Delta_X and the file "
+            "no time column, so its sample rate is unknown; give --sample-rate HZ"
+        )
+    if not (math.isfinite(step) and step > 0):
+        raise FormatError(f"{name}: Delta_X {step_text!r} is no time step above 0 s; give --sample-rate HZ")
+    half = float(printed_half_units([step_text.replace(",", ".")])[0])
+    whole = whole_rate(step, half)
+    if whole is not None:
+        return (
+            float(whole),
+            f"sample rate {whole} Hz: {_allows(step_text, step, half)}, the one whole rate among "
+            f"them{_ANOTHER}",
+        )
+    common = common_rate(step, half)
+    if common is not None:
+        return common, (
+            f"sample rate {common:g} Hz: {_allows(step_text, step, half)}, the one rate among them that "
+            f"acquisition hardware runs at{_ANOTHER}"
+        )
+    if half / step > COARSE_STEP_FRACTION:
+        return 1.0 / step, (
+            f"sample rate {1.0 / step:.8g} Hz = 1 / Delta_X ({step_text} s), known only to "
+            f"+-{100 * half / step:.2g} % from its printed digits; give --sample-rate if you know it"
+        )
+    return 1.0 / step, f"sample rate {1.0 / step:.8g} Hz = 1 / Delta_X ({step_text} s)"
+
+
+_ANOTHER = "; give --sample-rate if the instrument ran at another"
+
+
+def _allows(text: str, step: float, half: float) -> str:
+    """What a printed Delta_X allows: "Delta_X 0.000977 s, printed to 3 digits, allows
+    1023.02 to 1024.07 Hz"."""
+    low, high = 1 / (step + half), 1 / (step - half)
+    return f"Delta_X {text} s, printed to {_digits(text)} digits, allows {low:.6g} to {high:.6g} Hz"
+
+
+def _rows(name: str, layout: Layout, header: list[str], rate: float, lines) -> Iterator[bytes]:
+    """Second pass: each line of the file as the table reads it, its number kept: the
+    header row (hit, time and the channels) where the first segment's samples begin,
+    each sample row as hit, time, channel values; every other line blank."""
+    starts = {s.data_start: k for k, s in enumerate(layout.segments)}
+    n = len(header)
+    hit, k = -1, 0
+    for number, raw in enumerate(lines, start=1):
+        if number == layout.segments[0].data_start - 1:  # the headings row, or the header's end
+            yield ("hit,time (s)," + ",".join(header) + "\n").encode()
+            continue
+        if number in starts:
+            hit, k = starts[number], 0
+        text = decode_line(raw, number == 1) if hit >= 0 else ""
+        if hit < 0 or not text.strip() or not _is_number_or_empty(text, layout):
+            yield b"\n"
+            continue
+        cells = split_line(text, layout.separator)
+        if layout.x_columns == "multi":
+            values = cells[1 : 2 * n : 2]
+        elif layout.x_columns == "no" and cells[0].strip() == "" and len(cells) > n:
+            values = cells[1 : 1 + n]
+        elif layout.x_columns == "no":
+            values = cells[:n]
+        else:
+            values = cells[1 : 1 + n]
+        if len(values) < n:
+            raise FormatError(f"{name} line {number}: {len(values)} of the {n} channels' values")
+        values = [v.strip().replace(",", ".") if layout.decimal == "," else v.strip() for v in values]
+        yield f"{hit},{k / rate!r},{','.join(values)}\n".encode()
+        k += 1
+
+
+def _is_number_or_empty(text: str, layout: Layout) -> bool:
+    """A sample row (its first cell a number, or empty where X_Columns is No), not a
+    segment's header row."""
+    first = split_line(text, layout.separator)[0].strip()
+    return (not first and layout.x_columns == "no") or _is_number(first, layout.decimal)
+
+
+def _is_number(text: str, decimal: str) -> bool:
+    return is_number_text(text.replace(",", ".") if decimal == "," else text)
+
+
+def _number(text: str, decimal: str) -> float:
+    try:
+        return float(text.replace(",", ".") if decimal == "," else text)
+    except ValueError:
+        return math.nan
+
+
+def _digits(text: str) -> int:
+    """Significant digits printed in a number's text ('0.000977' -> 3)."""
+    mantissa = text.lower().split("e")[0].replace(",", ".").lstrip("+-").replace(".", "").lstrip("0")
+    return max(len(mantissa), 1)
