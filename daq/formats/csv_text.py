@@ -35,6 +35,7 @@ import numpy as np
 from daq.formats.axis import fit_regular, printed_half_units, step_fits
 from daq.formats.cells import outside_quotes, split_line
 from daq.formats.errors import FormatError, count
+from daq.formats.impacts import cut_note, find_cut
 from daq.formats.imported import (
     MAX_IMPORT_BYTES,
     MAX_IMPORT_HITS,
@@ -365,11 +366,8 @@ class Table:
             total += len(raw)
             if total > max_bytes:  # the file grew after it was checked
                 raise FormatError(f"{self.name} is more than the import limit of {max_bytes} bytes")
-            try:
-                line = raw.decode("utf-8-sig" if number == 1 else "utf-8")
-            except UnicodeDecodeError:
-                raise FormatError(f"{self.name} line {number}: not UTF-8 text") from None
-            line = line.rstrip("\r\n")
+            # Not UTF-8: Latin-1, as Excel on Windows saves "Accel (m/s²)" (decode_line).
+            line = decode_line(raw, number == 1)
             stripped = line.strip()
             if not stripped:
                 continue
@@ -914,6 +912,13 @@ class Table:
             # Multiplying by exactly 1.0 keeps every bit; other units scale once here.
             force_n = data[order, picked[1]].reshape(len(groups), n) * factors[0]
             response_m_s2 = data[order, picked[2]].reshape(len(groups), n) * factors[1]
+            if len(groups) == 1 and (cut := find_cut(force_n[0], response_m_s2[0], sample_rate_hz)):
+                take = cut.starts[:, None] + np.arange(cut.length)
+                force_n, response_m_s2 = force_n[0][take], response_m_s2[0][take]
+                start_s = -cut.pretrigger / sample_rate_hz
+                n = cut.length
+                groups = [g for g in take]
+                notes.setdefault("notes", []).append(cut_note(cut, sample_rate_hz))
         hits = make_hits(path, force_n, response_m_s2, sample_rate_hz, start_s, center, stamp, self.rejected)
         if self.picked_note and columns is None:
             notes.setdefault("notes", []).insert(0, self.picked_note)

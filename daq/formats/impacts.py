@@ -1,0 +1,105 @@
+"""A continuous record of several hammer taps, cut into one hit per tap.
+
+Loggers (LabVIEW, a DAQ card's own program, a scope) often write one long record while
+the technician taps several times. Read as one hit, its FRF mixes the taps and the double
+impact check fails it. Where the record holds two or more clear taps and the structure
+rang down between each and the next, each tap is a whole hit of its own: the record is
+cut at the taps, every hit the same length and starting the same pre-trigger before its
+tap. A second tap while the response still rings (a bounce, a hurried second strike) is
+left alone: cutting would truncate the first response, and the double impact check says
+so instead.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: A tap: the force rises above this fraction of the record's largest pulse.
+TAP_FRACTION = 0.5
+#: Samples above the threshold closer than this (s) are one tap (the pulse and its bounce).
+TAP_MERGE_S = 0.02
+#: The response has rung down before the next tap: the RMS of the response over the
+#: stretch just before it is below this fraction of the RMS just after the tap.
+RUNG_DOWN_FRACTION = 0.1
+#: ... or below this many times the RMS of the quiet before the first tap (the noise).
+NOISE_MARGIN = 1.5
+#: The stretch, as a fraction of the spacing of the taps, over which those RMS are taken.
+STRETCH_FRACTION = 0.1
+#: The shortest hit worth cutting, samples (128 frequency lines).
+MIN_HIT_SAMPLES = 256
+#: The pre-trigger of each cut hit, as a fraction of its length.
+PRETRIGGER_FRACTION = 1 / 64
+
+
+@dataclass(frozen=True)
+class Cut:
+    """Where a record is cut: the first sample of each hit, the common length and the
+    pre-trigger (samples before each tap)."""
+
+    starts: np.ndarray  # (n_hits,) int sample indices into the record
+    length: int
+    pretrigger: int
+    taps: np.ndarray  # (n_hits,) int sample index of each tap
+
+
+def find_cut(force: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> Cut | None:
+    """The cut of one record (force, response: (n,) real) into hits, or None where it is
+    one hit (one tap, taps too close, or a response still ringing at the next tap)."""
+    force = np.asarray(force, dtype=np.float64)
+    response = np.asarray(response, dtype=np.float64)
+    n = force.size
+    if n < 2 * MIN_HIT_SAMPLES or not (np.all(np.isfinite(force)) and np.all(np.isfinite(response))):
+        return None
+    level = force - np.median(force)  # loggers' offsets: the lvm corpus file's sits at 0.05
+    if -level.min() > level.max():  # a gauge wired the other way: taps negative
+        level = -level
+    peak = float(level.max())
+    if not peak > 0:
+        return None
+    above = np.flatnonzero(level > TAP_FRACTION * peak)
+    merge = max(round(TAP_MERGE_S * sample_rate_hz), 1)
+    taps = above[np.concatenate(([True], np.diff(above) > merge))]
+    if taps.size < 2:
+        return None
+    spacing = np.diff(taps)
+    gap = int(spacing.min())
+    pretrigger = min(int(taps[0]), int(gap * PRETRIGGER_FRACTION))
+    if n - taps[-1] + pretrigger < gap // 2 and taps.size > 2:
+        taps = taps[:-1]  # a last tap with too little record after it would shorten every hit
+    length = min(gap, n - int(taps[-1]) + pretrigger)
+    if length < MIN_HIT_SAMPLES or gap < 4 * merge:
+        return None
+    stretch = max(int(STRETCH_FRACTION * gap), 8)
+    mean = float(np.median(response))
+    # The sensor's noise, where the record has quiet before its first tap: a response
+    # rung down to it counts as rung down however weakly the tap excited the structure.
+    quiet = response[: max(int(taps[0]) - pretrigger, 0)] - mean
+    floor = NOISE_MARGIN * float(np.sqrt(np.mean(quiet**2))) if quiet.size >= 64 else 0.0
+    for tap, following in itertools.pairwise(taps):
+        after = response[tap : tap + stretch] - mean
+        before = response[max(following - pretrigger - stretch, tap) : following - pretrigger] - mean
+        ringing = float(np.sqrt(np.mean(before**2))) if before.size else math.inf
+        if ringing > max(RUNG_DOWN_FRACTION * float(np.sqrt(np.mean(after**2))), floor):
+            return None
+    starts = taps - pretrigger
+    if starts[-1] + length > n:
+        return None
+    return Cut(
+        starts=starts.astype(np.int64), length=length, pretrigger=pretrigger, taps=taps.astype(np.int64)
+    )
+
+
+def cut_note(cut: Cut, sample_rate_hz: float) -> str:
+    """The import's note on a record cut into hits."""
+    times = ", ".join(f"{t / sample_rate_hz:.4g}" for t in cut.taps[:8]) + (
+        ", ..." if cut.taps.size > 8 else ""
+    )
+    return (
+        f"one record holding {cut.taps.size} taps (at {times} s), the response rung down before each next "
+        f"one: cut into {cut.taps.size} hits of {cut.length} samples, each from "
+        f"{1000 * cut.pretrigger / sample_rate_hz:.4g} ms before its tap"
+    )
