@@ -840,6 +840,12 @@ ZONE_SHIFT = 0.1
 ZONE_SHIFTS = ((-1, 1), (1, -1), (-1, -1), (1, 1))
 
 
+#: A moved zone's reading is of the same mode when within this many half-power
+#: half-widths (f zeta) of it, plus SAME_MODE_LINES lines (_zone_spread).
+SAME_MODE_HALF_WIDTHS = 2.0
+SAME_MODE_LINES = 2.0
+
+
 def _zone_spread(result: RunAnalysis, decay: float) -> None:
     """Add to each mode's standard uncertainty the part the choice of band makes: the
     mode read again (as _estimates, refined as the result's) with the ends of every zone
@@ -868,8 +874,14 @@ def _zone_spread(result: RunAnalysis, decay: float) -> None:
         _refined_estimates(result, frf, f, decay, found)
         readings.append(found)
     readings = np.array(readings)  # (len(ZONE_SHIFTS), n_modes, 2)
+    line = float(np.median(np.diff(f)))
     for k, mode in enumerate(result.modes):
         ok = np.all(np.isfinite(readings[:, k, :]), axis=1)
+        # Another pole that a moved zone matched to this mode is no reading of it: on a
+        # 0.01 % mode of a 51,201-line FRF a moved zone's 602.2 Hz was taken for 596.4 Hz
+        # and made its ± 2.6 Hz. The same mode stays within its half-power band.
+        same = SAME_MODE_HALF_WIDTHS * mode.frequency_hz * abs(mode.damping_ratio) + SAME_MODE_LINES * line
+        ok &= np.abs(readings[:, k, 0] - mode.frequency_hz) <= same
         if not ok.any() or not (np.isfinite(mode.frequency_u_hz) and np.isfinite(mode.damping_u)):
             continue
         values = np.vstack([readings[ok, k, :], [[mode.frequency_hz, mode.damping_ratio]]])
