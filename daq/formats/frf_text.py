@@ -58,7 +58,7 @@ from daq.formats.csv_text import (
 from daq.formats.errors import FormatError, count
 from daq.formats.imported import MAX_IMPORT_BYTES, ImportedData, make_frfs, one_line, open_checked, show_path
 from daq.formats.line_ends import text_lines
-from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text
+from daq.formats.units import FREQUENCY_UNITS, clean_label, frf_unit, frf_unit_text, looks_like_frf_unit
 from daq.store.model import FRF_FORMS
 
 _KINDS = {
@@ -401,10 +401,12 @@ def _form(
         try:
             parsed.append((unit, *frf_unit(unit)))
         except FormatError:
-            if unit in row_units:
+            if unit in row_units and not looks_like_frf_unit(unit):
                 unknown.append(unit)
             elif option is None:
-                raise FormatError(f"{name}: {frf_unit_error(unit)}; or give --frf-form") from None
+                raise FormatError(
+                    f"{name}: {frf_unit_error(unit)}; or, if the values are in SI units, give --frf-form"
+                ) from None
     if len({(form, factor) for _, form, factor in parsed}) > 1:
         shown = ", ".join(frf_unit_text(u) for u, *_ in parsed)
         raise FormatError(f"{name}: the FRF columns have different units ({shown})")

@@ -3,7 +3,7 @@
 A unit is either a physical unit or a voltage with the sensor's sensitivity:
 
 - force: ``N``, ``kN``, ``lbf``
-- response: ``m/s^2`` (also ``m/s2``, ``m/s/s``), ``mm/s^2`` (also ``mm/s2``, ``mm/s/s``),
+- response: ``m/s^2`` (also ``m/s2``, ``m/s/s``), ``mm/s^2`` (also ``mm/s2``, ``mm/s/s``), ``in/s^2``,
   ``g`` (9.80665 m/s^2; also ``G``, ``g's``, ``G's``, as accelerometer software prints it)
 - voltage: ``mV@10.2mV/g`` means "the column is in mV; the sensor gives 10.2 mV per g";
   ``V@2.25mV/N`` means "the column is in V; the sensor gives 2.25 mV per N".
@@ -22,6 +22,7 @@ from daq.formats.errors import FormatError
 
 STANDARD_GRAVITY_M_S2 = 9.80665  # exact by definition (CGPM 1901)
 POUND_FORCE_N = 0.45359237 * STANDARD_GRAVITY_M_S2  # exact: international pound x standard gravity
+INCH_M = 0.0254  # exact: international inch
 
 QUANTITIES = ("force", "response")
 
@@ -34,6 +35,8 @@ _PHYSICAL: dict[str, dict[str, float]] = {
         "mm/s^2": 1e-3,
         "mm/s2": 1e-3,
         "g": STANDARD_GRAVITY_M_S2,
+        "in/s^2": INCH_M,
+        "in/s2": INCH_M,
     },
 }
 # Other spellings of response units, matched whole and case-sensitively: "G" is g only as
@@ -151,8 +154,10 @@ _FRF_NUMERATORS: dict[str, tuple[str, float]] = {
     "mm": ("receptance", 1e-3),
     "um": ("receptance", 1e-6),
     "µm": ("receptance", 1e-6),
+    "in": ("receptance", INCH_M),
     "m/s": ("mobility", 1.0),
     "mm/s": ("mobility", 1e-3),
+    "in/s": ("mobility", INCH_M),
     **{unit: ("accelerance", factor) for unit, factor in _PHYSICAL["response"].items()},
     **{unit: ("accelerance", _PHYSICAL["response"][same]) for unit, same in _RESPONSE_SPELLINGS.items()},
 }
@@ -217,6 +222,17 @@ def frf_unit(unit: str) -> tuple[str, float]:
         )
     form, factor = _FRF_NUMERATORS[parts[0]]
     return form, factor / _PHYSICAL["force"][parts[1]]
+
+
+def looks_like_frf_unit(unit: str) -> bool:
+    """A unit written as something over a force, known or not: SignalCalc's pair
+    "(furlong/s²)(N)", or "x/lbf". Such a unit in a units row is meant as the FRFs' unit
+    and must be read or refused, never passed over as a label such as "Ratio"."""
+    text = unit.strip()
+    if _PAREN_PAIR.fullmatch(text):
+        return True
+    bottom = clean_label(text).rpartition("/")[2].strip("() ")
+    return "/" in text and bottom in _PHYSICAL["force"]
 
 
 def frf_unit_text(unit: str) -> str:
