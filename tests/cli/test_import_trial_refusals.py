@@ -536,3 +536,19 @@ def test_an_estimator_given_for_a_run_of_frfs_is_said_to_be_unused(tmp_path):
     result = invoke_daq("analyze", "latest", "--store", str(store), "--estimator", "h2")
     assert result.returncode == 0, result.stderr
     assert "caution: --estimator h2 was not used: the run holds FRFs, not hits" in result.stdout
+
+
+def test_an_frf_table_after_a_preamble_given_as_csv_is_told_to_take_frf_text(tmp_path):
+    # A DataPhysics SignalCalc export (ModeLAB's Hxysv00001.txt layout): with --format csv
+    # it used to be refused as "line 2: 4 columns, expected 2".
+    path = tmp_path / "Hxysv00001.txt"
+    rows = [f"{k * 0.5:.13e}\t{1.0 + k!r}\t{0.5 * k!r}" for k in range(64)]
+    head = ["Units: Ratio", "Ref Chan:Resp Chan\t0-Z:0-Z", "Channel Name\t : ", "Channel Comment\t : ", ""]
+    head += ["Frequency\t Real\t Imaginary", "", "Units:", "Hz\t(m/s²)(N)\t "]
+    path.write_bytes(("\r\n".join(head + rows) + "\r\n").encode("latin-1"))
+    store = tmp_path / "runs"
+    message = refused(
+        daq_import(store, path, "--format", "csv"), store, "an FRF table", "'Frequency'", "--format frf-text"
+    )
+    assert "columns, expected" not in message
+    assert invoke_daq("import", str(path), "--store", str(store)).returncode == 0  # auto reads it

@@ -202,7 +202,7 @@ def import_file(
     except StoreError as exc:
         raise UserError(str(exc)) from None
     if format is not ImportFormat.auto and chosen in ("csv", "frf-text"):
-        check_not_uff(file, chosen)
+        check_forced_format(file, chosen)
     digest, size = sha256_of(file)
     if chosen == "run":
         parts = _from_run_file(file)
@@ -483,8 +483,9 @@ def looks_like_uff(head: bytes) -> bool:
     return False
 
 
-def check_not_uff(path: Path, chosen: str) -> None:
-    """A UFF file given to a text reader gets one line saying so, not a column count."""
+def check_forced_format(path: Path, chosen: str) -> None:
+    """A file of another format (UFF, LabVIEW, an FRF table after a preamble) given to a
+    text reader with --format gets one line saying what it is, not a column count."""
     from daq.formats.imported import check_regular_file, show_path
 
     check_regular_file(path)
@@ -505,6 +506,15 @@ def check_not_uff(path: Path, chosen: str) -> None:
             f"{show_path(path)}: a LabVIEW measurement file (it starts with 'LabVIEW Measurement'), "
             f"not {chosen}; import it with --format lvm"
         )
+    if chosen == "csv":
+        preamble, names = frf_table_head(head)
+        if names and preamble:
+            lines = f"{preamble} preamble line{'s' if preamble > 1 else ''}"
+            raise UserError(
+                f"{show_path(path)}: an FRF table ({lines}, then the column names "
+                f"{', '.join(repr(n) for n in names[:3])}, a frequency first), not time records; "
+                "import it with --format frf-text"
+            )
     if refusal := not_readable(path, head):
         raise UserError(refusal)
 
