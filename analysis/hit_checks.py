@@ -344,7 +344,9 @@ def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float
     peak = float(force.max())
     # Scaled by the peak first: a file's values near 1e200 must not overflow the square.
     crest = 1.0 / float(np.sqrt(np.mean((force / peak) ** 2))) if peak > 0 else 0.0
-    if crest < IMPULSE_CREST:
+    if peak == 0:
+        impact = HitCheck(NO_IMPACT, False, "the force is zero in every sample", crest)
+    elif crest < IMPULSE_CREST:
         detail = (
             f"the force is no hammer pulse: its peak is {crest:.1f} times its RMS, under "
             f"{IMPULSE_CREST:g} (noise or random excitation)"

@@ -90,3 +90,10 @@ def test_huge_or_non_finite_records_neither_overflow_nor_warn():
     assert all(c.passed for c in checks)
     assert file_checks(np.where(np.arange(force.size) == 5, np.nan, force), response, FS) == []
     assert file_checks(force, np.where(np.arange(response.size) == 5, np.inf, response), FS) == []
+
+
+def test_a_force_zero_in_every_sample_is_said_so_not_given_a_crest_factor():
+    (impact, *_) = file_checks(np.zeros(512), np.ones(512), 1024.0)
+    assert impact.name == NO_IMPACT
+    assert not impact.passed
+    assert impact.detail == "the force is zero in every sample"
