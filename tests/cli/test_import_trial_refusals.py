@@ -552,3 +552,17 @@ def test_an_frf_table_after_a_preamble_given_as_csv_is_told_to_take_frf_text(tmp
     )
     assert "columns, expected" not in message
     assert invoke_daq("import", str(path), "--store", str(store)).returncode == 0  # auto reads it
+
+
+def test_a_wav_file_is_named_as_one(tmp_path):
+    import wave
+
+    path = tmp_path / "tap.wav"
+    with wave.open(str(path), "wb") as out:
+        out.setnchannels(2)
+        out.setsampwidth(2)
+        out.setframerate(48000)
+        out.writeframes(b"\x00\x01" * 2 * 4800)
+    store = tmp_path / "runs"
+    message = refused(daq_import(store, path), store, "tap.wav: a WAV audio file", "as a CSV")
+    assert "NUL" not in message

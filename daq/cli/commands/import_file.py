@@ -536,6 +536,12 @@ def not_readable(path: Path, head: bytes) -> str:
             "text, e.g. numpy.savetxt with columns time, force, response (or frequency, then Re, Im "
             "per FRF), and import that"
         )
+    if head.startswith(b"RIFF") and head[8:12] == b"WAVE":
+        return (
+            f"{name}: a WAV audio file, which daq does not read (its samples carry no force or acceleration "
+            "units); export the force and response channels as a CSV with a header row (time, force, "
+            "response, with their units) and import that"
+        )
     if zipped:
         from daq.formats.zip_contents import is_excel_workbook, member_names
 
