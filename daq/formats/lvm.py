@@ -72,7 +72,7 @@ class Layout:
 
     separator: str = "\t"
     decimal: str = "."
-    x_columns: str = "one"
+    x_columns: str = ""  # "" until the file header or the first sample row says
     segments: list[Segment] = dataclasses.field(default_factory=list)
     x_texts: list[str] = dataclasses.field(default_factory=list)  # the first segment's times, as printed
     file_header: dict[str, str] = dataclasses.field(default_factory=dict)
@@ -106,14 +106,23 @@ def read_lvm(
     name = show_path(path)
     with open_checked(path, max_bytes) as (handle, info):
         layout = _scan(name, text_lines(handle))
-        rate, rate_note = _rate(name, layout, sample_rate_hz)
         header = _column_names(layout.segments[0])
+        if len(header) < 2:
+            raise FormatError(
+                f"{name} has {len(header)} channel ({header[0]}); a run needs two, a force and a response"
+            )
+        rate, rate_note = _rate(name, layout, sample_rate_hz)
         table = Table(name, columns=_table_columns(name, columns, header), keep_time_text=True)
+        # The times handed on are k / rate exactly: the run stores that rate, not a fit.
+        table.stated_rate = (rate, "the LabVIEW file")
         handle.seek(0)
         # The rows handed on are longer than the file's (hit and time added): the file's
         # own size was checked above, so the table's running limit only guards growth.
-        table.read(_rows(name, layout, header, rate, text_lines(handle)), 4 * max_bytes + (1 << 20))
-    data = table.build(path, table.columns, force_unit, response_unit, mtime_utc(info))
+        try:
+            table.read(_rows(name, layout, header, rate, text_lines(handle)), 4 * max_bytes + (1 << 20))
+            data = table.build(path, table.columns, force_unit, response_unit, mtime_utc(info))
+        except FormatError as exc:
+            raise FormatError(_said_of_channels(str(exc), layout, header)) from None
     details = dict(data.details)
     notes = [_channel_note(n, details.get("columns", [])) for n in details.get("notes", [])]
     notes = [n for n in notes if not n.startswith("sample rate ")]
@@ -125,6 +134,25 @@ def read_lvm(
         "header": {one_line(k)[:60]: one_line(v)[:200] for k, v in list(layout.file_header.items())[:32]},
     }
     return dataclasses.replace(data, format="lvm", details=details)
+
+
+_TABLE_COLUMNS = re.compile(r"--columns time,(\S+) \(time, force, response\)")
+_TABLE_CELL = re.compile(r"line (\d+) column (\d+):")
+
+
+def _said_of_channels(message: str, layout: Layout, header: list[str]) -> str:
+    """A refusal of the table reader, said of the .lvm: its columns counted in the file's
+    cells (the table's start with hit and time) and its --columns as channels."""
+    message = _TABLE_COLUMNS.sub(r"--columns \1 (force, response channels)", message)
+
+    def cell(match: re.Match) -> str:
+        channel = int(match.group(2)) - 3  # the table's columns: hit, time, the channels
+        if not 0 <= channel < len(header):
+            return match.group(0)
+        column = 2 * channel + 2 if layout.x_columns == "multi" else channel + 2
+        return f"line {match.group(1)} column {column} (channel {header[channel]!r}):"
+
+    return _TABLE_CELL.sub(cell, message)
 
 
 def _channel_note(note: str, picked: list[str]) -> str:
@@ -202,6 +230,8 @@ def _scan(name: str, lines) -> Layout:
             if state != "data":
                 segment.data_start = number
                 state = "data"
+            if not layout.x_columns:  # no X_Columns row: an empty first cell is no time
+                layout.x_columns = "no" if not first else "one"
             if len(layout.segments) == 1 and layout.x_columns != "no":
                 layout.x_texts.append(cells[0].strip())
     if state in ("signature", "file header"):
@@ -307,16 +337,29 @@ def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str]:
     """(sample rate Hz, the note saying where it came from)."""
     step_text = (layout.segments[0].delta_x or [""])[0]
     step = _number(step_text, layout.decimal)
+    texts = layout.x_texts
+    if len(texts) >= 2:
+        first = layout.segments[0].data_start
+        bad = next((k for k, t in enumerate(texts) if not _is_number(t, layout.decimal)), None)
+        if bad is not None:
+            raise FormatError(f"{name} line {first + bad}: time {texts[bad][:40]!r} is not a number")
+        values = np.array([_number(t, layout.decimal) for t in texts])
+        steps = np.diff(values)
+        if not np.all(steps > 0):
+            bad = int(np.argmin(steps > 0)) + 1
+            raise FormatError(f"{name} line {first + bad}: the time column does not increase there")
+        fit = fit_regular(values, printed_half_units([t.replace(",", ".") for t in texts]))
+        if fit.bad is not None:
+            raise FormatError(
+                f"{name} line {first + fit.bad}: the time column steps unevenly there (a dropped sample or "
+                f"a jump; the step is {float(np.median(steps)):.6g} s elsewhere): a run holds samples at one "
+                "rate"
+            )
+        if given is None:
+            return 1.0 / fit.step, f"sample rate {1.0 / fit.step:.8g} Hz fitted to the time column"
     if given is not None:
         said = f" (the file's Delta_X is {step_text})" if step_text else ""
         return float(given), f"sample rate {given:g} Hz from --sample-rate{said}"
-    texts = layout.x_texts
-    if len(texts) >= 2 and all(_is_number(t, layout.decimal) for t in texts):
-        values = np.array([_number(t, layout.decimal) for t in texts])
-        if np.all(np.diff(values) > 0):
-            fit = fit_regular(values, printed_half_units([t.replace(",", ".") for t in texts]))
-            if fit.bad is None:
-                return 1.0 / fit.step, f"sample rate {1.0 / fit.step:.8g} Hz fitted to the time column"
     if not step_text:
         raise FormatError(
             f"{name}: the segment header (line {layout.segments[0].line}) has no Delta_X and the file "
@@ -376,7 +419,7 @@ def _rows(name: str, layout: Layout, header: list[str], rate: float, lines) -> I
         cells = split_line(text, layout.separator)
         if layout.x_columns == "multi":
             values = cells[1 : 2 * n : 2]
-        elif layout.x_columns == "no" and cells[0].strip() == "" and len(cells) > n:
+        elif layout.x_columns == "no" and cells[0].strip() == "":  # LabVIEW's empty X_Value cell
             values = cells[1 : 1 + n]
         elif layout.x_columns == "no":
             values = cells[:n]
