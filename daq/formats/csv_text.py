@@ -883,6 +883,8 @@ class Table:
             coarse := self._coarse_note(time[groups[0]], half[groups[0]], steps[0])
         ):
             notes.setdefault("notes", []).append(coarse)
+            spread = self._rate_spread(time[groups[0]], half[groups[0]], steps[0])
+            notes["sample_rate_u_rel"] = spread * steps[0] / math.sqrt(3.0)
         if self.preamble:
             lines_said = ", ".join(str(line) for line, _, _ in self.preamble[:8])
             notes.setdefault("notes", []).append(
@@ -958,20 +960,28 @@ class Table:
         last digit more than COARSE_FRACTION of the step) knows only roughly, or "".
         t, half: one hit's times and their printed half units (s); step: the fitted step (s)."""
         coarsest = float(half.max())
-        if coarsest <= COARSE_FRACTION * step or t.size < 2:
+        spread = Table._rate_spread(t, half, step)
+        if not spread:
             return ""
-        # The fitted line and the true one both pass within the first and the last values'
-        # tolerances, so their steps differ by at most twice those over the record.
-        ends = max(float(half[0]), 0.01 * step) + max(float(half[-1]), 0.01 * step)
-        spread = 2.0 * ends / (t.size - 1) / step**2
-        if spread <= COARSE_RATE_SPREAD / step:
-            return ""  # coarse, but over enough samples: 4000 Hz +- 0.08 Hz needs no word
         return (
             f"the time column is printed coarsely (half a unit of its last digit is {coarsest:.3g} s, "
             f"{100 * coarsest / step:.0f} % of the step): the printed times allow any rate within "
             f"{spread:.2g} Hz of the fitted {1 / step:.6g} Hz; if you know the exact rate, give it with "
             "--sample-rate HZ"
         )
+
+    @staticmethod
+    def _rate_spread(t: np.ndarray, half: np.ndarray, step: float) -> float:
+        """How far (Hz) the true rate may lie from the fitted 1/step that a coarsely printed
+        time column allows, or 0 where that is too little to tell (see _coarse_note)."""
+        if float(half.max()) <= COARSE_FRACTION * step or t.size < 2:
+            return 0.0
+        # The fitted line and the true one both pass within the first and the last values'
+        # tolerances, so their steps differ by at most twice those over the record.
+        ends = max(float(half[0]), 0.01 * step) + max(float(half[-1]), 0.01 * step)
+        spread = 2.0 * ends / (t.size - 1) / step**2
+        # Coarse, but over enough samples (4000 Hz +- 0.08 Hz) needs no word.
+        return spread if spread > COARSE_RATE_SPREAD / step else 0.0
 
     def _ignored_note(self, ignored: list[int], picked: list[int], complex_mode: bool) -> str:
         """One line naming the columns the run leaves out (counted from 1, as in the other

@@ -111,7 +111,7 @@ def read_lvm(
             raise FormatError(
                 f"{name} has {len(header)} channel ({header[0]}); a run needs two, a force and a response"
             )
-        rate, rate_note = _rate(name, layout, sample_rate_hz)
+        rate, rate_note, rate_u_rel = _rate(name, layout, sample_rate_hz)
         table = Table(name, columns=_table_columns(name, columns, header), keep_time_text=True)
         # The times handed on are k / rate exactly: the run stores that rate, not a fit.
         table.stated_rate = (rate, "the LabVIEW file")
@@ -127,6 +127,9 @@ def read_lvm(
     notes = [_channel_note(n, details.get("columns", [])) for n in details.get("notes", [])]
     notes = [n for n in notes if not n.startswith("sample rate ")]
     details["notes"] = [rate_note, *notes] if rate_note else notes
+    details.pop("sample_rate_u_rel", None)  # the table's times are exact: what it saw is no doubt
+    if rate_u_rel:
+        details["sample_rate_u_rel"] = rate_u_rel
     details["lvm"] = {
         "segments": len(layout.segments),
         "channels": header,
@@ -333,8 +336,9 @@ def _table_columns(name: str, columns: str | None, header: list[str]) -> str | N
     return ",".join(["time", *out])
 
 
-def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str]:
-    """(sample rate Hz, the note saying where it came from)."""
+def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str, float]:
+    """(sample rate Hz, the note saying where it came from, its relative standard
+    uncertainty where the printed Delta_X leaves it in doubt, else 0)."""
     step_text = (layout.segments[0].delta_x or [""])[0]
     step = _number(step_text, layout.decimal)
     texts = layout.x_texts
@@ -356,10 +360,10 @@ def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str]:
                 "rate"
             )
         if given is None:
-            return 1.0 / fit.step, f"sample rate {1.0 / fit.step:.8g} Hz fitted to the time column"
+            return 1.0 / fit.step, f"sample rate {1.0 / fit.step:.8g} Hz fitted to the time column", 0.0
     if given is not None:
         said = f" (the file's Delta_X is {step_text})" if step_text else ""
-        return float(given), f"sample rate {given:g} Hz from --sample-rate{said}"
+        return float(given), f"sample rate {given:g} Hz from --sample-rate{said}", 0.0
     if not step_text:
         raise FormatError(
             f"{name}: the segment header (line {layout.segments[0].line}) has no Delta_X and the file "
@@ -374,19 +378,24 @@ def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str]:
             float(whole),
             f"sample rate {whole} Hz: {_allows(step_text, step, half)}, the one whole rate among "
             f"them{_ANOTHER}",
+            0.0,
         )
     common = common_rate(step, half)
     if common is not None:
-        return common, (
+        return (
+            common,
             f"sample rate {common:g} Hz: {_allows(step_text, step, half)}, the one rate among them that "
-            f"acquisition hardware runs at{_ANOTHER}"
+            f"acquisition hardware runs at{_ANOTHER}",
+            0.0,
         )
     if half / step > COARSE_STEP_FRACTION:
-        return 1.0 / step, (
+        return (
+            1.0 / step,
             f"sample rate {1.0 / step:.8g} Hz = 1 / Delta_X ({step_text} s), known only to "
-            f"+-{100 * half / step:.2g} % from its printed digits; give --sample-rate if you know it"
+            f"+-{100 * half / step:.2g} % from its printed digits; give --sample-rate if you know it",
+            half / step / math.sqrt(3.0),
         )
-    return 1.0 / step, f"sample rate {1.0 / step:.8g} Hz = 1 / Delta_X ({step_text} s)"
+    return 1.0 / step, f"sample rate {1.0 / step:.8g} Hz = 1 / Delta_X ({step_text} s)", 0.0
 
 
 _ANOTHER = "; give --sample-rate if the instrument ran at another"

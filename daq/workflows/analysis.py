@@ -38,8 +38,9 @@ RESULT_NAME = "analysis"
 #: no mode accounts for, --frequencies takes the nearest chain; 8: the ± carry the
 #: zones' ends and the hits' force weights, a clear peak near a band's low edge that
 #: starts near 0 Hz gets its second pass, a cluster asked for must be a feature, shallow
-#: peaks without a mode are named).
-ANALYSIS_VERSION = 8
+#: peaks without a mode are named; 9: the zones' spread counts only readings of the same
+#: mode, an imported rate known roughly goes into every frequency's ±).
+ANALYSIS_VERSION = 9
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
@@ -128,7 +129,28 @@ def analyze(run: Run, options: AnalysisOptions) -> tuple[RunAnalysis, dict[str, 
         raise ValueError(f"the run holds spectra but no time records or FRF: {NOTHING_TO_IDENTIFY}")
     else:
         raise ValueError("the run has no accepted hit and no FRF to analyse")
+    _rate_doubt(run, result)
     return result, notes
+
+
+def _rate_doubt(run: Run, result: RunAnalysis) -> None:
+    """A rate the imported file knew only roughly (a coarsely printed time column or
+    LabVIEW's Delta_X; its relative standard uncertainty ``sample_rate_u_rel`` in the
+    provenance) scales every frequency alike: its share goes into each frequency's ±, and
+    a caution says so. A new user's Delta_X 0.000488 gave 2049.18 Hz for 2048 Hz, every
+    frequency 0.06 % high, 250 of its ± off, with an import note alone."""
+    imported = run.provenance.get("imported_from", {})
+    u_rel = imported.get("sample_rate_u_rel") if isinstance(imported, dict) else None
+    if not isinstance(u_rel, (int, float)) or not u_rel > 0 or run.hits is None:
+        return
+    for mode in result.modes:
+        mode.frequency_u_hz = float(np.hypot(mode.frequency_u_hz, mode.frequency_hz * u_rel))
+    half = 100 * u_rel * np.sqrt(3.0)
+    result.cautions.append(
+        f"the sample rate ({float(run.hits.sample_rate_hz):.8g} Hz) is known only to ±{half:.2g} % from the "
+        f"file's printed times or step: every frequency may be off by that much, and each ± holds its "
+        f"share; import the file again with --sample-rate HZ if you know the rate"
+    )
 
 
 def _frf_window_decay(run: Run, source: str) -> tuple[float, str]:

@@ -252,10 +252,21 @@ def test_bad_input_refused(tmp_path, text, kwargs, expected):
     assert expected in message
 
 
-def test_not_utf8(tmp_path):
+def test_not_utf8_bytes_in_a_number_are_refused_with_their_line(tmp_path):
     path = tmp_path / "bin.csv"
     path.write_bytes(b"0,1,2\n\xff\xfe,1,2\n")
-    assert "line 2: not UTF-8" in refused(path)
+    assert "line 2" in refused(path)
+
+
+def test_a_windows_1252_header_reads_as_its_utf8_twin(tmp_path):
+    # Excel on Windows saves "Accel (m/s²)" as cp1252: it used to be refused as "not UTF-8".
+    rows = "".join(f"{k / 1000!r},{float(k == 3)!r},{0.5 * k!r}\n" for k in range(64))
+    header = "Time (s),Force (N),Accel (m/s²)\n"
+    (tmp_path / "cp1252.csv").write_bytes((header + rows).encode("cp1252"))
+    (tmp_path / "utf8.csv").write_bytes((header + rows).encode("utf-8"))
+    cp1252, utf8 = read_csv(tmp_path / "cp1252.csv"), read_csv(tmp_path / "utf8.csv")
+    np.testing.assert_array_equal(cp1252.hits.response_m_s2, utf8.hits.response_m_s2)
+    assert cp1252.details["response_unit"] == utf8.details["response_unit"] == "m/s^2"
 
 
 def test_missing_empty_and_too_large(tmp_path):
