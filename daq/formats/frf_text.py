@@ -329,6 +329,7 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         details.setdefault("notes", []).extend(empty_note)
     if phase_notes:
         details.setdefault("notes", []).extend(phase_notes)
+        details["phase_looks_like_radians"] = len(phase_notes)
     if said := table.unended_note():
         details.setdefault("notes", []).extend(said)
     measured = make_frfs(path, freq, frf, coh, labels, form)

@@ -189,6 +189,15 @@ def input_cautions(run: Run, notes: dict[str, Any]) -> list[str]:
             "accelerance, (m/s^2)/N; if they are receptance (m/N) or mobility ((m/s)/N), import the "
             "file again with --frf-form"
         )
+    imported = run.provenance.get("imported_from", {})
+    if isinstance(imported, dict) and imported.get("phase_looks_like_radians"):
+        # Said at import only, the analysis of a phase read 57 times too slow gave one
+        # mode at 2624 Hz under generic cautions (a new user's trial).
+        out.append(
+            "phase read as degrees though it looks like radians (every value within ±π, no unit): read "
+            "as degrees, the FRF's phase barely turns and its modes are wrong; if it is in radians, write "
+            "[rad] in the phase column's header and import the file again"
+        )
     if (hits := _averaged_against_checks(run)) is not None:
         out.append(hits)
     return out
