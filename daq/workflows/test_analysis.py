@@ -373,7 +373,7 @@ def test_analysis_json(analysis: TestAnalysis) -> dict[str, Any]:
         "positions_m": [_finite(x) for x in data.positions_m],
         "driving_point": None if data.driving_index is None else data.points[data.driving_index].name,
         "band_hz": [result.band.low_hz, result.band.high_hz],
-        "band_reason": result.band.reason,
+        "band_reason": for_a_test(result.band.reason),
         "n_lines": int(data.frequency_hz.size),
         "pretrigger_cut_s": result.pretrigger_cut_s,
         "pretrigger_range_s": list(result.pretrigger_range_s),
@@ -428,3 +428,12 @@ def aligned_shapes(analysis: TestAnalysis) -> np.ndarray:
         ]
     )
     return align(analysis.shapes.shapes, reference)
+
+
+def for_a_test(reason: str) -> str:
+    """The band's reason (analysis/band_choice.py, written for one run) as said of a
+    test, whose band comes from all its points' runs: the same words in the terminal, the
+    JSON and the page."""
+    return reason.replace("in the run limits", "in the test's runs limits").replace(
+        "the run's lines", "the points' lines"
+    )

@@ -209,6 +209,8 @@ def test_the_band_of_a_test_is_its_own_line_about_its_runs(two_points):
     )
     assert "((" not in lines[0] + lines[1]
     assert "in the run " not in two_points["printed"]
+    # The JSON says it in the same words (a new user found "nothing in the run limits it").
+    assert lines[1].endswith(two_points["info"]["band_reason"])
 
 
 def test_a_test_filled_from_files_goes_on_with_import(two_points):

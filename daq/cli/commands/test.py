@@ -262,7 +262,7 @@ def print_test_analysis(info: dict[str, Any]) -> None:
         f"point{'s' * (n_points != 1)}"
         + ("" if error is None else f", synthesis error {plain(100 * error, '.3g')} %")
     )
-    typer.echo(f"  band {span(*info['band_hz'], '.4g')}: {for_a_test(info['band_reason'])}")
+    typer.echo(f"  band {span(*info['band_hz'], '.4g')}: {info['band_reason']}")
     from daq.workflows.run_views import pretrigger_text
 
     cut = pretrigger_text(info)
@@ -298,14 +298,6 @@ def print_test_analysis(info: dict[str, Any]) -> None:
             for re, u in zip(mode["shape"]["real"], mode["shape"]["real_u"], strict=True)
         )
         typer.echo(f"    mode {k}: {values}")
-
-
-def for_a_test(reason: str) -> str:
-    """The band's reason (analysis/band_choice.py, written for one run) as said of a
-    test, whose band comes from all its points' runs."""
-    return reason.replace("in the run limits", "in the test's runs limits").replace(
-        "the run's lines", "the points' lines"
-    )
 
 
 def _why_no_mac(info: dict[str, Any]) -> str:
