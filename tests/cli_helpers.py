@@ -90,3 +90,24 @@ def daq_json(command: str, store: Path, *args: str) -> list[dict]:
     result = invoke_daq(command, *args, "--json", "--store", str(store))
     assert result.returncode == 0, result.stderr
     return json.loads(result.stdout)
+
+
+def daq_import(store: Path, *args) -> subprocess.CompletedProcess[str]:
+    """`daq import ARGS --store STORE`, in this process."""
+    return invoke_daq("import", *map(str, args), "--store", str(store))
+
+
+def runs_in(store: Path) -> list[str]:
+    """The run ids in ``store`` ([] when it does not exist)."""
+    from daq.store import Store
+
+    return [s.run_id for s in Store(store).list()] if store.exists() else []
+
+
+def refused(result: subprocess.CompletedProcess[str], store: Path, *fragments: str) -> str:
+    """One line on stderr with ``fragments``, exit status 1, no run in ``store``; the line."""
+    assert_one_line_error(result, *fragments)
+    assert result.returncode == 1
+    assert "Traceback" not in result.stderr
+    assert runs_in(store) == [], "a refused import stored a run"
+    return result.stderr

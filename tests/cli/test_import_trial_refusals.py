@@ -10,24 +10,7 @@ import pytest
 import pyuff
 
 from daq.store import Store
-from tests.cli_helpers import assert_one_line_error, invoke_daq
-
-
-def daq_import(store, *args: str):
-    return invoke_daq("import", *map(str, args), "--store", str(store))
-
-
-def runs_in(store) -> list[str]:
-    return [s.run_id for s in Store(store).list()] if store.exists() else []
-
-
-def refused(result, store, *fragments: str) -> str:
-    """One line on stderr with ``fragments``, exit status 1, no run in ``store``."""
-    assert_one_line_error(result, *fragments)
-    assert result.returncode == 1
-    assert "Traceback" not in result.stderr
-    assert runs_in(store) == [], "a refused import stored a run"
-    return result.stderr
+from tests.cli_helpers import assert_one_line_error, daq_import, invoke_daq, refused, runs_in
 
 
 def table(path, rows, separator: str = "\t", header: str | None = None):

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from daq.formats.errors import FormatError
 from daq.formats.lvm import read_lvm
 from daq.store import Store
-from tests.cli_helpers import assert_one_line_error, invoke_daq
+from tests.cli_helpers import daq_import, refused, runs_in
 
 G = 9.80665  # m/s^2 per g (standard gravity, exact by definition)
 
@@ -411,22 +411,6 @@ def test_an_unknown_unit_is_refused_naming_the_unit_options(tmp_path, which):
 # --- 5. the command line -------------------------------------------------------------------
 
 
-def daq_import(store, *args: str):
-    return invoke_daq("import", *map(str, args), "--store", str(store))
-
-
-def runs_in(store) -> list[str]:
-    return [s.run_id for s in Store(store).list()] if store.exists() else []
-
-
-def refused(result, store, *fragments: str) -> str:
-    """One line on stderr with ``fragments``, exit status 1, no run in ``store``."""
-    assert_one_line_error(result, *fragments)
-    assert result.returncode == 1
-    assert runs_in(store) == [], "a refused import stored a run"
-    return result.stderr
-
-
 def three_segments(n: int = 600) -> tuple[str, list[tuple[list[float], list[float], list[float]]]]:
     hits = [hammer_hit(n, 1024.0, 87.5, seed) for seed in range(3)]
     return lvm_text([[("F", "N", f), ("a1", "m/s^2", a), ("a2", "m/s^2", b)] for f, a, b in hits]), hits
@@ -534,41 +518,30 @@ def sample_line(text: str, k: int) -> int:
     return headings + 2 + k
 
 
-def test_a_value_that_is_no_number_is_refused_naming_its_line(tmp_path):
+def refusal_of_sample_4(tmp_path, row) -> tuple[int, str]:
+    """(its line, the one-line refusal) of a two-channel file whose sample 4 is written as
+    ``row(force)`` instead."""
     force, a1, _ = hammer_hit(300, 1024.0, 87.5)
     text = lvm_text([[("F", "N", force), ("a1", "m/s^2", a1)]])
     line = sample_line(text, 4)
     lines = text.splitlines()
-    lines[line - 1] = f"\t{force[4]!r}\tabc"
+    lines[line - 1] = row(force[4])
     with pytest.raises(FormatError) as excinfo:
-        read_lvm(write(tmp_path / "abc.lvm", "\n".join(lines) + "\n"))
-    message = one_line_refusal(excinfo)
+        read_lvm(write(tmp_path / "bad.lvm", "\n".join(lines) + "\n"))
+    return line, one_line_refusal(excinfo)
+
+
+def test_a_value_that_is_no_number_is_refused_naming_its_line_and_channel(tmp_path):
+    line, message = refusal_of_sample_4(tmp_path, lambda f: f"\t{f!r}\tabc")
     assert f"line {line}" in message, message
     assert "'abc'" in message, message
-
-
-def test_a_value_that_is_no_number_is_refused_naming_its_channel_or_file_column(tmp_path):
-    force, a1, _ = hammer_hit(300, 1024.0, 87.5)
-    text = lvm_text([[("F", "N", force), ("a1", "m/s^2", a1)]])
-    line = sample_line(text, 4)
-    lines = text.splitlines()
-    lines[line - 1] = f"\t{force[4]!r}\tabc"
-    with pytest.raises(FormatError) as excinfo:
-        read_lvm(write(tmp_path / "abc.lvm", "\n".join(lines) + "\n"))
-    message = one_line_refusal(excinfo)
+    # The file's third cell, channel a1: not the table's "column 4" (hit, time, F, a1).
     assert "column 4" not in message, message
     assert "a1" in message or "column 3" in message, message
 
 
 def test_a_row_short_of_a_channel_is_refused_as_such(tmp_path):
-    force, a1, _ = hammer_hit(300, 1024.0, 87.5)
-    text = lvm_text([[("F", "N", force), ("a1", "m/s^2", a1)]])
-    line = sample_line(text, 4)
-    lines = text.splitlines()
-    lines[line - 1] = f"\t{force[4]!r}"
-    with pytest.raises(FormatError) as excinfo:
-        read_lvm(write(tmp_path / "short.lvm", "\n".join(lines) + "\n"))
-    message = one_line_refusal(excinfo)
+    line, message = refusal_of_sample_4(tmp_path, lambda f: f"\t{f!r}")
     assert f"line {line}" in message, message
     assert "''" not in message, message
     assert "1 of the 2 channels" in message, message
