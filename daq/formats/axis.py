@@ -179,7 +179,7 @@ COMMON_RATES_HZ = tuple(
         {float(2**k) for k in range(6, 21)}
         | {
             m * 10.0**k
-            for m in (1, 1.024, 1.28, 2, 2.048, 2.5, 2.56, 4, 4.096, 5, 5.12, 8, 8.192)
+            for m in (1, 1.024, 1.28, 1.6, 2, 2.048, 2.5, 2.56, 3.2, 4, 4.096, 5, 5.12, 6.4, 8, 8.192)
             for k in range(2, 6)
         }
         | {8000.0, 11025.0, 16000.0, 22050.0, 32000.0, 44100.0, 48000.0, 96000.0, 192000.0}
@@ -193,7 +193,9 @@ def common_rate(step: float, half_unit: float) -> float | None:
     if not (step > 0 and 0 <= half_unit < step):
         return None
     low, high = 1.0 / (step + half_unit), 1.0 / (step - half_unit)
-    inside = [rate for rate in COMMON_RATES_HZ if low <= rate <= high]
+    # 0.000313 allows 3200 Hz exactly at its edge (1/0.0003125): rounding must not drop it.
+    slack = 1e-9 * high
+    inside = [rate for rate in COMMON_RATES_HZ if low - slack <= rate <= high + slack]
     return inside[0] if len(inside) == 1 else None
 
 

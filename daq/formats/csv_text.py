@@ -764,11 +764,12 @@ class Table:
         if header_unit is None:
             return DEFAULT_UNITS[quantity], 1.0, "default"
         flag = "--force-unit" if quantity == "force" else "--response-unit"
-        if header_unit in ("V", "mV"):
+        volts = {"Volts": "V", "volts": "V"}.get(header_unit, header_unit)  # LabVIEW spells it out
+        if volts in ("V", "mV"):
             example = "mV@2.25mV/N" if quantity == "force" else "mV@10.2mV/g"
             raise FormatError(
                 f"{self.name}: column {_show(self.header[col])} is in {header_unit}: give the sensor's "  # type: ignore[index]
-                f"sensitivity, e.g. {flag} {header_unit}{example[example.index('@') :]}"
+                f"sensitivity, e.g. {flag} {volts}{example[example.index('@') :]}"
             )
         try:
             where = "units row" if col in self.from_units_row else "header"

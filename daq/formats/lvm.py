@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from daq.formats.axis import common_rate, fit_regular, printed_half_units, whole_rate
+from daq.formats.axis import common_rate, fit_regular, printed_half_units, step_fits, whole_rate
 from daq.formats.cells import split_line
 from daq.formats.csv_text import Table, decode_line, header_name_unit, is_number_text
 from daq.formats.errors import FormatError
@@ -64,6 +64,10 @@ class Segment:
     units: list[str]
     delta_x: list[str]
     data_start: int = 0  # 1-based line of its first sample row
+    rows: int = 0  # sample rows read
+    declared: int = 0  # samples its header's Samples row declares (0: not said)
+    n_file: int = 0  # channels in the file, the empty ones (Samples 0) too
+    keep: list[int] = dataclasses.field(default_factory=list)  # the channels holding samples
 
 
 @dataclasses.dataclass
@@ -76,6 +80,8 @@ class Layout:
     segments: list[Segment] = dataclasses.field(default_factory=list)
     x_texts: list[str] = dataclasses.field(default_factory=list)  # the first segment's times, as printed
     file_header: dict[str, str] = dataclasses.field(default_factory=dict)
+    last_line: int = 0  # the file's last line, when it has no line end and too few values
+    notes: list[str] = dataclasses.field(default_factory=list)
 
 
 def looks_like_lvm(head: bytes) -> bool:
@@ -126,7 +132,7 @@ def read_lvm(
     details = dict(data.details)
     notes = [_channel_note(n, details.get("columns", [])) for n in details.get("notes", [])]
     notes = [n for n in notes if not n.startswith("sample rate ")]
-    details["notes"] = [rate_note, *notes] if rate_note else notes
+    details["notes"] = ([rate_note] if rate_note else []) + layout.notes + notes
     details.pop("sample_rate_u_rel", None)  # the table's times are exact: what it saw is no doubt
     if rate_u_rel:
         details["sample_rate_u_rel"] = rate_u_rel
@@ -139,14 +145,22 @@ def read_lvm(
     return dataclasses.replace(data, format="lvm", details=details)
 
 
-_TABLE_COLUMNS = re.compile(r"--columns time,(\S+) \(time, force, response\)")
+_TABLE_COLUMNS = re.compile(r"--columns ([^,\s]+),([^,\s]+),([^,\s]+) \(time, force, response\)")
+_TABLE_HEADER = re.compile(r"no column (.*) in the header \(hit, time \(s\), (.*)\)")
 _TABLE_CELL = re.compile(r"line (\d+) column (\d+):")
 
 
 def _said_of_channels(message: str, layout: Layout, header: list[str]) -> str:
     """A refusal of the table reader, said of the .lvm: its columns counted in the file's
     cells (the table's start with hit and time) and its --columns as channels."""
-    message = _TABLE_COLUMNS.sub(r"--columns \1 (force, response channels)", message)
+
+    def columns(match: re.Match) -> str:
+        # The table's columns are hit, time, then the channels: its index 2 is channel 0.
+        force, response = (str(int(c) - 2) if c.isdigit() else c for c in match.group(2, 3))
+        return f"--columns {force},{response} (force, response channels)"
+
+    message = _TABLE_COLUMNS.sub(columns, message)
+    message = _TABLE_HEADER.sub(r"no channel \1 (the channels: \2)", message)
 
     def cell(match: re.Match) -> str:
         channel = int(match.group(2)) - 3  # the table's columns: hit, time, the channels
@@ -204,9 +218,9 @@ def _scan(name: str, lines) -> Layout:
             layout.file_header[key.strip()] = value.strip()
             _setting(name, number, layout, key.strip().lower(), value.strip())
             continue
-        if not stripped:
-            continue
         cells = split_line(text, layout.separator)
+        if not any(c.strip() for c in cells):  # "" or, as LabVIEW writes it, "\t" or ","
+            continue
         first = cells[0].strip()
         if (
             state in ("between", "data")
@@ -217,7 +231,7 @@ def _scan(name: str, lines) -> Layout:
             state = "segment header"
         if state == "segment header":
             if first.startswith(END_OF_HEADER):
-                segment = _segment(name, number, segment, rows)  # type: ignore[arg-type]
+                segment = _segment(name, segment, rows, layout.x_columns)  # type: ignore[arg-type]
                 layout.segments.append(segment)
                 state = "names"
                 continue
@@ -235,15 +249,33 @@ def _scan(name: str, lines) -> Layout:
                 state = "data"
             if not layout.x_columns:  # no X_Columns row: an empty first cell is no time
                 layout.x_columns = "no" if not first else "one"
-            if len(layout.segments) == 1 and layout.x_columns != "no":
+            segment.rows += 1
+            short = len(_values(cells, layout, segment.n_file)) < segment.n_file
+            if short and not raw.endswith((b"\n", b"\r")):
+                layout.last_line = number  # cut short mid-row: no sample
+                segment.rows -= 1
+                layout.notes.append(
+                    f"line {number}, the last, is cut short ({len(cells)} cells, no line end): left out; "
+                    "the file may be incomplete"
+                )
+            elif len(layout.segments) == 1 and layout.x_columns != "no":
                 layout.x_texts.append(cells[0].strip())
     if state in ("signature", "file header"):
         raise FormatError(f"{name}: the file header has no '{END_OF_HEADER}' line: nothing after it to read")
-    if not layout.segments or not all(s.data_start for s in layout.segments):
-        raise FormatError(f"{name}: a segment has a header but no samples")
+    _drop_incomplete_last(name, layout)
+    empty = next((s for s in layout.segments if not s.data_start or not s.rows), None)
+    if not layout.segments or empty is not None:
+        where = f" (line {empty.line})" if empty is not None else ""
+        raise FormatError(f"{name}: a segment{where} has a header but no samples")
     first = layout.segments[0]
+    for segment in layout.segments:
+        if segment.declared and segment.rows < segment.declared:
+            layout.notes.append(
+                f"the segment at line {segment.line} holds {segment.rows} samples where its header declares "
+                f"{segment.declared}: the file may be cut short"
+            )
     for other in layout.segments[1:]:
-        if len(other.names) != len(first.names) or other.delta_x[:1] != first.delta_x[:1]:
+        if other.names != first.names or other.delta_x[:1] != first.delta_x[:1]:
             raise FormatError(
                 f"{name} line {other.line}: this segment's channels or Delta_X differ from the first "
                 f"segment's (line {first.line}): one run holds one set of channels at one rate; "
@@ -271,34 +303,65 @@ def _setting(name: str, number: int, layout: Layout, key: str, value: str) -> No
         raise FormatError(f"{name} line {number}: both the separator and the decimal separator are ','")
 
 
-def _segment(name: str, number: int, segment: Segment, rows: dict[str, list[str]]) -> Segment:
-    """The segment's channels from its header rows, checked."""
+def _segment(name: str, segment: Segment, rows: dict[str, list[str]], x_columns: str) -> Segment:
+    """The segment's channels from its header rows, checked. With X_Columns Multi each
+    channel's value stands in every other cell (an empty one under each time column);
+    channels whose Samples are 0 (LabVIEW's unused "Untitled" channels) are left out."""
     channels_text = (rows.get("Channels") or [""])[0]
     if not channels_text.isdigit() or not 1 <= int(channels_text) <= 64:
         raise FormatError(
             f"{name} line {segment.line}: the segment header has no Channels row with a count 1-64"
         )
     n = int(channels_text)
-    delta = [c for c in rows.get("Delta_X", []) if c][:n]
+
+    def per_channel(key: str) -> list[str]:
+        values = rows.get(key, [])
+        values = values[0::2] if x_columns == "multi" else values
+        return ([v.strip() for v in values] + [""] * n)[:n]
+
+    samples = per_channel("Samples")
+    segment.n_file = n
+    segment.keep = [k for k in range(n) if samples[k] != "0"]
+    if not segment.keep:
+        raise FormatError(f"{name} line {segment.line}: every channel of the segment declares 0 samples")
+    counts = [int(samples[k]) for k in segment.keep if samples[k].isdigit()]
+    segment.declared = max(counts, default=0)
+    delta = [d for k, d in enumerate(per_channel("Delta_X")) if k in segment.keep and d]
     if len(set(delta)) > 1:
         raise FormatError(
             f"{name} line {segment.line}: the channels have different Delta_X ({', '.join(delta)}): "
             "one run holds channels sampled at one rate"
         )
-    units = (rows.get("Y_Unit_Label", []) + [""] * n)[:n]
-    segment.units = [u.strip() for u in units]
+    units = per_channel("Y_Unit_Label")
+    segment.units = [units[k] for k in segment.keep]
     segment.delta_x = delta
-    segment.names = [f"channel {k}" for k in range(n)]
+    segment.names = [f"channel {k}" for k in segment.keep]
     return segment
+
+
+def _drop_incomplete_last(name: str, layout: Layout) -> None:
+    """Leave out a last segment that stops short of the samples the others hold and of
+    those its header declares: a file saved while LabVIEW still appended."""
+    if len(layout.segments) < 2:
+        return
+    last, others = layout.segments[-1], layout.segments[:-1]
+    full = min(s.rows for s in others)
+    if last.rows < full and (not last.declared or last.rows < last.declared):
+        layout.segments.pop()
+        layout.notes.append(
+            f"the last segment (line {last.line}) holds {last.rows} samples where the others hold {full}: "
+            "left out, the file was saved while it was written"
+        )
 
 
 def _names_row(layout: Layout, segment: Segment, cells: list[str]) -> None:
     """Take the channels' names from the column headings row (X_Value, names, Comment)."""
-    n = len(segment.names)
+    n = segment.n_file
     names = cells[1 : 2 * n : 2] if layout.x_columns == "multi" else cells[1 : 1 + n]
-    for k, text in enumerate(names[:n]):
+    for index, k in enumerate(segment.keep):
+        text = names[k].strip() if k < len(names) else ""
         if text and text != "Comment":
-            segment.names[k] = text
+            segment.names[index] = text
 
 
 def _column_names(segment: Segment) -> list[str]:
@@ -361,7 +424,21 @@ def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str, f
             )
         if given is None:
             return 1.0 / fit.step, f"sample rate {1.0 / fit.step:.8g} Hz fitted to the time column", 0.0
+        half_units = printed_half_units([t.replace(",", ".") for t in texts])
+        if not step_fits(values, half_units, 1.0 / given):
+            raise FormatError(
+                f"{name}: --sample-rate gives {given:g} Hz, but the time column steps at "
+                f"{1.0 / fit.step:.6g} Hz, more than its printed precision allows; correct or remove one"
+            )
+        return float(given), f"sample rate {given:g} Hz from --sample-rate", 0.0
     if given is not None:
+        if step_text and math.isfinite(step) and step > 0:
+            half = float(printed_half_units([step_text.replace(",", ".")])[0])
+            if abs(1.0 / given - step) > half * (1 + 1e-9):
+                raise FormatError(
+                    f"{name}: --sample-rate gives {given:g} Hz, but Delta_X {step_text} s allows only "
+                    f"{1 / (step + half):.6g} to {1 / (step - half):.6g} Hz; correct or remove one"
+                )
         said = f" (the file's Delta_X is {step_text})" if step_text else ""
         return float(given), f"sample rate {given:g} Hz from --sample-rate{said}", 0.0
     if not step_text:
@@ -372,6 +449,9 @@ def _rate(name: str, layout: Layout, given: float | None) -> tuple[float, str, f
     if not (math.isfinite(step) and step > 0):
         raise FormatError(f"{name}: Delta_X {step_text!r} is no time step above 0 s; give --sample-rate HZ")
     half = float(printed_half_units([step_text.replace(",", ".")])[0])
+    exact = round(1.0 / step)
+    if abs(1.0 / step - exact) <= 1e-9 / step:  # 3.906250E-5: 25600 Hz exactly
+        return float(exact), f"sample rate {exact} Hz = 1 / Delta_X ({step_text} s)", 0.0
     whole = whole_rate(step, half)
     if whole is not None:
         return (
@@ -411,34 +491,42 @@ def _allows(text: str, step: float, half: float) -> str:
 def _rows(name: str, layout: Layout, header: list[str], rate: float, lines) -> Iterator[bytes]:
     """Second pass: each line of the file as the table reads it, its number kept: the
     header row (hit, time and the channels) where the first segment's samples begin,
-    each sample row as hit, time, channel values; every other line blank."""
+    each sample row as hit (segments counted from 1), time, channel values; every other
+    line blank. A last row without a line end keeps that, so the table notes it."""
     starts = {s.data_start: k for k, s in enumerate(layout.segments)}
-    n = len(header)
-    hit, k = -1, 0
+    stop = layout.segments[-1].data_start + layout.segments[-1].rows  # a segment left out
+    hit, k, segment = -1, 0, layout.segments[0]
     for number, raw in enumerate(lines, start=1):
         if number == layout.segments[0].data_start - 1:  # the headings row, or the header's end
             yield ("hit,time (s)," + ",".join(header) + "\n").encode()
             continue
         if number in starts:
             hit, k = starts[number], 0
-        text = decode_line(raw, number == 1) if hit >= 0 else ""
-        if hit < 0 or not text.strip() or not _is_number_or_empty(text, layout):
+            segment = layout.segments[hit]
+        inside = hit >= 0 and number < stop and number != layout.last_line
+        text = decode_line(raw, number == 1) if inside else ""
+        if not text.strip() or not _is_number_or_empty(text, layout):
             yield b"\n"
             continue
-        cells = split_line(text, layout.separator)
-        if layout.x_columns == "multi":
-            values = cells[1 : 2 * n : 2]
-        elif layout.x_columns == "no" and cells[0].strip() == "":  # LabVIEW's empty X_Value cell
-            values = cells[1 : 1 + n]
-        elif layout.x_columns == "no":
-            values = cells[:n]
-        else:
-            values = cells[1 : 1 + n]
-        if len(values) < n:
-            raise FormatError(f"{name} line {number}: {len(values)} of the {n} channels' values")
-        values = [v.strip().replace(",", ".") if layout.decimal == "," else v.strip() for v in values]
-        yield f"{hit},{k / rate!r},{','.join(values)}\n".encode()
+        values = _values(split_line(text, layout.separator), layout, segment.n_file)
+        if len(values) < segment.n_file:
+            raise FormatError(f"{name} line {number}: {len(values)} of the {segment.n_file} channels' values")
+        values = [values[c].strip() for c in segment.keep]
+        values = [v.replace(",", ".") for v in values] if layout.decimal == "," else values
+        end = "\n" if raw.endswith((b"\n", b"\r")) else ""
+        yield f"{hit + 1},{k / rate!r},{','.join(values)}{end}".encode()
         k += 1
+
+
+def _values(cells: list[str], layout: Layout, n: int) -> list[str]:
+    """The channels' cells of a sample row (at most n), without its time cells."""
+    if layout.x_columns == "multi":
+        return cells[1 : 2 * n : 2]
+    if layout.x_columns == "no" and cells[0].strip() == "":  # LabVIEW's empty X_Value cell
+        return cells[1 : 1 + n]
+    if layout.x_columns == "no":
+        return cells[:n]
+    return cells[1 : 1 + n]
 
 
 def _is_number_or_empty(text: str, layout: Layout) -> bool:

@@ -2,7 +2,7 @@
 
 A unit is either a physical unit or a voltage with the sensor's sensitivity:
 
-- force: ``N``, ``kN``, ``lbf``
+- force: ``N`` (also ``Newtons``, as LabVIEW labels it), ``kN``, ``lbf``
 - response: ``m/s^2`` (also ``m/s2``, ``m/s/s``), ``mm/s^2`` (also ``mm/s2``, ``mm/s/s``), ``in/s^2``,
   ``g`` (9.80665 m/s^2; also ``G``, ``g's``, ``G's``, as accelerometer software prints it)
 - voltage: ``mV@10.2mV/g`` means "the column is in mV; the sensor gives 10.2 mV per g";
@@ -44,6 +44,8 @@ _PHYSICAL: dict[str, dict[str, float]] = {
 # is refused), and only "G" itself, never a lower-cased text ("mG", "Gm/s^2" stay unknown).
 _RESPONSE_SPELLINGS = {"G": "g", "g's": "g", "G's": "g", "m/s/s": "m/s^2", "mm/s/s": "mm/s^2"}
 _VOLTS = {"V": 1.0, "mV": 1e-3}
+# Units spelled out, as LabVIEW's DAQmx channels label them ("Newtons", "Volts").
+_SPELLED_OUT = {"Newtons": "N", "Newton": "N", "newtons": "N", "newton": "N", "Volts": "V", "volts": "V"}
 _NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|[-+]?(?:nan|inf|infinity)", re.I)
 
 
@@ -65,6 +67,7 @@ def parse_unit(unit: str, quantity: str) -> float:
     if not isinstance(unit, str):
         raise FormatError(f"{quantity} unit must be text, got {type(unit).__name__}")
     text = unit.strip()
+    text = _SPELLED_OUT.get(text, text)
     table = _PHYSICAL[quantity]
     if quantity == "response":
         text = _RESPONSE_SPELLINGS.get(text, text)
