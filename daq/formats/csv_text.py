@@ -764,7 +764,7 @@ class Table:
         if header_unit is None:
             return DEFAULT_UNITS[quantity], 1.0, "default"
         flag = "--force-unit" if quantity == "force" else "--response-unit"
-        volts = {"Volts": "V", "volts": "V"}.get(header_unit, header_unit)  # LabVIEW spells it out
+        volts = {"Volts": "V"}.get(header_unit, header_unit)  # LabVIEW spells it out
         if volts in ("V", "mV"):
             example = "mV@2.25mV/N" if quantity == "force" else "mV@10.2mV/g"
             raise FormatError(

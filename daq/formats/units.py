@@ -45,7 +45,7 @@ _PHYSICAL: dict[str, dict[str, float]] = {
 _RESPONSE_SPELLINGS = {"G": "g", "g's": "g", "G's": "g", "m/s/s": "m/s^2", "mm/s/s": "mm/s^2"}
 _VOLTS = {"V": 1.0, "mV": 1e-3}
 # Units spelled out, as LabVIEW's DAQmx channels label them ("Newtons", "Volts").
-_SPELLED_OUT = {"Newtons": "N", "Newton": "N", "newtons": "N", "newton": "N", "Volts": "V", "volts": "V"}
+_SPELLED_OUT = {"Newtons": "N", "Volts": "V"}
 _NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|[-+]?(?:nan|inf|infinity)", re.I)
 
 
