@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from daq.formats.csv_text import read_csv
-from daq.formats.impacts import find_cut
+from daq.formats.impacts import cut_note, find_cut
 from daq.store import Store
 from tests.cli_helpers import invoke_daq
 
@@ -197,11 +197,20 @@ def test_the_same_taps_once_rung_down_are_cut():
     check_cut(find_cut(force, response, RATE), [700, second], force)
 
 
-def test_one_tap_among_several_still_ringing_leaves_the_record_whole():
+def test_a_tap_far_closer_than_the_others_stays_inside_the_hit_before():
+    # A second strike 0.4 s after a tap, among taps 2.5 s apart: cutting there would cut
+    # every hit to 0.4 s (a trial's record lost 88 % of each hit so). The other taps are
+    # cut; the close one stays in its hit, where the double impact check names it.
     spacing = int(2.5 * RATE)  # 40 Hz at 1 % damping: 1.8 s to fall to 1 %
     taps = [600, 600 + spacing, 600 + spacing + round(0.4 * RATE), 600 + 3 * spacing]
     force, response = record(taps, taps[-1] + spacing, freq_hz=40.0)
-    assert find_cut(force, response, RATE) is None
+    cut = find_cut(force, response, RATE)
+    assert cut is not None
+    assert cut.taps.tolist() == [taps[0], taps[1], taps[3]]
+    assert cut.left_in == (taps[2],)
+    assert cut.length == spacing
+    start = int(cut.starts[1])
+    assert start < taps[2] < start + cut.length  # inside the second hit
 
 
 def test_a_record_of_noise_or_too_short_is_not_cut():
@@ -296,3 +305,15 @@ def test_a_csv_with_a_hit_column_is_not_cut_again(tmp_path):
     path.write_text("hit,time,force,response\n" + rows)
     data = read_csv(path)
     assert data.hits.force_n.shape == (2, n)
+
+
+def test_the_note_names_a_tap_left_in_and_a_last_tap_left_out():
+    taps = [600, 600 + 6144, 600 + 6144 + 700, 600 + 2 * 6144, 600 + 3 * 6144, 600 + 4 * 6144]
+    force, response = record(taps, taps[-1] + 1000, freq_hz=150.0)
+    cut = find_cut(force, response, RATE)
+    assert cut is not None
+    assert cut.left_in == (taps[2],)
+    assert cut.left_out == (taps[-1],)
+    note = cut_note(cut, RATE)
+    assert f"the tap at {taps[2] / RATE:.4g} s, too close to the one before" in note
+    assert f"the tap at {taps[-1] / RATE:.4g} s left out" in note
