@@ -275,7 +275,9 @@ def _scan(name: str, lines) -> Layout:
                 f"{segment.declared}: the file may be cut short"
             )
     for other in layout.segments[1:]:
-        if other.names != first.names or other.delta_x[:1] != first.delta_x[:1]:
+        if other.names == [f"channel {k}" for k in other.keep]:  # no headings row of its own
+            other.names = list(first.names)
+        if other.keep != first.keep or other.names != first.names or other.delta_x[:1] != first.delta_x[:1]:
             raise FormatError(
                 f"{name} line {other.line}: this segment's channels or Delta_X differ from the first "
                 f"segment's (line {first.line}): one run holds one set of channels at one rate; "

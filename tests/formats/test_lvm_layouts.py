@@ -135,3 +135,13 @@ def test_channels_in_the_wrong_order_are_told_the_columns_by_channel(tmp_path):
     message = str(excinfo.value)
     assert "no channel 'Force' (the channels: F (N), a1 (g))" in message
     assert "hit" not in message
+
+
+def test_a_later_segment_without_its_own_headings_row_takes_the_first_s_names(tmp_path):
+    segments = [two_channels(("N", "m/s^2"))[2] for _ in range(2)]
+    lines = lvm_text(segments).splitlines()
+    second = [k for k, line in enumerate(lines) if line.startswith("X_Value")][1]
+    del lines[second]
+    data = read_lvm(write(tmp_path / "two.lvm", "\n".join(lines) + "\n"))
+    assert data.hits.force_n.shape == (2, 400)
+    assert data.details["lvm"]["channels"] == ["F (N)", "a1 (m/s^2)"]
