@@ -97,3 +97,16 @@ def test_a_force_zero_in_every_sample_is_said_so_not_given_a_crest_factor():
     assert impact.name == NO_IMPACT
     assert not impact.passed
     assert impact.detail == "the force is zero in every sample"
+
+
+@settings(max_examples=20, deadline=None)
+@given(offset=st.floats(-20.0, 20.0), drift=st.floats(-1.0, 1.0))
+def test_a_clean_tap_on_an_offset_or_drifting_gauge_is_an_impact(offset, drift):
+    # A trial's logger: 100 N taps on an 8 N offset drifting 0.6 N/s failed "no impact".
+    rate, n = 2048.0, 8192
+    t = np.arange(n) / rate
+    force = offset + drift * t
+    force[200:204] += 100 * np.sin(np.pi * np.arange(1, 5) / 5)
+    response = np.exp(-3 * t) * np.sin(2 * np.pi * 40 * t)
+    (impact, *_) = file_checks(force, response, rate)
+    assert impact.name != NO_IMPACT, impact
