@@ -506,14 +506,14 @@ def _rows(name: str, layout: Layout, header: list[str], rate: float, lines) -> I
             hit, k = starts[number], 0
             segment = layout.segments[hit]
         inside = hit >= 0 and number < stop and number != layout.last_line
-        text = decode_line(raw, number == 1) if inside else ""
-        if not text.strip() or not _is_number_or_empty(text, layout):
+        cells = split_line(decode_line(raw, number == 1), layout.separator) if inside else [""]
+        if not any(cells) or not _is_sample_row(cells, layout):
             yield b"\n"
             continue
-        values = _values(split_line(text, layout.separator), layout, segment.n_file)
+        values = _values(cells, layout, segment.n_file)
         if len(values) < segment.n_file:
             raise FormatError(f"{name} line {number}: {len(values)} of the {segment.n_file} channels' values")
-        values = [values[c].strip() for c in segment.keep]
+        values = [values[c] for c in segment.keep]  # split_line strips each cell
         values = [v.replace(",", ".") for v in values] if layout.decimal == "," else values
         end = "\n" if raw.endswith((b"\n", b"\r")) else ""
         yield f"{hit + 1},{k / rate!r},{','.join(values)}{end}".encode()
@@ -531,11 +531,10 @@ def _values(cells: list[str], layout: Layout, n: int) -> list[str]:
     return cells[1 : 1 + n]
 
 
-def _is_number_or_empty(text: str, layout: Layout) -> bool:
+def _is_sample_row(cells: list[str], layout: Layout) -> bool:
     """A sample row (its first cell a number, or empty where X_Columns is No), not a
     segment's header row."""
-    first = split_line(text, layout.separator)[0].strip()
-    return (not first and layout.x_columns == "no") or _is_number(first, layout.decimal)
+    return (not cells[0] and layout.x_columns == "no") or _is_number(cells[0], layout.decimal)
 
 
 def _is_number(text: str, decimal: str) -> bool:
