@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from daq.formats.errors import FormatError
 from daq.formats.frf_text import read_frf_text
@@ -71,3 +73,30 @@ def test_a_label_that_is_no_unit_still_leaves_the_default(tmp_path):
     assert data.measured_frfs.form == "accelerance"
     np.testing.assert_array_equal(data.measured_frfs.frf[0], h)
     assert "no FRF unit" in data.details["form_from"]
+
+
+UNITS = {
+    "(in/s²)(lbf)": ("accelerance", INCH_M / POUND_FORCE_N),
+    "(in/s)(N)": ("mobility", INCH_M),
+    "(in)(kN)": ("receptance", INCH_M / 1000.0),
+    "(g)(N)": ("accelerance", 9.80665),
+    "(mm)(N)": ("receptance", 1e-3),
+}
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    unit=st.sampled_from(sorted(UNITS)),
+    values=st.lists(st.floats(-1e6, 1e6, allow_nan=False).filter(lambda v: abs(v) > 1e-300), min_size=16),
+)
+def test_any_values_under_a_units_row_come_out_in_si_times_its_factor(tmp_path, unit, values):
+    form, factor = UNITS[unit]
+    f = np.arange(len(values)) * 0.5
+    head = ["Units: Ratio", "", "Frequency\t Real\t Imaginary", "", "Units:", f"Hz\t{unit}\t "]
+    rows = [f"{x:.13e}\t{v!r}\t{-v!r}" for x, v in zip(f, values, strict=True)]
+    path = tmp_path / "Hxysv.txt"
+    path.write_bytes(("\r\n".join(head + rows) + "\r\n").encode("latin-1"))
+    frfs = read_frf_text(path).measured_frfs
+    assert frfs.form == form
+    want = np.array(values) * (1 - 1j) * factor
+    np.testing.assert_allclose(frfs.frf[0], want, rtol=1e-12)
