@@ -291,7 +291,7 @@ def join_units(cells: list[str]) -> list[str]:
     out: list[str] = []
     closing = ""
     for cell in cells:
-        if closing or (out and cell[:1] in "(["):
+        if closing or (out and cell.startswith(("(", "["))):  # "" is `in` every string
             closing = closing or (")" if cell[0] == "(" else "]")
             out[-1] += " " + cell
             if cell.endswith(closing):

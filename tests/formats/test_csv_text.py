@@ -319,3 +319,11 @@ def test_a_hit_column_names_its_hits_by_the_files_own_numbers(tmp_path, text, sa
     path.write_text(text)
     with pytest.raises(FormatError, match=re.escape(said)):
         read_csv(path)
+
+
+def test_an_empty_cell_among_a_whitespace_header_s_cells_is_no_unit(tmp_path):
+    # Hypothesis found b'\x0b\x0b"': an empty cell read as the start of a "(unit)" and an
+    # IndexError came out instead of a refusal.
+    path = tmp_path / "vt.csv"
+    path.write_bytes(b'\x0b\x0b"')
+    refused(path)
