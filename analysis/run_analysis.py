@@ -783,11 +783,48 @@ def _scatter(
                 line = int(np.argmin(np.abs(result.frequency_hz - mode.frequency_hz)))
                 weights = hit_weights[ok, line]
             n = ok.sum()
-            mode.frequency_u_hz = float(np.hypot(_mean_u(found[ok, k, 0], weights), f_order))
-            mode.damping_u = float(np.hypot(_mean_u(found[ok, k, 1], weights), z_order))
+            f_bias = _noise_bias(found[ok, k, 0], mode.frequency_hz, weights)
+            z_bias = _noise_bias(found[ok, k, 1], mode.damping_ratio, weights)
+            # The damping's bias is LSCF's known one (docs/analysis.md): corrected, and
+            # its size kept in the u, as the correction is only as good as its model.
+            if mode.damping_ratio - z_bias > 0:
+                mode.damping_ratio -= z_bias
+                mode.damping_ratio_windowed -= z_bias
+                mode.quality["noise_bias_damping"] = z_bias
+            f_u = [_mean_u(found[ok, k, 0], weights), f_order, f_bias]
+            z_u = [_mean_u(found[ok, k, 1], weights), z_order, z_bias]
+            mode.frequency_u_hz = float(np.sqrt(np.sum(np.square(f_u))))
+            mode.damping_u = float(np.sqrt(np.sum(np.square(z_u))))
             mode.uncertainty_from = f"{n} hits" if n == len(hit_frfs) else f"{n} of {len(hit_frfs)} hits"
     if any(m.uncertainty_from == "" for m in result.modes):
         _bootstrap(result, decay, only_missing=True)
+
+
+#: The noise bias is read only where the hits count as more than this many: with two,
+#: the hits' mean less the average is divided by at most 1 and is mostly their scatter
+#: (lvm-2ch m2's 21.2 Hz, 2 hits: 0.21 % "corrected" to 0.11 +- 0.14 %).
+NOISE_BIAS_MIN_HITS = 2.5
+
+
+def _noise_bias(values: np.ndarray, averaged: float, weights: np.ndarray | None = None) -> float:
+    """The bias the noise gives ``averaged``, the value read from the hits' averaged FRF,
+    estimated from ``values`` (n,), the same quantity read from each hit alone.
+
+    A least-squares fit with the measured H inside its equations is biased in proportion
+    to the noise variance in H; one hit's FRF holds n_eff times the variance of the
+    average of n_eff hits (n_eff = 1 / sum w^2, w the hits' weights summing to 1), so the
+    hits' mean sits n_eff - 1 biases of the average away from it:
+    bias = (sum w x - averaged) / (n_eff - 1). A heavily damped mode (300 Hz at 8 %, 5
+    hits at 5 % noise) read 6.3-7.6 % from the average and 3-6 % hit by hit: the spread
+    over hits put the truth more than 2 u away in 8 of 20 draws, 9 u at worst. 0 where n_eff <=
+    NOISE_BIAS_MIN_HITS."""
+    n = values.size
+    usable = weights is not None and np.all(np.isfinite(weights)) and weights.sum() > 0
+    w = weights / weights.sum() if usable else np.full(n, 1.0 / n)
+    n_eff = 1.0 / float(np.sum(w**2))
+    if n_eff <= NOISE_BIAS_MIN_HITS:
+        return 0.0
+    return float((np.sum(w * values) - averaged) / (n_eff - 1.0))
 
 
 def _mean_u(values: np.ndarray, weights: np.ndarray | None = None) -> float:

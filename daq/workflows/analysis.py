@@ -39,8 +39,10 @@ RESULT_NAME = "analysis"
 #: zones' ends and the hits' force weights, a clear peak near a band's low edge that
 #: starts near 0 Hz gets its second pass, a cluster asked for must be a feature, shallow
 #: peaks without a mode are named; 9: the zones' spread counts only readings of the same
-#: mode, an imported rate known roughly goes into every frequency's ±).
-ANALYSIS_VERSION = 9
+#: mode, an imported rate known roughly goes into every frequency's ±; 10: a heavily
+#: damped chain may wander by half its half-width, the damping read from several hits is
+#: corrected for the noise bias their own readings show, and that bias enters the ±).
+ANALYSIS_VERSION = 10
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
 STATUS_CODES = {"new": 0, "frequency": 1, "damping": 2, "stable": 3}
