@@ -119,6 +119,28 @@ def _is_units_marker(line: str) -> bool:
     return line.strip().rstrip(":").strip().lower() in ("units", "unit") and line.strip().endswith(":")
 
 
+#: A quoted preamble line holds at most this many cells ("X axis","Frequency","Hz").
+QUOTED_PREAMBLE_CELLS = 4
+_QUOTED_CELLS = re.compile(r'\s*"[^"]*"(?:\s*[,;\t]\s*"[^"]*")+\s*')
+
+
+def _quoted_metadata(line: str) -> tuple[str, str] | None:
+    """(key, value) of a preamble line written in quotes, as PULSE and Test.Lab exports
+    write them, else None: one quoted string ("Averages:<TAB>5", or a title with neither,
+    kept as the title), or a few quoted cells ("Name","FRF Point1:+Z/Point1:+Z"). Only
+    before a frequency column's header (scan_layout): a time record's quoted header row
+    would read the same."""
+    if len(line) >= 2 and line[0] == line[-1] == '"' and '"' not in line[1:-1]:
+        inner = line[1:-1].strip()
+        return (_metadata(inner) or ("title", inner)) if inner else None
+    if not _QUOTED_CELLS.fullmatch(line):
+        return None
+    cells = [c.strip() for c in re.findall(r'"([^"]*)"', line)]
+    if not 2 <= len(cells) <= QUOTED_PREAMBLE_CELLS or not cells[0]:
+        return None
+    return cells[0].rstrip(":").strip(), " ".join(c for c in cells[1:] if c)
+
+
 def scan_layout(lines: list[str]) -> Layout:
     """Where the preamble, column names, units row and data begin in a table's first lines.
 
@@ -147,7 +169,7 @@ def scan_layout(lines: list[str]) -> Layout:
             layout.header, layout.header_cells = index, cells
             start = index + 1
             break
-        meta = _metadata(line.strip(" \r\n"))  # "key<TAB>" keeps its tab
+        meta = _metadata(line.strip(" \r\n")) or _quoted_metadata(stripped)  # "key<TAB>" keeps its tab
         if meta is None or len(candidates) >= MAX_PREAMBLE_LINES:
             return Layout()
         candidates.append((index, meta))
@@ -232,6 +254,9 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
             kinds.append(kind)
             labels_of.append(label)
         units = list(table.units)
+        for i, cell_name in enumerate(table.names):
+            if kinds[i] == "phase" and units[i] is None and _bare_phase_unit(cell_name):
+                units[i] = _bare_phase_unit(cell_name)  # a column named "°" or "rad" only
     from_row: set[int] = set()
     if layout.units is not None:
         if len(layout.unit_cells) > table.n_cols and any(layout.unit_cells[table.n_cols :]):
@@ -274,7 +299,9 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
             values = first + 1j * second
             unit_text = units[col] or units[col + 1]
         else:
-            mag_unit = units[col] or ""
+            # A column named by its unit alone, "dB re 1 (m/s²)/N" (PULSE), says its unit.
+            named = table.names[col] if re.match(r"(?i)\s*db\s+re\s", table.names[col]) else ""
+            mag_unit = units[col] or named
             db = "db" in mag_unit.lower() or "db" in table.names[col].lower()
             magnitude = 10.0 ** (first / 20.0) if db else first
             if not db and np.any(first < 0):
@@ -359,8 +386,16 @@ def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
         kind = "mag"
     if kind is None and unit is not None and clean_label(unit).lower() in _PHASE_UNITS:
         kind = "phase"
+    if kind is None and unit is None and _bare_phase_unit(cell):
+        kind = "phase"  # PULSE names its columns by their units: "Hz", "dB re 1 g/N", "°"
     label = " ".join(t for t in tokens if t.lower() not in _KINDS)
     return kind, label
+
+
+def _bare_phase_unit(cell: str) -> str | None:
+    """The phase unit a header cell is made of alone ("°", "deg", "rad"), else None."""
+    text = clean_label(cell.strip("\"' ")).lower()
+    return text if text in _PHASE_UNITS else None
 
 
 #: A phase column with no unit whose values all lie within +-pi (with this slack for a

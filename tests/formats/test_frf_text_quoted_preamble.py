@@ -1,0 +1,112 @@
+"""FRF exports whose preamble lines are quoted (Brüel & Kjær PULSE, Siemens Test.Lab) and
+whose columns are named by their units alone ("Hz", "dB re 1 (m/s²)/N", "°").
+
+A new user's PULSE-like export was refused as a time record with "1 data column", and a
+Test.Lab-like one with "line 2: 3 columns, expected 2"; the same tables without quotes
+imported."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from daq.formats.frf_text import read_frf_text
+from tests.cli_helpers import daq_import, runs_in
+
+LINES = 48
+F = np.arange(1, LINES + 1) * 0.5
+H = (1.0 + 0.2 * np.arange(LINES)) * np.exp(1j * np.linspace(-3.0, 3.0, LINES))
+
+
+def pulse_like(path, phase_name: str = "°", phase_scale: float = 1.0) -> None:
+    """Tab separated, decimal commas, quoted title and key/value lines, columns named by
+    their units; magnitude in dB re 1 (m/s²)/N, phase in degrees (times phase_scale)."""
+    head = [
+        '"Frequency Response H1(Response,Hammer) - Mark 1 (Magnitude/Phase)"',
+        '"Measurement:\tImpact test beam"',
+        '"Averages:\t5"',
+        "",
+        f'"Hz"\t"dB re 1 (m/s²)/N"\t"{phase_name}"',
+    ]
+    db = 20 * np.log10(np.abs(H))
+    phase = np.degrees(np.angle(H)) * phase_scale
+    rows = [
+        "\t".join(f"{v:.10f}".replace(".", ",") for v in (f, m, p))
+        for f, m, p in zip(F, db, phase, strict=True)
+    ]
+    path.write_bytes(("\r\n".join(head + rows) + "\r\n").encode("latin-1"))
+
+
+def write_testlab_like(path, preamble: list[tuple[str, ...]]) -> None:
+    """Comma separated, each preamble line a row of quoted cells, then Re/Im in g/N."""
+    head = [",".join(f'"{c}"' for c in cells) for cells in preamble]
+    head += ["", '"Frequency (Hz)","FRF Real (g/N)","FRF Imaginary (g/N)"']
+    rows = [f"{float(f)!r},{float(v.real)!r},{float(v.imag)!r}" for f, v in zip(F, H, strict=True)]
+    path.write_text("\n".join(head + rows) + "\n", encoding="utf-8")
+
+
+def test_a_pulse_like_export_reads_its_quoted_preamble_and_unit_named_columns(tmp_path):
+    pulse_like(tmp_path / "h1.txt")
+    data = read_frf_text(tmp_path / "h1.txt")
+    assert data.measured_frfs.form == "accelerance"
+    np.testing.assert_allclose(data.measured_frfs.frequency_hz, F)
+    np.testing.assert_allclose(data.measured_frfs.frf[0], H, rtol=1e-8)
+    assert "(m/s^2)/N" in data.details["form_from"]
+
+
+def test_a_column_named_rad_alone_is_read_in_radians(tmp_path):
+    pulse_like(tmp_path / "h1.txt", phase_name="rad", phase_scale=np.pi / 180)
+    np.testing.assert_allclose(read_frf_text(tmp_path / "h1.txt").measured_frfs.frf[0], H, rtol=1e-8)
+
+
+def test_a_testlab_like_export_is_detected_and_imported(tmp_path):
+    path = tmp_path / "frf.csv"
+    write_testlab_like(
+        path, [("Name", "FRF Point1:+Z/Point1:+Z"), ("X axis", "Frequency", "Hz"), ("Averages", "5")]
+    )
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    assert "frf-text" in result.stdout
+    assert "3 preamble lines" in result.stdout
+    assert len(runs_in(store)) == 1
+
+
+def test_a_time_record_with_a_quoted_header_is_still_a_time_record(tmp_path):
+    t = np.arange(256) / 256.0
+    rows = [
+        f"{x:.6f},{100.0 if k == 3 else 0.0},{np.exp(-3 * x) * np.sin(2 * np.pi * 20 * x):.6g}"
+        for k, x in enumerate(t)
+    ]
+    path = tmp_path / "hit.csv"
+    path.write_text('"Time (s)","Force (N)","Accel (m/s^2)"\n' + "\n".join(rows) + "\n", encoding="utf-8")
+    result = daq_import(tmp_path / "runs", path)
+    assert result.returncode == 0, result.stderr
+    assert "csv: 1 hit of 256 samples" in result.stdout
+
+
+CELL = st.text(
+    st.characters(codec="latin-1", exclude_characters='"\r\n\t,;'), min_size=1, max_size=12
+).filter(lambda s: s.strip() != "" and not s.strip()[0].isdigit())
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(preamble=st.lists(st.lists(CELL, min_size=2, max_size=4).map(tuple), min_size=1, max_size=6))
+def test_any_quoted_preamble_leaves_the_frf_as_without_it(tmp_path, preamble):
+    path = tmp_path / "frf.csv"
+    write_testlab_like(path, preamble)
+    frfs = read_frf_text(path).measured_frfs
+    np.testing.assert_allclose(frfs.frequency_hz, F)
+    np.testing.assert_allclose(frfs.frf[0], H * 9.80665, rtol=1e-12)
+
+
+@pytest.mark.parametrize("title", ['"Frequency Response H1"', '"Key:\tvalue"', '"Name","value"'])
+def test_each_quoted_line_kind_alone_is_a_preamble(tmp_path, title):
+    path = tmp_path / "frf.csv"
+    rows = [f"{float(f)!r},{float(v.real)!r},{float(v.imag)!r}" for f, v in zip(F, H, strict=True)]
+    path.write_text(
+        f'{title}\n"Frequency (Hz)","Re (g/N)","Im (g/N)"\n' + "\n".join(rows) + "\n", encoding="utf-8"
+    )
+    np.testing.assert_allclose(read_frf_text(path).measured_frfs.frf[0], H * 9.80665, rtol=1e-12)
