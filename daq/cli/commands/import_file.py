@@ -10,9 +10,11 @@ source's name, size and SHA-256, so it can always be traced back to the bytes it
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import math
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -197,64 +199,65 @@ def import_file(
         raise UserError("--frf-form applies to frf-text files only", exit_code=2)
     started = utc_now()
     store_dir, _ = resolve_store_dir(store)
-    try:
-        Store(store_dir).ensure_writable()
-    except StoreError as exc:
-        raise UserError(str(exc)) from None
-    if format is not ImportFormat.auto and chosen in ("csv", "frf-text"):
-        check_forced_format(file, chosen)
-    digest, size = sha256_of(file)
-    if chosen == "run":
-        parts = _from_run_file(file)
-    else:
+    with _no_empty_store_left(store_dir):
         try:
-            data = _read(file, chosen, columns, force_unit, response_unit, frf_form, sample_rate)
-            check_read(file, chosen, format is not ImportFormat.auto, data)
-        except MemoryError:
-            # A well-formed file can still decode to more than this machine holds (int16
-            # samples become float64 records four times their size).
-            raise UserError(
-                f"{file}: its data do not fit in this machine's memory once decoded; nothing imported"
-            ) from None
-        except (FormatError, UserError) as exc:
-            if format is not ImportFormat.auto:
-                raise
-            # The "format ... detected" line is printed only on success: say here which
-            # reader refused the file, and why it was chosen.
-            raise UserError(f"{exc} (read as {chosen}: {how})", getattr(exc, "exit_code", 1)) from None
-        parts = {
-            "hits": data.hits,
-            "measured_frfs": data.measured_frfs,
-            "spectra": data.spectra,
-            "details": data.details,
+            Store(store_dir).ensure_writable()
+        except StoreError as exc:
+            raise UserError(str(exc)) from None
+        if format is not ImportFormat.auto and chosen in ("csv", "frf-text"):
+            check_forced_format(file, chosen)
+        digest, size = sha256_of(file)
+        if chosen == "run":
+            parts = _from_run_file(file)
+        else:
+            try:
+                data = _read(file, chosen, columns, force_unit, response_unit, frf_form, sample_rate)
+                check_read(file, chosen, format is not ImportFormat.auto, data)
+            except MemoryError:
+                # A well-formed file can still decode to more than this machine holds (int16
+                # samples become float64 records four times their size).
+                raise UserError(
+                    f"{file}: its data do not fit in this machine's memory once decoded; nothing imported"
+                ) from None
+            except (FormatError, UserError) as exc:
+                if format is not ImportFormat.auto:
+                    raise
+                # The "format ... detected" line is printed only on success: say here which
+                # reader refused the file, and why it was chosen.
+                raise UserError(f"{exc} (read as {chosen}: {how})", getattr(exc, "exit_code", 1)) from None
+            parts = {
+                "hits": data.hits,
+                "measured_frfs": data.measured_frfs,
+                "spectra": data.spectra,
+                "details": data.details,
+            }
+        earlier = earlier_imports(store_dir, digest)
+        provenance: dict[str, Any] = {
+            "imported_from": {
+                "file": file.name,
+                "sha256": digest,
+                "size_bytes": size,
+                "format": chosen,
+                "format_from": how,
+                **parts.pop("details"),
+            }
         }
-    earlier = earlier_imports(store_dir, digest)
-    provenance: dict[str, Any] = {
-        "imported_from": {
-            "file": file.name,
-            "sha256": digest,
-            "size_bytes": size,
-            "format": chosen,
-            "format_from": how,
-            **parts.pop("details"),
-        }
-    }
-    if points is not None:
-        from daq.workflows.article import sample_for
+        if points is not None:
+            from daq.workflows.article import sample_for
 
-        parts["sample"] = sample_for(points)
-        parts["points"] = points
-    try:
-        run = Run(
-            run_id=new_run_id(), kind="imported", complete=True, start_time=started, end_time=utc_now(),
-            operator=operator, note=note, provenance=provenance, **parts,
-        )  # fmt: skip
-    except ValueError as exc:
-        raise UserError(f"{file}: cannot make a run of it: {exc}") from None
-    try:
-        path = Store(store_dir).seal(run)
-    except StoreError as exc:
-        raise UserError(str(exc)) from None
+            parts["sample"] = sample_for(points)
+            parts["points"] = points
+        try:
+            run = Run(
+                run_id=new_run_id(), kind="imported", complete=True, start_time=started, end_time=utc_now(),
+                operator=operator, note=note, provenance=provenance, **parts,
+            )  # fmt: skip
+        except ValueError as exc:
+            raise UserError(f"{file}: cannot make a run of it: {exc}") from None
+        try:
+            path = Store(store_dir).seal(run)
+        except StoreError as exc:
+            raise UserError(str(exc)) from None
     joined = ""
     if where is not None:
         # Joined before anything is printed: a closed pipe on stdout (| head) must not
@@ -294,6 +297,21 @@ def import_file(
         typer.echo(f"warning: {warning}", err=True)
     if joined:
         typer.echo(joined)
+
+
+@contextlib.contextmanager
+def _no_empty_store_left(store_dir: Path) -> Iterator[None]:
+    """The store folder, made before the file is read so that an unwritable store fails
+    first, is removed again when the import is refused and the folder was made for it
+    and is still empty: a refused import leaves nothing behind."""
+    made = [d for d in (store_dir, *store_dir.parents) if not d.exists()]
+    try:
+        yield
+    except BaseException:
+        with contextlib.suppress(OSError):
+            for folder in made:  # the store first, then the parents made for it
+                folder.rmdir()  # refuses a folder that holds anything
+        raise
 
 
 def import_as_test(file: Path, name, article, format, operator, note, store, point_options: bool) -> None:
