@@ -96,8 +96,9 @@ def test_sdypy_finds_daq_analyzes_damping_in_the_export(driving_point):
     freq, damping = sdypy_damping(driving_point["uff"], [m["frequency_hz"] for m in compared.values()])
     for (k, mode), f, zeta in zip(compared.items(), freq, damping, strict=True):
         assert abs(f - mode["frequency_hz"]) <= 0.01 * mode["frequency_hz"], (k, f, mode["frequency_hz"])
-        # daq's stated uncertainty is far inside the tolerance: the tolerance is the peer's.
-        assert 3 * mode["damping_u"] <= 0.2 * TOLERANCE[k] * mode["damping_ratio"], (k, mode["damping_u"])
+        # daq's stated uncertainty is well inside the tolerance: the tolerance is the peer's.
+        # (0.3 of it since the u carries the noise bias the hits show: mode 3's 0.44 %.)
+        assert 3 * mode["damping_u"] <= 0.3 * TOLERANCE[k] * mode["damping_ratio"], (k, mode["damping_u"])
         assert zeta == pytest.approx(mode["damping_ratio"], rel=TOLERANCE[k]), (
             k,
             zeta,
