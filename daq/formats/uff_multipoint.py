@@ -59,6 +59,12 @@ from daq.formats.uff58 import (
     _frf_form,
     _Record,
     _record,
+    _records_text,
+    check_complex,
+    conversion_notes,
+    decode_texts,
+    frequency_axis,
+    skipped_datasets_note,
 )
 
 #: UFF direction codes (58 reference / response direction) and their names.
@@ -575,20 +581,26 @@ def read_multipoint_uff(path: Path | str, max_bytes: int = MAX_IMPORT_BYTES) -> 
     _check_starts_as_uff(path, name)
     _check_ends_whole(path, name)
     sets, skipped = _read_sets(path, name)
-    notes = [f"skipped datasets {', '.join(map(str, skipped))}"] if skipped else []
+    why = "a test holds nodes (15), trace lines (82), functions (58) and mode shapes (55)"
+    notes = [skipped_datasets_note(skipped, why)] if skipped else []
     records = [_record(d, k, name) for k, d in enumerate(s for s in sets if s.get("type") == _FUNCTIONS)]
     if not records:
         raise FormatError(f"no dataset 58 in {name}: a multi-point test needs its FRFs (function type 4)")
     frf_recs = [r for r in records if r.func == FUNC_FRF]
     coh_recs = [r for r in records if r.func == FUNC_COHERENCE]
-    other = sorted({r.func for r in records} - {FUNC_FRF, FUNC_COHERENCE})
+    other = [r for r in records if r.func not in (FUNC_FRF, FUNC_COHERENCE)]
     if other:
-        notes.append(f"skipped records of function type {', '.join(map(str, other))}")
+        notes.append(
+            f"skipped {_records_text(other)}: a test holds FRFs (function type 4) and their coherence (6)"
+        )
     if not frf_recs:
         raise FormatError(f"{name}: no FRFs (function type 4) among its datasets 58")
-    freq = frf_recs[0].x
     for rec in frf_recs:
-        if not np.array_equal(rec.x, freq):
+        check_complex(name, rec)
+    axis = frequency_axis(name, frf_recs, notes, tuple(coh_recs))
+    freq = axis.hz
+    for rec in frf_recs:
+        if not np.array_equal(rec.x, frf_recs[0].x):
             raise FormatError(
                 f"{name}: FRF record #{rec.index} has a different frequency axis from #{frf_recs[0].index}; "
                 "one test has one frequency axis"
@@ -601,12 +613,19 @@ def read_multipoint_uff(path: Path | str, max_bytes: int = MAX_IMPORT_BYTES) -> 
             f"({forms[mixed]}) are of different forms; one test holds FRFs of one form"
         )
     units: list[str] = []
-    frf = np.stack([_scaled(rec.data.astype(np.complex128), _frf_factor(rec, units)) for rec in frf_recs])
+    factors = [_frf_factor(rec, units, name) for rec in frf_recs]
+    frf = np.stack(
+        [_scaled(rec.data.astype(np.complex128), f) for rec, f in zip(frf_recs, factors, strict=True)]
+    )
     doubtful = sorted({u for u in units if u.startswith(("unknown", "none"))})
     if doubtful:
         notes.append(f"FRF units: {'; '.join(doubtful)}")
+    notes.extend(conversion_notes(frf_recs, factors, forms[0]))
     dofs = [_dofs(name, rec) for rec in frf_recs]
     coherence = _coherence(frf_recs, coh_recs, dofs, name, notes)
+    if axis.order is not None:  # frequencies given falling: every array in rising order
+        frf = frf[:, axis.order]
+        coherence = coherence[:, axis.order] if coherence is not None else None
     names = _names(frf_recs, dofs, notes)
     geometry = [s for s in sets if s.get("type") == _GEOMETRY]
     nodes = _geometry(name, geometry, notes)
@@ -659,6 +678,10 @@ def _read_sets(path: Path, name: str) -> tuple[list[dict], list[int]]:
             wanted = [i for i, t in enumerate(types) if t in (_GEOMETRY, _LINES, _SHAPES, _FUNCTIONS)]
             skipped = sorted(set(types) - {_GEOMETRY, _LINES, _SHAPES, _FUNCTIONS})
             sets = uff.read_sets(wanted) if wanted else []
+            sets = [sets] if isinstance(sets, dict) else list(sets)
+            # Latin-1 ID lines and unit labels ('m/s²' from Windows tools), read as a run's import does.
+            functions = [k for k, i in enumerate(wanted) if types[i] == _FUNCTIONS]
+            decode_texts(path, uff, [wanted[k] for k in functions], [sets[k] for k in functions])
         except Exception as exc:
             failure = one_line(str(exc))[:100] or type(exc).__name__
             del exc
@@ -666,7 +689,6 @@ def _read_sets(path: Path, name: str) -> tuple[list[dict], list[int]]:
             gc.collect()  # pyuff's open file sits in the traceback's frames
     if failure:
         raise FormatError(f"{name}: not a readable UFF file ({failure})")
-    sets = [sets] if isinstance(sets, dict) else list(sets)
     if not all(isinstance(s, dict) for s in sets):
         raise FormatError(f"{name}: a dataset could not be read")
     return sets, skipped
