@@ -82,6 +82,8 @@ def choose_band(
     coherence_ok = True
     if coherence is not None:
         c = np.asarray(coherence, dtype=float)
+        # Several FRFs: their mean is what the band follows, and the reason says so.
+        whose = f"the mean of {c.shape[0]} FRFs': " if c.ndim == 2 and c.shape[0] > 1 else ""
         if c.ndim == 2:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)  # a line with no finite value: NaN, then 0
@@ -96,7 +98,7 @@ def choose_band(
             c_low, c_high = int(lines[good[0]]), int(lines[good[-1]])
             if c_low <= low and c_high >= high:
                 # Checked, and limiting neither edge: said, not passed over as if absent.
-                usable = f"{MIN_COHERENCE:g} or more from the lowest line up to the top"
+                usable = f"{whose}{MIN_COHERENCE:g} or more from the lowest line up to the top"
                 why.append(f"the coherence ({usable}) limits neither edge")
             said_low = c_low > low
             if said_low:
@@ -123,6 +125,36 @@ def choose_band(
     if not why:
         why.append("nothing in the run limits it (no force spectrum, no coherence)")
     return BandChoice(float(f[low]), float(f[high]), "; ".join(why), coherence_ok)
+
+
+#: An FRF among several whose coherence (its running median) is below MIN_COHERENCE over
+#: more than this share of the band is named in a caution: the band follows the FRFs'
+#: mean coherence, which one good FRF beside a noisy one keeps above it.
+POOR_SHARE = 0.5
+
+
+def poor_coherence(
+    frequency_hz: np.ndarray, coherence: np.ndarray | None, low_hz: float, high_hz: float
+) -> list[tuple[int, float, float]]:
+    """(index, share of the band's lines, median coherence) of each FRF, among two or more
+    (coherence (n_frf, n_lines), 0..1), whose running median coherence (over
+    SMOOTH_FRACTION of the lines) stays below MIN_COHERENCE over more than POOR_SHARE of
+    the lines from low_hz to high_hz (Hz). [] for one FRF (coherence_ok says it) or none."""
+    if coherence is None:
+        return []
+    c = np.atleast_2d(np.asarray(coherence, dtype=float))
+    f = np.asarray(frequency_hz, dtype=float)
+    lines = np.flatnonzero(np.isfinite(f) & (f >= low_hz) & (f <= high_hz))
+    if c.shape[0] < 2 or lines.size == 0:
+        return []
+    width = max(3, round(SMOOTH_FRACTION * lines.size) | 1)
+    out = []
+    for k, row in enumerate(c):
+        values = np.where(np.isfinite(row[lines]), row[lines], 0.0)
+        share = float(np.mean(median_filter(values, size=width, mode="nearest") < MIN_COHERENCE))
+        if share > POOR_SHARE:
+            out.append((k, share, float(np.median(values))))
+    return out
 
 
 def edge_text(value: float) -> str:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from analysis.band_choice import BandChoice, choose_band, edge_text
+from analysis.band_choice import BandChoice, choose_band, edge_text, poor_coherence
 from analysis.measurement_text import with_uncertainty
 from analysis.modal_id import ModalResult, identify_modes
 from analysis.modal_id.identify import UNEXPLAINED_SNR_DB, WEAK_PEAK_PROMINENCE_DB
@@ -433,6 +433,17 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         out.append(
             "the coherence is below 0.5 over the whole band: the FRF is mostly noise (too weak a hit, "
             "a loose sensor, or the wrong channels)"
+        )
+    if band is not None and (
+        poor := poor_coherence(result.frequency_hz, result.coherence, band.low_hz, band.high_hz)
+    ):
+        named = ", ".join(f"FRF {k + 1} (below 0.5 over {share:.0%} of the band, median {median:.2f})"
+                          for k, share, median in poor)  # fmt: skip
+        it, one = ("it", True) if len(poor) == 1 else ("them", False)
+        out.append(
+            f"{named} {'is' if one else 'are'} mostly noise, yet {'it weighs' if one else 'they weigh'} in "
+            "the modes as the others do, and the band, chosen from the FRFs' mean coherence, does not show "
+            f"it: leave {it} out of the file and import it again, or measure {it} again"
         )
     if aside:
         out.append(_set_aside_caution(result, aside, options))
