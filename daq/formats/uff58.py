@@ -351,9 +351,17 @@ def _hits(path: Path, name: str, records: list[_Record], stamp: str, details: di
         )
         return None
     if len(forces) != len(responses):
+        points = sorted({(_int(r.nodes[2], -1), _int(r.nodes[3], 0)) for r in responses})
+        several = (
+            f", at {len(points)} response points ({', '.join(f'node {n} dir {d}' for n, d in points)}); "
+            "a run holds one response per hit: write one file per response point, each with its "
+            "force records, or export time, force and one response as CSV"
+            if len(points) > 1
+            else ""
+        )
         raise FormatError(
             f"{name}: {len(forces)} force and {len(responses)} acceleration time records; "
-            "they must pair up (k-th force with k-th response)"
+            f"they must pair up (k-th force with k-th response){several}"
         )
     first = forces[0]
     n = first.data.size

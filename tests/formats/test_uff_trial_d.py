@@ -229,6 +229,21 @@ def test_time_records_in_mg_and_kgf_are_converted(tmp_path):
     np.testing.assert_allclose(got.hits.response_m_s2[0], np.cos(x) * 1e-3 * G, rtol=1e-12)
 
 
+def test_one_force_and_two_sensors_is_refused_naming_the_points_and_what_to_do(tmp_path):
+    x = np.arange(64) / 1024.0
+    time = {"func": 1, "den_kind": 0, "den_unit": "NONE", "x_kind": 17, "x_unit": "s"}
+    sets = [
+        record(np.sin(x), x, kind=13, unit="N", **time),
+        record(np.cos(x), x, kind=12, nodes=(1, 3, 1, 3), **time),
+        record(np.cos(2 * x), x, kind=12, nodes=(1, 3, 2, 3), **time),
+    ]
+    path = write(tmp_path / "two.uff", sets)
+    refused(
+        daq_import(tmp_path / "s", path), tmp_path / "s", "1 force and 2 acceleration time records",
+        "2 response points (node 1 dir 3, node 2 dir 3)", "one file per response point",
+    )  # fmt: skip
+
+
 def multi_point(path: Path, units: list[str]) -> Path:
     sets = [
         record(frf_values(seed=k), FREQ, unit=unit, nodes=(1, 3, k + 1, 3), id1=f"H{k + 1}1")
