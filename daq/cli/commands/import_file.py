@@ -443,6 +443,8 @@ def detect_format(path: Path) -> tuple[str, str]:
         raise UserError(f"{show_path(path)}: cannot read it ({exc.strerror or exc})") from None
     if head.startswith(HDF5_SIGNATURE):
         return "run", "the HDF5 signature of a run file"
+    if said := hp_ascii_export(path, head):
+        raise UserError(said)
     if looks_like_sdf(head):
         return "sdf", "an SDF FILE_HDR record at the start"
     suffix = path.suffix.lower()
@@ -490,6 +492,38 @@ def detect_format(path: Path) -> tuple[str, str]:
         f"{show_path(path)}: cannot tell its format from its name or content; "
         "give --format csv, lvm, frf-text, uff, sdf or run"
     )
+
+
+#: The header file of an HP analyzer's ASCII export (SDF_FILE_HDR ... as text); its data
+#: lie beside it in files of one number per line (.X the axis, .TXT or .Y/.Z the values).
+HP_ASCII_HEADER = b"SDF_FILE_HDR"
+HP_ASCII_SUFFIXES = (".hdr", ".x", ".txt", ".y", ".z")
+
+
+def hp_ascii_export(path: Path, head: bytes) -> str:
+    """The refusal of a file of an HP analyzer's ASCII export (its SDF_FILE_HDR text header,
+    or a column of numbers beside one), else "". Its header and numbers are in several
+    files and the binary SDF file the analyzer saves holds them all: that one is read."""
+    from daq.formats.imported import show_path
+
+    header = path
+    if HP_ASCII_HEADER not in head[:4096]:
+        if path.suffix.lower() not in HP_ASCII_SUFFIXES:
+            return ""
+        beside = [p for p in path.parent.glob(f"{glob_escape(path.stem)}.*") if p.suffix.lower() == ".hdr"]
+        try:
+            header = next(p for p in beside if HP_ASCII_HEADER in p.read_bytes()[:4096])
+        except (StopIteration, OSError):
+            return ""
+    return (
+        f"{show_path(path)}: part of an HP analyzer's ASCII export (header {show_path(header.name)}, "
+        "one number per line in the files beside it); import the SDF file the analyzer saved "
+        "(its binary .DAT or .SDF file) instead: it holds the header and the data together"
+    )
+
+
+def glob_escape(text: str) -> str:
+    return "".join(f"[{c}]" if c in "*?[" else c for c in text)
 
 
 def looks_like_uff(head: bytes) -> bool:
