@@ -76,12 +76,19 @@ MAX_DAMPING = 0.02
 
 def to_refine(poles: np.ndarray) -> np.ndarray:
     """(n_poles,) bool: the poles LSCF's noise bias reaches and the local fit can mend:
-    at most MAX_DAMPING, with another pole within stability.OVERLAP summed half-power
+    at most MAX_DAMPING, with another such pole within stability.OVERLAP summed half-power
     half-widths. An isolated mode's LSCF pole holds in noise (400 Hz at 1 %, 5 % noise:
     1.0002-1.0029 %), and a narrow window would read it with fewer lines than LSCF does,
     more scattered (197 Hz at 1 %: 0.028 Hz over seeds for LSCF's 0.016 Hz)."""
     f, zeta = frequency_damping(poles)
-    return overlapped(f, zeta) & (zeta <= MAX_DAMPING)
+    light = zeta <= MAX_DAMPING
+    out = np.zeros(f.size, dtype=bool)
+    # Close to another light pole only: a heavily damped neighbour overlaps by its own
+    # width, yet lies beyond the light pole's window, where a constant and a slope stand
+    # in for its curve and bend the fit (a new user's 400 Hz at 1 % beside 370 Hz at 5 %,
+    # noise-free: 0.9165 % +- 0.0070 % refined, 1.00000 % from LSCF).
+    out[light] = overlapped(f[light], zeta[light])
+    return out
 
 
 def refine_poles(

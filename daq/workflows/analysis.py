@@ -42,7 +42,8 @@ RESULT_NAME = "analysis"
 #: mode, an imported rate known roughly goes into every frequency's ±; 10: a heavily
 #: damped chain may wander by half its half-width, the damping read from several hits is
 #: corrected for the noise bias their own readings show, and that bias enters the ±; an
-#: FRF whose coherence is poor beside good ones is named in a caution).
+#: FRF whose coherence is poor beside good ones is named in a caution; a light mode beside
+#: heavy ones only is no longer refined).
 ANALYSIS_VERSION = 10
 #: The analyzer's window mnemonics (stored settings) as analysis window kinds.
 WINDOW_KINDS = {"UNIF": "uniform", "HANN": "hann", "FLAT": "flattop", "FORC": "force", "EXPO": "exponential"}
