@@ -302,12 +302,32 @@ def join_units(cells: list[str]) -> list[str]:
 
 
 def header_name_unit(cell: str) -> tuple[str, str | None]:
-    """("Force", "N") for "Force [N]" or "Force (N)"; (cell, None) without a unit."""
+    """("Force", "N") for "Force [N]" or "Force (N)"; ("FRF Real", "(in/s^2)/lbf") for a
+    unit with parentheses inside ("FRF Real ((in/s²)/lbf)", as Test.Lab writes it);
+    (cell, None) without a unit."""
     match = _HEADER_UNIT.fullmatch(cell)
-    if match is None or not match.group(1):
+    if match is not None and match.group(1):
+        unit = match.group(2) if match.group(2) is not None else match.group(3)
+        return match.group(1).strip(), clean_label(unit) or None
+    nested = _nested_unit(cell.rstrip())
+    if nested is None:
         return cell, None
-    unit = match.group(2) if match.group(2) is not None else match.group(3)
-    return match.group(1).strip(), clean_label(unit) or None
+    name, unit = nested
+    return name, clean_label(unit) or None
+
+
+def _nested_unit(cell: str) -> tuple[str, str] | None:
+    """(name, unit) of a cell ending in a parenthesised unit that holds parentheses itself,
+    "FRF Real ((in/s²)/lbf)" -> ("FRF Real", "(in/s²)/lbf"); None otherwise."""
+    if not cell.endswith(")"):
+        return None
+    depth = 0
+    for index in range(len(cell) - 1, -1, -1):
+        depth += {")": 1, "(": -1}.get(cell[index], 0)
+        if depth == 0:
+            name = cell[:index].strip()
+            return (name, cell[index + 1 : -1]) if name else None
+    return None
 
 
 def is_frequency_name(name: str, unit: str | None) -> bool:

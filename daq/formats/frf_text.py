@@ -169,7 +169,8 @@ def scan_layout(lines: list[str]) -> Layout:
             layout.header, layout.header_cells = index, cells
             start = index + 1
             break
-        meta = _metadata(line.strip(" \r\n")) or _quoted_metadata(stripped)  # "key<TAB>" keeps its tab
+        # A quoted line first: "Key:<TAB>value" split at the tab would keep the quote in its key.
+        meta = _quoted_metadata(stripped) or _metadata(line.strip(" \r\n"))  # "key<TAB>" keeps its tab
         if meta is None or len(candidates) >= MAX_PREAMBLE_LINES:
             return Layout()
         candidates.append((index, meta))
@@ -270,6 +271,21 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
                 from_row.add(col)
     if kinds.count("freq") != 1 or kinds[0] != "freq":
         raise FormatError(f"{name}: an FRF table needs exactly one frequency column, the first")
+    # Units the preamble states ("X axis","Frequency","kHz"; "Y-Axis Unit: g/N") stand for
+    # those the header and units row leave out: ignored, they put a 120 Hz mode at 0.12 Hz
+    # and a g/N FRF at (m/s^2)/N (a new user's Test.Lab- and PULSE-like exports).
+    preamble_x, preamble_y = _preamble_units(layout.metadata)
+    unit_notes: list[str] = []
+    if units[0] is None and preamble_x is not None:
+        units[0] = preamble_x[0]
+        if FREQUENCY_UNITS[preamble_x[0]] != 1.0:
+            unit_notes.append(f"frequency in {preamble_x[0]}, as the preamble's {preamble_x[1]!r} says")
+    from_preamble: set[str] = set()
+    if preamble_y is not None:
+        for col in range(1, table.n_cols):
+            if kinds[col] in ("re", "im", "mag") and units[col] is None:
+                units[col] = preamble_y[0]
+                from_preamble.add(preamble_y[0])
     freq_unit = units[0] or "Hz"
     if freq_unit not in FREQUENCY_UNITS:
         raise FormatError(f"{name}: unknown frequency unit {freq_unit!r}; use Hz or kHz")
@@ -330,7 +346,11 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
             raise FormatError(f"{name}: column {col + 1} ({_label(table, col)}) follows no FRF")
     row_units = {units[c] for c in from_row}
     form, factor, said = _form(
-        name, [u for u in frf_units if u and ("/" in u or ")(" in u or u in row_units)], frf_form, row_units
+        name,
+        [u for u in frf_units if u and ("/" in u or ")(" in u or u in row_units)],
+        frf_form,
+        row_units,
+        from_preamble and preamble_y[1],  # type: ignore[index]
     )
     frf = np.stack(frfs) * factor if factor != 1.0 else np.stack(frfs)
     coh = np.stack(coherence) if coherence and len(coherence) == len(frfs) else None
@@ -354,6 +374,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         details["notes"] = [f"{len(coherence)} coherence columns for {len(frfs)} FRFs: coherence ignored"]
     if empty_note:
         details.setdefault("notes", []).extend(empty_note)
+    if unit_notes:
+        details.setdefault("notes", []).extend(unit_notes)
     if phase_notes:
         details.setdefault("notes", []).extend(phase_notes)
         details["phase_looks_like_radians"] = len(phase_notes)
@@ -389,7 +411,37 @@ def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
     if kind is None and unit is None and _bare_phase_unit(cell):
         kind = "phase"  # PULSE names its columns by their units: "Hz", "dB re 1 g/N", "°"
     label = " ".join(t for t in tokens if t.lower() not in _KINDS)
+    if re.match(r"(?i)\s*db\s+re\s", cell):
+        label = ""  # a column named by its unit, "dB re 1 (m/s²)/N": no label in it
     return kind, label
+
+
+#: Preamble keys (lower case, letters only) that state the frequency axis's unit, and the
+#: FRF's (Test.Lab's "X axis","Frequency","Hz"; PULSE's "X-Axis Unit:<TAB>Hz").
+_X_UNIT_KEYS = {"xaxis", "xaxisunit", "xaxisunits", "xunit", "xunits", "abscissaunit"}
+_Y_UNIT_KEYS = {"yaxis", "yaxisunit", "yaxisunits", "yunit", "yunits", "ordinateunit"}
+
+
+def _preamble_units(metadata: list[tuple[str, str]]) -> tuple[tuple[str, str] | None, tuple[str, str] | None]:
+    """((frequency unit, key), (FRF unit, key)) the preamble states, each None if not:
+    the last word of an x-axis line if it is Hz or kHz; the last word of a y-axis line if
+    it is an FRF unit (the whole value where it is a level in dB, "dB re 1 g/N")."""
+    x = y = None
+    for key, value in metadata:
+        folded = re.sub("[^a-z]", "", key.lower())
+        words = value.split()
+        if not words:
+            continue
+        if folded in _X_UNIT_KEYS and x is None and words[-1] in FREQUENCY_UNITS:
+            x = (words[-1], key)
+        if folded in _Y_UNIT_KEYS and y is None:
+            unit = value.strip() if "db" in value.lower() else words[-1]
+            try:
+                frf_unit(clean_label(re.sub(r"(?i)db|re\s*1", "", unit)))
+            except FormatError:
+                continue
+            y = (unit if "db" in value.lower() else clean_label(unit), key)
+    return x, y
 
 
 def _bare_phase_unit(cell: str) -> str | None:
@@ -427,10 +479,11 @@ def _label(table: Table, col: int) -> str:
 
 
 def _form(
-    name: str, units: list[str], option: str | None, row_units: set[str] | None = None
+    name: str, units: list[str], option: str | None, row_units: set[str] | None = None, preamble_key: str = ""
 ) -> tuple[str, float, str]:
     """(form, SI factor, where from) of the table's FRFs. A unit of the units row
-    (``row_units``) that is no FRF unit ("Ratio") is passed over: accelerance by default."""
+    (``row_units``) that is no FRF unit ("Ratio") is passed over: accelerance by default.
+    ``preamble_key``: the preamble line the FRF unit came from, if it did."""
     row_units = row_units or set()
     parsed, unknown = [], []
     for unit in dict.fromkeys(units):
@@ -447,6 +500,8 @@ def _form(
         shown = ", ".join(frf_unit_text(u) for u, *_ in parsed)
         raise FormatError(f"{name}: the FRF columns have different units ({shown})")
     where = "units row" if parsed and parsed[0][0] in row_units else "header"
+    if preamble_key:
+        where = f"preamble's {preamble_key!r}"
     if option is not None:
         said = f"option; the {where} says {frf_unit_text(parsed[0][0])}" if parsed else "option"
         same = [factor for _, form, factor in parsed if form == option]

@@ -110,3 +110,57 @@ def test_each_quoted_line_kind_alone_is_a_preamble(tmp_path, title):
         f'{title}\n"Frequency (Hz)","Re (g/N)","Im (g/N)"\n' + "\n".join(rows) + "\n", encoding="utf-8"
     )
     np.testing.assert_allclose(read_frf_text(path).measured_frfs.frf[0], H * 9.80665, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("unit", "factor"),
+    [("((in/s²)/lbf)", 0.0254 / (0.45359237 * 9.80665)), ("((g)/N)", 9.80665), ("[(m/s²)/N]", 1.0)],
+)
+def test_a_unit_with_parentheses_inside_is_read(tmp_path, unit, factor):
+    path = tmp_path / "frf.csv"
+    write_testlab_like(path, [("Name", "FRF Point1:+Z/Point1:+Z")])
+    text = path.read_text(encoding="utf-8").replace("(g/N)", unit)
+    path.write_text(text, encoding="utf-8")
+    frfs = read_frf_text(path).measured_frfs
+    # Before: "nothing in the file says", the values stored as (m/s^2)/N, 175 times off in lbf.
+    np.testing.assert_allclose(frfs.frf[0], H * factor, rtol=1e-12)
+
+
+def _bare_columns(path, preamble: list[str]) -> None:
+    rows = [f"{float(f) / 1000.0!r},{float(v.real)!r},{float(v.imag)!r}" for f, v in zip(F, H, strict=True)]
+    path.write_text("\n".join([*preamble, '"Frequency","Real","Imaginary"', *rows]) + "\n", encoding="utf-8")
+
+
+def test_units_only_the_preamble_states_are_used(tmp_path):
+    path = tmp_path / "frf.csv"
+    _bare_columns(
+        path, ['"Name","FRF Point1:+Z/Point1:+Z"', '"X axis","Frequency","kHz"', '"Y axis","FRF","g/N"']
+    )
+    data = read_frf_text(path)
+    # Before: a 120 Hz mode at 0.12 Hz, and g/N stored as (m/s^2)/N, with no word of either.
+    np.testing.assert_allclose(data.measured_frfs.frequency_hz, F, rtol=1e-12)
+    np.testing.assert_allclose(data.measured_frfs.frf[0], H * 9.80665, rtol=1e-12)
+    assert data.details["form_from"] == "preamble's 'Y axis' (g/N)"
+    assert "frequency in kHz, as the preamble's 'X axis' says" in data.details["notes"]
+    assert data.details["preamble"]["Name"] == "FRF Point1:+Z/Point1:+Z"
+
+
+def test_a_pulse_y_axis_unit_line_in_quotes_is_used(tmp_path):
+    path = tmp_path / "h1.txt"
+    rows = [f"{float(f)!r}\t{float(v.real)!r}\t{float(v.imag)!r}" for f, v in zip(F, H, strict=True)]
+    head = ['"Frequency Response H1"', '"Y-Axis Unit:\tg/N"', "", '"Hz"\t"Real"\t"Imaginary"']
+    path.write_text("\n".join(head + rows) + "\n", encoding="utf-8")
+    data = read_frf_text(path)
+    np.testing.assert_allclose(data.measured_frfs.frf[0], H * 9.80665, rtol=1e-12)
+    assert data.details["form_from"] == "preamble's 'Y-Axis Unit' (g/N)"
+
+
+def test_a_signalcalc_units_ratio_line_states_no_unit(tmp_path):
+    path = tmp_path / "Hxysv.txt"
+    rows = [f"{float(f)!r}\t{float(v.real)!r}\t{float(v.imag)!r}" for f, v in zip(F, H, strict=True)]
+    path.write_text(
+        "\n".join(["Units: Ratio", "", "Frequency\tReal\tImaginary", *rows]) + "\n", encoding="utf-8"
+    )
+    data = read_frf_text(path)
+    np.testing.assert_allclose(data.measured_frfs.frf[0], H, rtol=1e-12)
+    assert data.details["form_from"].startswith("default")
