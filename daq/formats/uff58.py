@@ -444,6 +444,24 @@ def _exact_axis(rec: _Record, start: float, step: float, details: dict) -> tuple
     return out_rate, start
 
 
+def _printed_step_u_rel(rec: _Record) -> float:
+    """The relative standard uncertainty of an even abscissa's step printed to HEADER_DIGITS
+    significant digits (half a unit of its last digit over sqrt 3, over the step), or 0:
+    uneven axes (their own values, doubles in binary 58), and a step whose printed digits
+    end in zeros (1.00000E+00, 2.50000E-01: a step that short is taken as exact). The
+    header is text in binary 58 too, so an even axis there has the same doubt. A new user's 1/3 Hz lines, printed 3.33333E-01, put a 4000 Hz mode
+    0.0033 Hz low with a ± of 0.0010 Hz."""
+    step = rec.x_inc
+    if not (rec.even and math.isfinite(step) and step > 0):
+        return 0.0
+    printed = f"{step:.{HEADER_DIGITS - 1}e}"
+    mantissa = printed.split("e")[0]
+    if float(printed) != step or mantissa.endswith("0"):
+        return 0.0
+    half = 0.5 * 10.0 ** (int(printed.split("e")[1]) - (HEADER_DIGITS - 1))
+    return half / step / math.sqrt(3.0)
+
+
 #: Significant digits of the abscissa increment in a dataset 58 header: the format prints
 #: it as E13.5 (pyuff, and the writers that follow the format).
 HEADER_DIGITS = 6
@@ -522,6 +540,14 @@ def _frfs(path: Path, name: str, frf_recs: list[_Record], coh_recs: list[_Record
     for rec in frf_recs:
         check_complex(name, rec)
     freq = frequency_axis(name, frf_recs, notes, tuple(coh_recs))
+    if (u_rel := _printed_step_u_rel(frf_recs[0])) > 0:
+        # Every frequency is f0 + k x step: the step's printed precision scales them all.
+        details["frequency_axis_u_rel"] = u_rel
+        notes.append(
+            f"the frequency step {frf_recs[0].x_inc:.5e} is printed to {HEADER_DIGITS} significant digits: "
+            f"every frequency is known to ±{100 * u_rel * math.sqrt(3):.2g} %, which daq analyze adds to "
+            "each ±"
+        )
     for rec in frf_recs:
         if not np.array_equal(rec.x, frf_recs[0].x):
             raise FormatError(

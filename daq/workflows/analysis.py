@@ -144,7 +144,23 @@ def _rate_doubt(run: Run, result: RunAnalysis) -> None:
     a caution says so. A new user's Delta_X 0.000488 gave 2049.18 Hz for 2048 Hz, every
     frequency 0.06 % high, 250 of its ± off, with an import note alone."""
     imported = run.provenance.get("imported_from", {})
-    u_rel = imported.get("sample_rate_u_rel") if isinstance(imported, dict) else None
+    if not isinstance(imported, dict):
+        return
+    u_rel = imported.get("frequency_axis_u_rel")
+    if result.source == "measured_frf" and isinstance(u_rel, (int, float)) and u_rel > 0:
+        # An FRF file's frequency step printed to few digits (UFF 58 ASCII): the same share.
+        dominant = False
+        for mode in result.modes:
+            share = mode.frequency_hz * u_rel
+            dominant |= bool(share >= mode.frequency_u_hz)
+            mode.frequency_u_hz = float(np.hypot(mode.frequency_u_hz, share))
+        if dominant:  # said where it is the larger part of some ±, not for every ASCII file
+            result.cautions.append(
+                f"the file's frequency step is known only to ±{100 * u_rel * np.sqrt(3.0):.2g} % (printed to "
+                "6 significant digits): every frequency may be off by that much, and each ± holds its share"
+            )
+        return
+    u_rel = imported.get("sample_rate_u_rel")
     if not isinstance(u_rel, (int, float)) or not u_rel > 0 or run.hits is None:
         return
     for mode in result.modes:
