@@ -27,6 +27,14 @@ TAP_MERGE_S = 0.02
 RUNG_DOWN_FRACTION = 0.1
 #: ... or below this many times the RMS of the quiet before the first tap (the noise).
 NOISE_MARGIN = 1.5
+#: ... or, with no quiet before the first tap to measure the noise by, below this fraction
+#: of the RMS after the tap and no lower than the RMS halfway between the taps over this
+#: ratio: stationary, so noise. A ringing response cannot do both: decayed by 1/0.3 over
+#: the spacing, it is sqrt(1/0.3) = 1.8 times higher halfway. (A new user's taps 0.02 s
+#: into the record, 2 % noise: the response between taps at 0.17 of its RMS after each tap,
+#: flat; the record was left one hit and read three spurious modes.)
+STATIONARY_FRACTION = 0.3
+STATIONARY_RATIO = 1.25
 #: The stretch, as a fraction of the spacing of the taps, over which those RMS are taken.
 STRETCH_FRACTION = 0.1
 #: A tap closer to the one before than this fraction of the taps' median spacing is no
@@ -99,10 +107,14 @@ def find_cut(force: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> 
     quiet = response[: max(int(taps[0]) - pretrigger, 0)] - mean
     floor = NOISE_MARGIN * float(np.sqrt(np.mean(quiet**2))) if quiet.size >= 64 else 0.0
     for tap, following in itertools.pairwise(taps):
-        after = response[tap : tap + stretch] - mean
+        after = _rms(response[tap : tap + stretch] - mean)
         before = response[max(following - pretrigger - stretch, tap) : following - pretrigger] - mean
-        ringing = float(np.sqrt(np.mean(before**2))) if before.size else math.inf
-        if ringing > max(RUNG_DOWN_FRACTION * float(np.sqrt(np.mean(after**2))), floor):
+        ringing = _rms(before) if before.size else math.inf
+        if ringing <= max(RUNG_DOWN_FRACTION * after, floor):
+            continue
+        middle = (tap + following) // 2
+        halfway = _rms(response[middle - stretch // 2 : middle + stretch // 2] - mean)
+        if not (ringing <= STATIONARY_FRACTION * after and halfway <= STATIONARY_RATIO * ringing):
             return None
     starts = taps - pretrigger
     if starts[-1] + length > n:
@@ -115,6 +127,10 @@ def find_cut(force: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> 
         left_in=left_in,
         left_out=left_out,
     )
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
 
 
 def cut_note(cut: Cut, sample_rate_hz: float) -> str:
