@@ -165,7 +165,8 @@ def scan_layout(lines: list[str]) -> Layout:
             layout.first_data, layout.data_cells = index, cells
             break
         first = header_name_unit(cells[0].strip("\"'"))
-        if (is_frequency_name(*first) or f_then_frf_columns(cells)) and (len(cells) >= 3 or not candidates):
+        named = is_frequency_name(*first) or (first[0].strip().lower() == "khz" and first[1] is None)
+        if (named or f_then_frf_columns(cells)) and (len(cells) >= 3 or not candidates):
             layout.header, layout.header_cells = index, cells
             start = index + 1
             break
@@ -258,6 +259,10 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
         for i, cell_name in enumerate(table.names):
             if kinds[i] == "phase" and units[i] is None and _bare_phase_unit(cell_name):
                 units[i] = _bare_phase_unit(cell_name)  # a column named "°" or "rad" only
+            if kinds[i] == "mag" and units[i] is None and _bare_frf_unit(cell_name):
+                units[i] = _bare_frf_unit(cell_name)  # a column named "(m/s²)/N" only
+        if kinds and kinds[0] == "freq" and units[0] is None and table.names[0].strip().lower() == "khz":
+            units[0] = "kHz"  # a frequency column named "kHz" only
     from_row: set[int] = set()
     if layout.units is not None:
         if len(layout.unit_cells) > table.n_cols and any(layout.unit_cells[table.n_cols :]):
@@ -400,7 +405,7 @@ def f_then_frf_columns(cells: list[str]) -> bool:
 def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
     """(kind, label) of a header cell: kind "freq", "re", "im", "mag", "phase", "coh"
     ("f" as the first cell is frequency here: the table is read as FRFs, f_then_frf_columns)."""
-    if first and (is_frequency_name(cell, unit) or (cell.strip().lower() == "f" and unit is None)):
+    if first and (is_frequency_name(cell, unit) or (cell.strip().lower() in ("f", "khz") and unit is None)):
         return "freq", ""
     tokens = _TOKEN.findall(cell)
     kind = next((_KINDS[t.lower()] for t in tokens if t.lower() in _KINDS), None)
@@ -410,6 +415,8 @@ def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
         kind = "phase"
     if kind is None and unit is None and _bare_phase_unit(cell):
         kind = "phase"  # PULSE names its columns by their units: "Hz", "dB re 1 g/N", "°"
+    if kind is None and unit is None and _bare_frf_unit(cell):
+        return "mag", ""  # ... and a linear magnitude by the FRF's unit: "(m/s²)/N"
     label = " ".join(t for t in tokens if t.lower() not in _KINDS)
     if re.match(r"(?i)\s*db\s+re\s", cell):
         label = ""  # a column named by its unit, "dB re 1 (m/s²)/N": no label in it
@@ -442,6 +449,18 @@ def _preamble_units(metadata: list[tuple[str, str]]) -> tuple[tuple[str, str] | 
                 continue
             y = (unit if "db" in value.lower() else clean_label(unit), key)
     return x, y
+
+
+def _bare_frf_unit(cell: str) -> str | None:
+    """The FRF unit a header cell is made of alone ("(m/s²)/N", "g/N"), else None."""
+    text = cell.strip("\"' ")
+    if "/" not in text and ")(" not in text:
+        return None
+    try:
+        frf_unit(clean_label(text))
+    except FormatError:
+        return None
+    return text
 
 
 def _bare_phase_unit(cell: str) -> str | None:

@@ -164,3 +164,21 @@ def test_a_signalcalc_units_ratio_line_states_no_unit(tmp_path):
     data = read_frf_text(path)
     np.testing.assert_allclose(data.measured_frfs.frf[0], H, rtol=1e-12)
     assert data.details["form_from"].startswith("default")
+
+
+def test_pulse_columns_named_khz_and_by_a_linear_frf_unit(tmp_path):
+    # Refused before: '"kHz"' as no frequency ("1 data column"), '"(m/s²)/N"' as no column kind.
+    head = ['"Frequency Response H1"', '"Averages:\t5"', "", '"kHz"\t"(m/s²)/N"\t"°"']
+    rows = [
+        f"{float(f) / 1000.0!r}\t{float(abs(v))!r}\t{float(np.degrees(np.angle(v)))!r}"
+        for f, v in zip(F, H, strict=True)
+    ]
+    path = tmp_path / "h1.txt"
+    path.write_text("\n".join(head + rows) + "\n", encoding="utf-8")
+    store = tmp_path / "runs"
+    result = daq_import(store, path)
+    assert result.returncode == 0, result.stderr
+    data = read_frf_text(path)
+    np.testing.assert_allclose(data.measured_frfs.frequency_hz, F, rtol=1e-12)
+    np.testing.assert_allclose(data.measured_frfs.frf[0], H, rtol=1e-9)
+    assert data.details["form_from"] == "header ((m/s^2)/N)"
