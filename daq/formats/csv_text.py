@@ -157,7 +157,13 @@ def all_numbers(cells: list[str]) -> bool:
 
 
 def _metadata(line: str) -> tuple[str, str] | None:
-    """(key, value) of a preamble line "key: value" or "key<TAB>value", else None."""
+    """(key, value) of a preamble line "key: value" or "key<TAB>value", else None. A line
+    that is one quoted string (a title, or "key: value" in quotes, as PULSE writes its
+    preamble) is read inside its quotes, a title as ("title", text)."""
+    text = line.strip()
+    if len(text) >= 2 and text[0] == text[-1] == '"' and '"' not in text[1:-1]:
+        inner = text[1:-1].strip()
+        return (_metadata(inner) or ("title", inner)) if inner else None
     if "\t" in line:
         cells = [c.strip() for c in line.split("\t")]
         if len([c for c in cells if c]) <= 2 and cells[0]:

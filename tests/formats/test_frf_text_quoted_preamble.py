@@ -12,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from daq.formats.csv_text import is_number_text
 from daq.formats.frf_text import read_frf_text
 from tests.cli_helpers import daq_import, runs_in
 
@@ -87,9 +88,10 @@ def test_a_time_record_with_a_quoted_header_is_still_a_time_record(tmp_path):
     assert "csv: 1 hit of 256 samples" in result.stdout
 
 
+#: A preamble cell: text, never a number ("INF" is one: a row of numbers is data).
 CELL = st.text(
     st.characters(codec="latin-1", exclude_characters='"\r\n\t,;'), min_size=1, max_size=12
-).filter(lambda s: s.strip() != "" and not s.strip()[0].isdigit())
+).filter(lambda s: s.strip() != "" and not s.strip()[0].isdigit() and not is_number_text(s))
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -182,3 +184,16 @@ def test_pulse_columns_named_khz_and_by_a_linear_frf_unit(tmp_path):
     np.testing.assert_allclose(data.measured_frfs.frequency_hz, F, rtol=1e-12)
     np.testing.assert_allclose(data.measured_frfs.frf[0], H, rtol=1e-9)
     assert data.details["form_from"] == "header ((m/s^2)/N)"
+
+
+def test_a_time_record_behind_a_quoted_title_and_key_line_is_read(tmp_path):
+    t = np.arange(256) / 256.0
+    rows = [f"{x:.6f},{100.0 if k == 3 else 0.0},{np.sin(2 * np.pi * 20 * x):.6g}" for k, x in enumerate(t)]
+    head = ['"Impact test, beam 2"', '"Operator:\tme"', '"Time (s)","Force (N)","Accel (m/s^2)"']
+    path = tmp_path / "hit.csv"
+    path.write_text("\n".join(head + rows) + "\n", encoding="utf-8")
+    result = daq_import(tmp_path / "runs", path)
+    # Before: "has 1 data column", the title read as the header.
+    assert result.returncode == 0, result.stderr
+    assert "csv: 1 hit of 256 samples" in result.stdout
+    assert "preamble lines 1, 2 skipped" in result.stdout
