@@ -449,8 +449,9 @@ def _printed_step_u_rel(rec: _Record) -> float:
     significant digits (half a unit of its last digit over sqrt 3, over the step), or 0:
     uneven axes (their own values, doubles in binary 58), and a step whose printed digits
     end in zeros (1.00000E+00, 2.50000E-01: a step that short is taken as exact). The
-    header is text in binary 58 too, so an even axis there has the same doubt. A new user's 1/3 Hz lines, printed 3.33333E-01, put a 4000 Hz mode
-    0.0033 Hz low with a ± of 0.0010 Hz."""
+    header is text in binary 58 too, so an even axis there has the same doubt. A new
+    user's 1/3 Hz lines, printed 3.33333E-01, put a 4000 Hz mode 0.0033 Hz low with a ±
+    of 0.0010 Hz."""
     step = rec.x_inc
     if not (rec.even and math.isfinite(step) and step > 0):
         return 0.0
@@ -615,8 +616,13 @@ def _coherence_by_dof(
             f"{', '.join(f'#{i}' for i in lacking)}: coherence ignored (a run holds it for every FRF or none)"
         )
         return None
-    matched = [rec for rec in found if rec is not None]
-    if not all(np.array_equal(rec.x, frf_recs[0].x) for rec in matched):
+    return coherence_values([rec for rec in found if rec is not None], frf_recs[0].x, notes)
+
+
+def coherence_values(matched: list[_Record], axis: np.ndarray, notes: list[str]) -> np.ndarray | None:
+    """The coherence records matched to the FRFs, one each, as (n_frf, n_lines), or None
+    with a note where one lies on another axis than ``axis`` (Hz) or holds complex values."""
+    if not all(np.array_equal(rec.x, axis) for rec in matched):
         notes.append("coherence on a different frequency axis: ignored")
         return None
     if any(rec.data.dtype.kind == "c" and np.any(rec.data.imag) for rec in matched):

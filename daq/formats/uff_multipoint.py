@@ -61,6 +61,7 @@ from daq.formats.uff58 import (
     _record,
     _records_text,
     check_complex,
+    coherence_values,
     conversion_notes,
     decode_texts,
     frequency_axis,
@@ -760,13 +761,7 @@ def _coherence(frf_recs, coh_recs, dofs, name: str, notes: list[str]) -> np.ndar
             f"{len(coh_recs)} coherence records do not match the {len(dofs)} FRFs one to one: ignored"
         )
         return None
-    if not all(np.array_equal(rec.x, freq) for rec in found):
-        notes.append("coherence on a different frequency axis: ignored")
-        return None
-    if any(rec.data.dtype.kind == "c" and np.any(rec.data.imag) for rec in found):
-        notes.append("complex coherence values: ignored")
-        return None
-    return np.stack([rec.data.real.astype(np.float64) for rec in found])
+    return coherence_values(found, freq, notes)  # type: ignore[arg-type]
 
 
 def _names(frf_recs, dofs, notes: list[str]) -> dict[int, str]:
