@@ -215,6 +215,11 @@ def run_service(
     from daq.workflows.instrument_link import SimSpec
     from drivers.errors import DriverError
 
+    if _NOTED:
+        # A signal came while the libraries above were imported: stop before anything is
+        # bound or built, rather than build a service only to close it (a SIGTERM 0.3 s
+        # into start-up outlasted the 20 s a test gives, once, on a loaded machine).
+        raise _Shutdown
     loopback = is_loopback(host)
     # Idle clients must not take every file descriptor: raise the soft limit, and keep
     # the connections well below it (ConnectionGuard).
