@@ -44,7 +44,7 @@ from daq.formats.imported import (
     one_line,
     show_path,
 )
-from daq.formats.units import INCH_M, POUND_FORCE_N, STANDARD_GRAVITY_M_S2
+from daq.formats.units import FORM_OF_QUANTITY, PHYSICAL_UNITS, SHOWN_UNITS
 
 FUNC_TIME, FUNC_FRF, FUNC_COHERENCE = 1, 4, 6
 FORCE_TYPES = (13, 9)  # excitation force, reaction force
@@ -738,37 +738,20 @@ def check_complex(name: str, rec: _Record) -> None:
 
 # --- unit labels ---------------------------------------------------------------------------------
 
-_FOOT_M = 0.3048  # exact: international foot
-# Unit labels modal software writes into datasets 58, by quantity, and their SI factors.
-# Wider than daq/formats/units.py's column units, which the text readers share as they are.
-UFF_UNITS: dict[str, dict[str, float]] = {
-    "force": {"N": 1.0, "Newton": 1.0, "Newtons": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": POUND_FORCE_N,
-              "kgf": STANDARD_GRAVITY_M_S2, "kp": STANDARD_GRAVITY_M_S2},
-    "acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "m/s/s": 1.0, "mm/s^2": 1e-3, "mm/s2": 1e-3,
-                     "mm/s/s": 1e-3, "cm/s^2": 1e-2, "g": STANDARD_GRAVITY_M_S2,
-                     "G": STANDARD_GRAVITY_M_S2, "g's": STANDARD_GRAVITY_M_S2,
-                     "G's": STANDARD_GRAVITY_M_S2, "mg": 1e-3 * STANDARD_GRAVITY_M_S2,
-                     "ft/s^2": _FOOT_M, "ft/s2": _FOOT_M, "in/s^2": INCH_M, "in/s2": INCH_M},
-    "velocity": {"m/s": 1.0, "mm/s": 1e-3, "cm/s": 1e-2, "um/s": 1e-6, "in/s": INCH_M,
-                 "ft/s": _FOOT_M},
-    "displacement": {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "um": 1e-6, "nm": 1e-9, "in": INCH_M,
-                     "mil": 1e-3 * INCH_M, "mils": 1e-3 * INCH_M, "ft": _FOOT_M},
-}  # fmt: skip
+#: Unit labels modal software writes into datasets 58: the one table of daq/formats/units.py.
+UFF_UNITS = PHYSICAL_UNITS
 #: Labels of values a UFF file cannot turn into engineering units: it carries no sensitivity.
 VOLTAGE_LABELS = ("V", "mV", "Volt", "Volts", "EU")
 NO_SENSITIVITY = (
     "a UFF file carries no sensor sensitivity, so volts (or 'EU') cannot be turned into N or m/s^2; "
     "export the data in engineering units (N, m/s^2, g ...)"
 )
-_FORM_OF_QUANTITY = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
-FORM_QUANTITY = {form: quantity for quantity, form in _FORM_OF_QUANTITY.items()}
+FORM_QUANTITY = {form: quantity for quantity, form in FORM_OF_QUANTITY.items()}
 _A = {"force": "a force", "acceleration": "an acceleration", "velocity": "a velocity",
       "displacement": "a displacement"}  # fmt: skip
 
 
-#: The labels messages list (UFF_UNITS also takes other spellings of them: m/s2, G, Newtons ...).
-_SHOWN = {"force": "N, kN, lbf, kgf", "acceleration": "m/s^2, mm/s^2, g, mg, ft/s^2, in/s^2",
-          "velocity": "m/s, mm/s, in/s, ft/s", "displacement": "m, mm, um, in, mil, ft"}  # fmt: skip
+_SHOWN = SHOWN_UNITS
 
 
 def _understood(quantity: str) -> str:
@@ -865,7 +848,7 @@ def _unit_form(rec: _Record) -> str | None:
     if found is None:
         return None
     quantity = uff_unit(found[0])
-    return _FORM_OF_QUANTITY.get(quantity[0]) if quantity else None
+    return FORM_OF_QUANTITY.get(quantity[0]) if quantity else None
 
 
 def _frf_form(name: str, rec: _Record) -> str:
@@ -922,7 +905,7 @@ def _frf_factor(rec: _Record, units: list[str], name: str = "") -> float:
         )
     found = _frf_units(rec)
     form = FRF_FORM_OF_TYPE.get(rec.kind) or _unit_form(rec) or "accelerance"
-    quantity = next(q for q, f in _FORM_OF_QUANTITY.items() if f == form)
+    quantity = FORM_QUANTITY[form]
     if found is None:
         level = uff_unit(num) == ("level", 1.0)
         said = f"{num!r} over {den!r}" if den.upper() not in _NO_UNIT else repr(num)

@@ -2,9 +2,12 @@
 
 A unit is either a physical unit or a voltage with the sensor's sensitivity:
 
-- force: ``N`` (also ``Newtons``, as LabVIEW labels it), ``kN``, ``lbf``
-- response: ``m/s^2`` (also ``m/s2``, ``m/s/s``), ``mm/s^2`` (also ``mm/s2``, ``mm/s/s``), ``in/s^2``,
-  ``g`` (9.80665 m/s^2; also ``G``, ``g's``, ``G's``, as accelerometer software prints it)
+- force: ``N`` (also ``Newtons``, as LabVIEW labels it), ``kN``, ``mN``, ``lbf``, ``kgf``
+- response: ``m/s^2`` (also ``m/s2``, ``m/s/s``), ``mm/s^2`` (also ``mm/s2``, ``mm/s/s``),
+  ``cm/s^2``, ``in/s^2``, ``ft/s^2``, ``g`` (9.80665 m/s^2; also ``G``, ``g's``, ``G's``, as
+  accelerometer software prints it), ``mg``
+- (PHYSICAL_UNITS, which the FRF units of text tables and UFF files share, adds velocity
+  and displacement)
 - voltage: ``mV@10.2mV/g`` means "the column is in mV; the sensor gives 10.2 mV per g";
   ``V@2.25mV/N`` means "the column is in V; the sensor gives 2.25 mV per N".
   The column may be in ``V`` or ``mV``, the sensitivity in ``V/<unit>`` or ``mV/<unit>``
@@ -26,19 +29,30 @@ INCH_M = 0.0254  # exact: international inch
 
 QUANTITIES = ("force", "response")
 
-# SI factor of each physical unit: value_in_SI = value_in_unit * factor.
-_PHYSICAL: dict[str, dict[str, float]] = {
-    "force": {"N": 1.0, "kN": 1000.0, "lbf": POUND_FORCE_N},
-    "response": {
-        "m/s^2": 1.0,
-        "m/s2": 1.0,
-        "mm/s^2": 1e-3,
-        "mm/s2": 1e-3,
-        "g": STANDARD_GRAVITY_M_S2,
-        "in/s^2": INCH_M,
-        "in/s2": INCH_M,
-    },
-}
+_FOOT_M = 0.3048  # exact: international foot
+
+#: Physical units by quantity and their SI factor (value_in_SI = value_in_unit * factor),
+#: as files, loggers and modal software label them. The one table every reader uses: CSV
+#: and LabVIEW columns (force and acceleration), FRF units of text tables and UFF files.
+PHYSICAL_UNITS: dict[str, dict[str, float]] = {
+    "force": {"N": 1.0, "Newton": 1.0, "Newtons": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": POUND_FORCE_N,
+              "kgf": STANDARD_GRAVITY_M_S2, "kp": STANDARD_GRAVITY_M_S2},
+    "acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "m/s/s": 1.0, "mm/s^2": 1e-3, "mm/s2": 1e-3,
+                     "mm/s/s": 1e-3, "cm/s^2": 1e-2, "g": STANDARD_GRAVITY_M_S2,
+                     "G": STANDARD_GRAVITY_M_S2, "g's": STANDARD_GRAVITY_M_S2,
+                     "G's": STANDARD_GRAVITY_M_S2, "mg": 1e-3 * STANDARD_GRAVITY_M_S2,
+                     "ft/s^2": _FOOT_M, "ft/s2": _FOOT_M, "in/s^2": INCH_M, "in/s2": INCH_M},
+    "velocity": {"m/s": 1.0, "mm/s": 1e-3, "cm/s": 1e-2, "um/s": 1e-6, "in/s": INCH_M,
+                 "ft/s": _FOOT_M},
+    "displacement": {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "um": 1e-6, "µm": 1e-6, "nm": 1e-9,
+                     "in": INCH_M, "mil": 1e-3 * INCH_M, "mils": 1e-3 * INCH_M, "ft": _FOOT_M},
+}  # fmt: skip
+#: The labels messages list for each quantity (PHYSICAL_UNITS also takes other spellings).
+SHOWN_UNITS = {"force": "N, kN, lbf, kgf", "acceleration": "m/s^2, mm/s^2, g, mg, ft/s^2, in/s^2",
+               "velocity": "m/s, mm/s, in/s, ft/s", "displacement": "m, mm, um, in, mil, ft"}  # fmt: skip
+# A time record's columns: a force and a response (an acceleration).
+_PHYSICAL = {"force": PHYSICAL_UNITS["force"], "response": PHYSICAL_UNITS["acceleration"]}
+_SHOWN = {"force": SHOWN_UNITS["force"], "response": SHOWN_UNITS["acceleration"]}
 # Other spellings of response units, matched whole and case-sensitively: "G" is g only as
 # an acceleration unit (no force or prefix reading: "GN" stays unknown, "G" for a force
 # is refused), and only "G" itself, never a lower-cased text ("mG", "Gm/s^2" stay unknown).
@@ -51,7 +65,7 @@ _NUMBER = re.compile(r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|[-+
 
 def accepted_forms(quantity: str) -> str:
     """The unit spellings accepted for ``quantity``, for error messages."""
-    physical = ", ".join(_PHYSICAL[quantity])
+    physical = _SHOWN[quantity]
     example = "mV@2.25mV/N" if quantity == "force" else "mV@10.2mV/g"
     return f"{physical}, or a voltage with sensitivity such as {example}"
 
@@ -133,7 +147,7 @@ def _voltage_factor(text: str, quantity: str) -> float:
         said = f"{physical!r} is {kind[other]} unit" if other else f"{physical!r} is not one of them"
         raise FormatError(
             f"{quantity} unit {_show(text)}: the sensitivity must be per a {quantity} unit "
-            f"({', '.join(_PHYSICAL[quantity])}); {said}"
+            f"({_SHOWN[quantity]}); {said}"
         )
     value = float(number.group(0))
     if not math.isfinite(value) or value <= 0:
@@ -152,17 +166,12 @@ def _show(text: str) -> str:
 TIME_UNITS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
 FREQUENCY_UNITS = {"Hz": 1.0, "hz": 1.0, "kHz": 1e3, "khz": 1e3}
 # Numerator of an FRF unit: (form, SI factor).
+#: The FRF form whose numerator is each quantity.
+FORM_OF_QUANTITY = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
 _FRF_NUMERATORS: dict[str, tuple[str, float]] = {
-    "m": ("receptance", 1.0),
-    "mm": ("receptance", 1e-3),
-    "um": ("receptance", 1e-6),
-    "µm": ("receptance", 1e-6),
-    "in": ("receptance", INCH_M),
-    "m/s": ("mobility", 1.0),
-    "mm/s": ("mobility", 1e-3),
-    "in/s": ("mobility", INCH_M),
-    **{unit: ("accelerance", factor) for unit, factor in _PHYSICAL["response"].items()},
-    **{unit: ("accelerance", _PHYSICAL["response"][same]) for unit, same in _RESPONSE_SPELLINGS.items()},
+    unit: (form, factor)
+    for quantity, form in FORM_OF_QUANTITY.items()
+    for unit, factor in PHYSICAL_UNITS[quantity].items()
 }
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from daq.formats.errors import FormatError
-from daq.formats.units import parse_unit, to_si
+from daq.formats.units import frf_unit, parse_unit, to_si
 
 
 @pytest.mark.parametrize(
@@ -104,3 +104,26 @@ def test_a_sensitivity_per_the_wrong_quantity_says_which_unit_it_must_be_per(uni
     assert said in message
     assert "unknown" not in message
     assert "\n" not in message
+
+
+# Every reader takes the same units (daq/formats/units.py PHYSICAL_UNITS): the factors by
+# definition (standard gravity 9.80665 m/s^2, the international inch and foot).
+@pytest.mark.parametrize(
+    ("unit", "quantity", "factor"),
+    [("kgf", "force", 9.80665), ("mN", "force", 1e-3), ("mg", "response", 9.80665e-3),
+     ("ft/s^2", "response", 0.3048), ("cm/s^2", "response", 1e-2)],
+)  # fmt: skip
+def test_a_csv_column_takes_the_units_the_uff_reader_takes(unit, quantity, factor):
+    # Before, the CSV reader refused these while UFF records in them were converted.
+    assert parse_unit(unit, quantity) == pytest.approx(factor, rel=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("unit", "form", "factor"),
+    [("(ft/s^2)/N", "accelerance", 0.3048), ("mg/N", "accelerance", 9.80665e-3),
+     ("mil/lbf", "receptance", 2.54e-5 / (0.45359237 * 9.80665)), ("(cm/s)/kgf", "mobility", 1e-2 / 9.80665)],
+)  # fmt: skip
+def test_an_frf_text_unit_takes_the_units_the_uff_reader_takes(unit, form, factor):
+    got_form, got_factor = frf_unit(unit)
+    assert got_form == form
+    assert got_factor == pytest.approx(factor, rel=1e-15)
