@@ -12,7 +12,7 @@ import numpy as np
 
 from analysis.modal_id.lscf import lscf_poles
 from analysis.modal_id.lsfd import FORMS, lsfd
-from analysis.modal_id.refine import missing, redundant, refine_poles, to_refine
+from analysis.modal_id.refine import missing, missing_beside_heavy, redundant, refine_poles, to_refine
 from analysis.modal_id.stability import (
     Cluster,
     cluster_poles,
@@ -38,8 +38,9 @@ class ModeQuality:
     synthesis (modes and residuals), over the FRFs and lines used; accepted: False for
     a cluster picked for a frequency of interest that failed a selection rule (too few
     stable orders, ...); refined: the pole was refined on the FRF (analysis.modal_id.refine),
-    not LSCF's; added: a mode LSCF missed among close ones, found by refitting them
-    (refine.missing), with no cluster (n_stable_orders 0, scatters NaN); *_spread_top:
+    not LSCF's; added: a mode LSCF missed among close ones or beside a heavily damped
+    one, found by refitting them (refine.missing, refine.missing_beside_heavy), with no
+    cluster (n_stable_orders 0, scatters NaN); *_spread_top:
     standard deviation of the cluster's frequency (Hz) and damping over its poles in the
     top TOP_ORDERS orders of its zone (the models a result is read from; the lowest
     orders of a chain are still immature), with,
@@ -353,19 +354,43 @@ def _identify_in_zones(
         chosen = [c for c, x in zip(chosen, extra, strict=True) if not x]
         poles = poles[~extra]
         changed = changed or bool(extra.any())
+    beside_heavy = np.zeros(poles.size, dtype=bool)
     if poles.size and refine and freqs is None:
-        # A mode LSCF missed among close ones (refine.missing): a pole with no chain.
+        # A mode LSCF missed among close ones (refine.missing), or beside a heavily damped
+        # one (refine.missing_beside_heavy): a pole with no chain.
         added = missing(fu, hu, poles, line_hz, to_refine(poles))
-        if added.size:
-            order = np.argsort(np.abs(np.concatenate([poles, added])))
-            poles = np.concatenate([poles, added])[order]
-            sources: list[int | None] = [*chosen, *[None] * added.size]
+        before = np.concatenate([poles, added])
+        heavy_added, parent = missing_beside_heavy(fu, hu, before, line_hz)
+        if heavy_added.size:
+            # A pole added must stand above the noise as a mode set aside must (spurious_check):
+            # the F test reads the misfit's lines as independent, which windowed hits'
+            # noise, smooth over lines, is not.
+            both = np.concatenate([before, heavy_added])
+            keep, _, worth_naming = spurious_check(
+                fu, hu, both, lsfd(fu, hu, both, form), form, line_hz, noise_u
+            )
+            kept = keep | worth_naming
+            heavy_added, parent = heavy_added[kept[before.size :]], parent[kept[before.size :]]
+        if heavy_added.size:
+            # ... and hold where it is refined from its own value, as each hit or bootstrap
+            # replicate is refined for its ±: on the tool holder a pole added beside 1073
+            # Hz settled at 1300 Hz and, refined again, ran to the 1968 Hz mode.
+            heavy_added, parent = _holding(fu, hu, before, heavy_added, parent, line_hz)
+        if added.size or heavy_added.size:
+            order = np.argsort(np.abs(np.concatenate([before, heavy_added])))
+            poles = np.concatenate([before, heavy_added])[order]
+            sources: list[int | None] = [*chosen, *[None] * (added.size + heavy_added.size)]
             chosen = [sources[k] for k in order]
+            mark = np.zeros(before.size + heavy_added.size, dtype=bool)
+            mark[parent] = True
+            mark[before.size :] = True
+            beside_heavy = mark[order]
             changed = True
     refined = np.zeros(poles.size, dtype=bool)
     if poles.size and refine:
-        # Close modes' LSCF poles carry a bias from the noise in H (analysis.modal_id.refine).
-        poles, refined = refine_poles(fu, hu, poles, line_hz, refine=to_refine(poles))
+        # Close modes' LSCF poles carry a bias from the noise in H (analysis.modal_id.refine);
+        # a pole added beside a heavy one has no other reading to start from.
+        poles, refined = refine_poles(fu, hu, poles, line_hz, refine=to_refine(poles) | beside_heavy)
     if changed or refined.any():
         # The synthesis of the poles kept, as they are now (none left: residual terms only).
         est = lsfd(fu, hu, poles, form)
@@ -406,6 +431,20 @@ def _identify_in_zones(
         zones=list(zones),
         set_aside=set_aside,
     )
+
+
+def _holding(f, h, before, added, parent, line_hz) -> tuple[np.ndarray, np.ndarray]:
+    """The poles ``added`` (n_added,) beside the heavy poles ``before[parent]`` that stay
+    refined when refined again from their refined values (refine.refine_poles' limits on
+    how far a pole may move), with their parents' indices."""
+    poles = np.concatenate([before, added])
+    mask = to_refine(poles)
+    mask[parent] = True
+    mask[before.size :] = True
+    once, done_once = refine_poles(f, h, poles, line_hz, refine=mask)
+    _, done_twice = refine_poles(f, h, once, line_hz, refine=mask)
+    holds = (done_once & done_twice)[before.size :]
+    return added[holds], parent[holds]
 
 
 def _one_per_mode(clusters: list[Cluster], chosen: list[int], line_hz: float) -> list[int]:

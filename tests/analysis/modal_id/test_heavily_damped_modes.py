@@ -117,7 +117,10 @@ def test_both_normalisations_find_what_alpha_p_alone_misses_with_honest_uncertai
         (mode,) = _found(both, f_true, zeta_true)
         assert abs(mode.frequency_hz - f_true) <= 3 * mode.frequency_u_hz, (f_true, mode)
         assert abs(mode.damping_ratio - zeta_true) <= 3 * mode.damping_u, (zeta_true, mode)
-    assert {m.quality["normalisation"] for m in both.modes} <= set(identify.NORMALISATIONS)
+    # A mode added beside a heavy one (refine.missing_beside_heavy) has no LSCF chain.
+    assert {m.quality["normalisation"] for m in both.modes if not m.quality["added"]} <= set(
+        identify.NORMALISATIONS
+    )
 
     monkeypatch.setattr(identify, "NORMALISATIONS", ("highest",))
     alone = analyze_frfs(f, h, None, "file")
