@@ -262,8 +262,10 @@ def missing_beside_heavy(
 
     Why: two overlapping heavily damped modes (150 and 170 Hz at 5 and 8 %, 3-10 hits at
     2-5 % noise) were one mode in 9 of 15 files: LSCF held no chain at 170 Hz at any
-    order, and no caution said so. Poles fitted to the noise beside a single heavy mode
-    read F 2-4 (known-truth records, 3-10 hits at 1-5 % noise), the missed mode 58-113.
+    order, and no caution said so. Beside a single heavy mode the best extra pole read F
+    1.9-3.6 (four heavy poles of three known-truth files, 5 hits at 3 % noise; in a
+    fourth, F 23 for an undamped pole, which ADD_MIN_HALF_WIDTH_LINES refuses), the
+    missed mode 58-113.
     """
     f = np.asarray(frequency_hz, dtype=float)
     h = np.atleast_2d(np.asarray(frf, dtype=complex))
