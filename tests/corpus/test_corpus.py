@@ -284,3 +284,17 @@ def test_the_labview_file_itself_reads_as_the_converted_csv_does(channel, name, 
     for mode in analysed(name)["modes"]:
         assert min(abs(f - mode["frequency_hz"]) for f in ours) <= 5e-4 * mode["frequency_hz"], (mode, ours)
     assert len(ours) == len(analysed(name)["modes"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(SETS))
+def test_every_mode_carries_a_standard_uncertainty(name, analysed):
+    """Every mode found with default options has a finite ± for its frequency and damping.
+    On the tool holder, a pole added beside the heavily damped 1073 Hz mode
+    (refine.missing_beside_heavy) settled at 1300 Hz and, refined again from there as each
+    bootstrap replicate is, ran to the 1968 Hz mode: it was reported with no ± until a
+    pole that does not hold was left out (identify._holding)."""
+    for m in analysed(name)["modes"]:
+        assert np.isfinite(m["frequency_u_hz"]), m
+        assert m["damping_u"] is not None, m
+        assert np.isfinite(m["damping_u"]), m
