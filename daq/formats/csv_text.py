@@ -176,6 +176,24 @@ def _metadata(line: str) -> tuple[str, str] | None:
     return None
 
 
+def _metadata_row(line: str, width: int) -> tuple[str, str] | None:
+    """(key, value) of a preamble line: a ``key,value`` row of a delimited table (``,`` or
+    ``;``, quoted or not, as oscilloscopes and acquisition programs write their settings
+    above the data: ``"Sample rate","2048 Hz"``), holding fewer filled cells than the
+    ``width`` filled cells of a data row (or a sample rate: RATE_KEYS), its first no number;
+    else _metadata's forms."""
+    cells, delimiter = split_cells(line)
+    filled = [c for c in cells if c]
+    if delimiter in (",", ";") and len(filled) >= 2 and cells[0] and ":" not in cells[0]:
+        key, value = cells[0], " ".join(filled[1:])
+        # As wide as the data, the row may be the header, unless it states the sample rate
+        # (a file of force and response alone: "Sample rate,2048" above "Force,Acc").
+        states_rate = _is_rate_key(key) and _RATE_VALUE.fullmatch(value) is not None
+        if (len(filled) < width or states_rate) and not is_number_text(key):
+            return key, value
+    return _metadata(line)
+
+
 def _head_lines(handle: IO[bytes]) -> tuple[list[bytes], bool]:
     """The first HEAD_LINES raw lines (each complete), and whether the file ended among them."""
     head: list[bytes] = []
@@ -254,17 +272,22 @@ def preamble_lines(texts: list[str]) -> list[tuple[int, tuple[str, str]]]:
             continue
         cells, _ = split_cells(stripped)
         if all_numbers(cells):
-            width = len(cells)
+            width = len([c for c in cells if c])
             break
         rows.append(index)
     # The row before the data is the header unless it is a metadata line too; a row that
     # is no metadata line before it (prose, a units row) leaves the table reader to decide.
-    metas = [(i, _metadata(texts[i].strip(" \r\n"))) for i in rows]
+    metas = [(i, _metadata_row(texts[i].strip(" \r\n"), width)) for i in rows]
     # Metadata lines right before the numbers: no header at all.
     body = metas if metas and metas[-1][1] is not None else metas[:-1]
     if width >= 2 and body and len(body) <= 64 and all(meta is not None for _, meta in body):
         return body  # type: ignore[return-value]
     return []
+
+
+def _is_rate_key(key: str) -> bool:
+    """A preamble key stating the sample rate (RATE_KEYS, letters only, any case)."""
+    return re.sub("[^a-z]", "", key.lower()) in RATE_KEYS
 
 
 def _without_preamble(table: Table, handle):
@@ -279,7 +302,7 @@ def _without_preamble(table: Table, handle):
     table.preamble = [(index + 1, key, value) for index, (key, value) in preamble]
     for line, key, value in table.preamble:
         rate = _RATE_VALUE.fullmatch(value.strip())
-        if re.sub("[^a-z]", "", key.lower()) in RATE_KEYS and rate is not None:
+        if _is_rate_key(key) and rate is not None:
             hz = float(rate.group(1)) * (1000.0 if (rate.group(2) or "").lower() == "khz" else 1.0)
             if math.isfinite(hz) and hz > 0 and table.stated_rate is None:  # --sample-rate wins
                 table.stated_rate = (hz, f"line {line} ({one_line(key)[:40]}: {one_line(value)[:40]})")
