@@ -66,6 +66,8 @@ COMPLEX_COLUMNS = ("force_re", "force_im", "response_re", "response_im")
 #: The time "column" of a file of force and response alone, read with a stated rate: its
 #: times are k / rate, made here.
 NO_TIME = -1
+#: A time step this many times the median one is a gap (a sample dropped), not jitter.
+GAP_STEPS = 1.5
 COMMENT_MARKS = ("#", "%", "//")
 # Header names (lower case, without their unit) that say which column is the force and
 # which the response, whatever their order (a header unit in N or g says so too). Only
@@ -278,11 +280,24 @@ def preamble_lines(texts: list[str]) -> list[tuple[int, tuple[str, str]]]:
     # The row before the data is the header unless it is a metadata line too; a row that
     # is no metadata line before it (prose, a units row) leaves the table reader to decide.
     metas = [(i, _metadata_row(texts[i].strip(" \r\n"), width)) for i in rows]
+    if metas and _names_row(texts[metas[-1][0]], width):
+        # "Force [N]<TAB>Accel [g]" above two columns of numbers is their header, though it
+        # reads as "key<TAB>value" too: skipped, its units were lost (g stored as m/s^2).
+        metas[-1] = (metas[-1][0], None)
     # Metadata lines right before the numbers: no header at all.
     body = metas if metas and metas[-1][1] is not None else metas[:-1]
     if width >= 2 and body and len(body) <= 64 and all(meta is not None for _, meta in body):
         return body  # type: ignore[return-value]
     return []
+
+
+def _names_row(line: str, width: int) -> bool:
+    """A delimited row of ``width`` filled cells, none a number nor a "key:": the names of
+    the data's columns ("Operator: me" or "Operator:<TAB>me" stays a preamble line)."""
+    cells, delimiter = split_cells(line.strip())
+    filled = [c for c in cells if c]
+    named = delimiter is not None and 0 < len(filled) == width and ":" not in filled[0]
+    return named and not any(is_number_text(c) for c in filled)
 
 
 def _is_rate_key(key: str) -> bool:
@@ -665,6 +680,13 @@ class Table:
             rest = [i for i in range(self.n_cols) if i != hit and i not in self.empty_cols]
             if len(rest) == 2 and self.stated_rate is not None and self.find("time") is None:
                 return self._pick_without_time(rest), hit
+            if len(rest) == 2 and self.find("time") is not None:
+                time = self.find("time")
+                other = _show(header[rest[1] if rest[0] == time else rest[0]])
+                raise FormatError(
+                    f"{self.name} has 2 data columns, time {_show(header[time])} and {other}: an impact "
+                    "record needs force and response (and time, or --sample-rate)"
+                )
             if len(rest) < 3:
                 raise FormatError(
                     f"{self.name} has {count(len(rest), 'data column')}; need time, force and response"
@@ -894,6 +916,7 @@ class Table:
         data = self.data()
         lines = np.frombuffer(self.lines, dtype=np.int64)
         if picked[0] == NO_TIME:
+            self._refuse_time_axis(data, picked[1:])
             time_unit = None
             time, half, groups = self._made_time(data, lines, hit_col)
         else:
@@ -1042,9 +1065,15 @@ class Table:
         text = f"column{plural} {shown} ignored: a run holds one time, force and response"
         if complex_mode:
             return text
-        example = [header[i] if header else str(i) for i in (picked[0], picked[1], ignored[0])]
+        # Without a time column (--sample-rate), the column left out may be the time: an
+        # example of NO_TIME's -1 is refused as "no column '-1'".
+        if picked[0] == NO_TIME:
+            cols = (ignored[0], picked[1], picked[2])
+        else:
+            cols = (picked[0], picked[1], ignored[0])
+        example = [header[i] if header else str(i) for i in cols]
         if not all(_PLAIN_NAME.fullmatch(c) for c in example):  # no quoting for the shell
-            example = [str(i) for i in (picked[0], picked[1], ignored[0])]
+            example = [str(i) for i in cols]
         return (
             f"{text}; give --columns to choose (header names or 0-based indices), e.g. --columns "
             + ",".join(example)
@@ -1088,6 +1117,20 @@ class Table:
         if self.header is not None:
             return "time"
         return "the first column (time or frequency)" if col == 0 else f"column {col + 1} (time)"
+
+    def _refuse_time_axis(self, data: np.ndarray, signals: list[int]) -> None:
+        """FormatError where a column taken for force or response (``signals``, without a
+        time column) rises over every row, as a time axis does and no signal does: a file
+        of time and one signal stored its time ramp as the force."""
+        for role, col in zip(("force", "response"), signals, strict=True):
+            x = data[:, col]
+            if x.size >= 8 and x[-1] > x[0] and np.all(np.diff(x) >= 0):
+                shown = _show(self.header[col]) if self.header else str(col + 1)
+                raise FormatError(
+                    f"{self.name}: column {shown}, taken for the {role}, rises over every row as a time "
+                    "axis does: the file holds time and one signal; an impact record needs force and "
+                    "response (and time, or --sample-rate)"
+                )
 
     def _made_time(self, data, lines, hit_col) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         """(time s, its half unit, the hits' rows) of a file without a time column: one hit,
@@ -1173,9 +1216,20 @@ class Table:
                     what, unit = "uneven time step (the time column is", " s"
                 else:
                     what, unit = f"{said} steps unevenly (it is", ""
+                picked = self.picked or []
+                # Jittered time stamps of samples taken at a steady rate (a logger's clock)
+                # are refused as a dropped sample is: the way round is the user's to take,
+                # and is not offered where a step spans a gap (a sample dropped).
+                around = (
+                    f"; if the samples were taken at a steady rate and only their times are uneven, leave "
+                    f"the time column out: --columns {picked[-2]},{picked[-1]} --sample-rate HZ"
+                    if len(picked) == 3 and not self.complex_mode and np.max(d) < GAP_STEPS * np.median(d)
+                    else ""
+                )
                 raise FormatError(
                     f"{self.name} line {lines[rows[fit.bad]]}: {what} not a straight line within its printed "
                     f"precision or 1 % of the step {float(np.median(d)):g}{unit}, whichever is larger)"
+                    + around
                 )
             tolerance = max(tolerance, fit.tolerance)
             if k:

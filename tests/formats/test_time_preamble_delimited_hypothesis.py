@@ -123,7 +123,7 @@ def test_a_rate_row_as_wide_as_force_and_response_gives_their_rate(sep, quoted, 
         row([key, f"{rate:g}"], sep, quoted, 2, False),
         row(["Force (N)", "Acc (m/s^2)"], sep, quoted, 2, False),
     ]
-    lines += [f"{100.0 if i == 3 else 0.0}{sep}{0.001 * i:.6g}" for i in range(64)]
+    lines += [f"{100.0 if i == 3 else 0.0}{sep}{0.001 * (-1) ** i * (64 - i):.6g}" for i in range(64)]
     path = WORK / "two.csv"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     data = read_csv(path)

@@ -482,6 +482,7 @@ def detect_format(path: Path) -> tuple[str, str]:
             f"the header names {header[0]!r}, then FRF columns ({', '.join(header[1:3])}{more})",
         )
     if not header and (why := headerless_frf_table(head)):
+        check_not_time_in_ms(path, head, why)
         return "frf-text", why
     if not header:
         check_not_slow_time(path, head)
@@ -715,6 +716,69 @@ def headerless_frf_table(head: bytes) -> str:
         return ""
     why = frequency_axis_why(step, table[0, 0] == 0 and bool(np.all(table[0, 2::2] == 0)))
     return f"no header, and its first column steps by {step:g}: {why}" if why else ""
+
+
+def hammer_pulse_rows(force: Any, response: Any) -> tuple[int, int] | None:
+    """(first, last) row (0-based) of a hammer's pulse in ``force`` (n_rows,) that starts a
+    response (n_rows,); None otherwise. The pulse: its values of half its peak or more, 2 or
+    more, of one sign within max(3, 2 %) of the rows, starting at row PULSE_FIRST_ROW or
+    later, 80 % of the rows below 5 % of the peak. The response: quiet before the pulse
+    (under 1 % of its energy), largest after it, ringing (PULSE_RING_CROSSINGS) and
+    decaying (its last quarter's RMS under half its first quarter's).
+
+    An FRF table's columns are no such pair. Near a resonance the real part of a mobility
+    is such a peak, but the imaginary part beside it is as large on either side (the
+    dispersive half of the circle), and the other forms' real parts take both signs; a
+    resonance narrower than a line leaves one large value, not two."""
+    import numpy as np
+
+    x, y = np.asarray(force, dtype=float), np.asarray(response, dtype=float)
+    peak = float(np.max(np.abs(x))) if x.size else 0.0
+    if x.size < 16 or not peak > 0:
+        return None
+    big = np.flatnonzero(np.abs(x) >= 0.5 * peak)
+    first, last = int(big[0]), int(big[-1])
+    one_sign = big.size >= 2 and np.all(np.sign(x[big]) == np.sign(x[first]))
+    narrow = last - first + 1 <= max(3, 0.02 * x.size)
+    quiet = np.mean(np.abs(x) < 0.05 * peak) >= 0.8
+    if not (one_sign and narrow and quiet and first >= PULSE_FIRST_ROW):
+        return None
+    energy = y**2
+    before = float(np.sum(energy[: first - 2]))
+    starts = before < 0.01 * float(np.sum(energy)) and int(np.argmax(energy)) >= first
+    after = y[first:]
+    rings = np.count_nonzero(np.diff(np.sign(after[np.abs(after) > 0.05 * np.max(np.abs(after))])) != 0)
+    quarter = max(after.size // 4, 1)
+    decays = np.sqrt(np.mean(after[-quarter:] ** 2)) < 0.5 * np.sqrt(np.mean(after[:quarter] ** 2))
+    return (first, last) if starts and rings >= PULSE_RING_CROSSINGS and decays else None
+
+
+#: A hammer's pulse is told from an FRF's peak (hammer_pulse_rows) only after this many
+#: rows: the response must be seen quiet before it ...
+PULSE_FIRST_ROW = 8
+#: ... and ring after it, crossing zero this many times, and decay (a phase column beside a
+#: magnitude falls from 0 to -pi past a resonance and stays there, wrapping at +-pi).
+PULSE_RING_CROSSINGS = 6
+
+
+def check_not_time_in_ms(path: Path, head: bytes, why: str) -> None:
+    """A headerless table read as FRFs (``why``) whose second column is a hammer's pulse
+    (hammer_pulse_rows), not an FRF's real part: UserError, not a time record in ms (first
+    column 0, 0.488, 0.977, ...) stored as an FRF table without a word."""
+    from daq.formats.imported import show_path
+
+    found = _steady_first_column(head)
+    pulse = None if found is None else hammer_pulse_rows(found[0][:, 1], found[0][:, 2])
+    if pulse is not None:
+        first, last = (k + 1 for k in pulse)
+        rows = f"row {first}" if first == last else f"rows {first}-{last}"
+        raise UserError(
+            f"{show_path(path)}: cannot tell its format: {why}, yet its second column is a pulse of one "
+            f"sign ({rows}) as a hammer's force is, not an FRF's real part; if its first column is time "
+            "in ms, give the file a header row with units (Time [ms], Force [N], Acc [m/s^2]), or "
+            "import it with --format csv --columns 1,2 --sample-rate HZ; if it is an FRF table, give it "
+            "a header row naming its columns (e.g. Frequency (Hz), H1 Re, H1 Im)"
+        )
 
 
 def frequency_axis_why(step: float, real_at_zero: bool) -> str:
