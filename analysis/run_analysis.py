@@ -449,7 +449,7 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         out.append(_set_aside_caution(result, aside, options))
     unexplained = _unexplained(result, aside)
     if unexplained and not asked:
-        out.append(_unexplained_caution(result, unexplained))
+        out.append(_unexplained_caution(result, unexplained, options))
     # ModalResult.weak_peaks_hz leaves out the clear peaks already named above.
     weak = [
         p for p in getattr(result.modal, "weak_peaks_hz", None) or []
@@ -590,14 +590,7 @@ def _set_aside_caution(
     them (the same band, order and estimator as this result, so that the same chains come)."""
     one = len(aside) == 1
     listed = ", ".join(f"{f:.6g}" for f, _ in aside)
-    every = sorted([m.frequency_hz for m in result.modes] + [f for f, _ in aside])
-    again = f"--frequencies {','.join(f'{f:.6g}' for f in every)}"
-    if options.band_hz is not None:
-        again += f" --band {options.band_hz[0]:g}:{options.band_hz[1]:g}"
-    if options.max_order is not None:
-        again += f" --max-order {options.max_order}"
-    if options.estimator != AnalysisOptions.estimator and result.source == "hits":
-        again += f" --estimator {options.estimator}"
+    again = _keep_options(result, [f for f, _ in aside], options)
     return (
         f"{len(aside)} possible mode{'' if one else 's'} left out, at {listed} Hz: "
         f"{'it improves' if one else 'each improves'} the fit where it lies, but not clearly enough to "
@@ -607,6 +600,20 @@ def _set_aside_caution(
     )
 
 
+def _keep_options(result: RunAnalysis, more_hz: list[float], options: AnalysisOptions) -> str:
+    """The options that ask for the modes found and ``more_hz`` (Hz) with the same band,
+    order and estimator as this result, so that the same chains come."""
+    every = sorted([m.frequency_hz for m in result.modes] + list(more_hz))
+    again = f"--frequencies {','.join(f'{f:.6g}' for f in every)}"
+    if options.band_hz is not None:
+        again += f" --band {options.band_hz[0]:g}:{options.band_hz[1]:g}"
+    if options.max_order is not None:
+        again += f" --max-order {options.max_order}"
+    if options.estimator != AnalysisOptions.estimator and result.source == "hits":
+        again += f" --estimator {options.estimator}"
+    return again
+
+
 def _unexplained(result: RunAnalysis, aside: list[tuple[float, float]]) -> list[float]:
     """The clear peaks of the FRF no mode accounts for (ModalResult.unexplained_peaks_hz),
     but those a possible mode left out already names (within two lines)."""
@@ -614,20 +621,42 @@ def _unexplained(result: RunAnalysis, aside: list[tuple[float, float]]) -> list[
     return [p for p in peaks if not any(abs(p - f) <= 2 * _line(result) for f, _ in aside)]
 
 
-def _unexplained_caution(result: RunAnalysis, peaks: list[float]) -> str:
-    """A clear peak without a mode, what it may be, and the --band that looks at it alone."""
+def _unexplained_caution(result: RunAnalysis, peaks: list[float], options: AnalysisOptions) -> str:
+    """A clear peak without a mode, what it may be, the --band that looks at it alone (but
+    where the result's own --band is hardly wider) and the --frequencies that keep what the
+    diagram holds there beside the modes found."""
     one = len(peaks) == 1
     p = peaks[0]
     band, listed = _look_band(result, p), ", ".join(f"{f:.4g}" for f in peaks)
     what = "a mode" if one else "modes"
+    look = f"look at {'it' if one else 'each'} with --band" + (
+        f" {band}" if one else f", e.g. --band {band} for {p:.4g} Hz"
+    )
+    keep = f"; or keep what the diagram holds there with {_keep_options(result, peaks, options)}"
+    low, high = (float(v) for v in band.split(":"))
+    given = options.band_hz
+    if given is not None and high - low >= LOOKED_BAND_SHARE * (given[1] - given[0]):
+        # Its band was given and is hardly wider: the same --band again finds nothing again
+        # (a measured beam's 224.6 Hz on 9.8 Hz lines was sent round from band to band, and
+        # --frequencies in that band held nothing either).
+        look = (
+            f"its --band {given[0]:g}:{given[1]:g} already looks at {'it' if one else 'them'} and holds "
+            f"nothing: a mode narrower than a line ({_line(result):.3g} Hz) is likely; record longer for "
+            "finer lines, or analyse without --band"
+        )
+        keep = ""
     return (
         f"{'a clear peak' if one else 'clear peaks'} of the FRF at {listed} Hz "
         f"({UNEXPLAINED_SNR_DB:g} dB or more above the noise) {'has' if one else 'have'} no mode, even "
         f"analysed in {'a zone of its own' if one else 'zones of their own'}: {what} the stability diagram "
-        "does not hold (one of a close pair, a mode narrower than a line, or a small mode beside a larger "
-        f"one); look at {'it' if one else 'each'} with --band"
-        + (f" {band}" if one else f", e.g. --band {band} for {p:.4g} Hz")
+        f"does not hold (one of a close pair, a mode narrower than a line, or a small mode beside a larger "
+        f"one); {look}{keep}"
     )
+
+
+#: An unexplained peak's caution suggests no --band when the result's own --band is no more
+#: than this many times wider than the band it would suggest.
+LOOKED_BAND_SHARE = 0.5
 
 
 def _look_band(result: RunAnalysis, peak_hz: float) -> str:

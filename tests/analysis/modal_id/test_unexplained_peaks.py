@@ -59,7 +59,8 @@ def test_without_the_second_pass_the_pair_is_lost_and_the_caution_names_its_peak
     assert caution.startswith(
         "clear peaks of the FRF at 31, 33 Hz (25 dB or more above the noise) have no mode"
     )
-    assert caution.endswith("look at each with --band, e.g. --band 18.5:43.5 for 31 Hz"), caution
+    assert "; look at each with --band, e.g. --band 18.5:43.5 for 31 Hz; " in caution, caution
+    assert caution.endswith("keep what the diagram holds there with --frequencies 12.5027,31,33,180.088")
 
 
 def test_frequencies_asked_for_take_the_chain_at_them_not_a_blend_of_two_modes():
