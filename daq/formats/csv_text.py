@@ -113,6 +113,9 @@ def choose_delimiter(line: str) -> str | None:
     return None
 
 
+#: What a line's delimiter is called in a message (None: runs of whitespace).
+_DELIMITER_NAMES = {",": "commas", ";": "semicolons", "\t": "tabs", None: "spaces"}
+
 #: How far the preamble scan looks: lines, and bytes of one line.
 HEAD_LINES = 200
 HEAD_LINE_BYTES = 4096
@@ -501,8 +504,15 @@ class Table:
                 return
         cells = self._split(line)
         if len(cells) != self.n_cols:
+            other = choose_delimiter(line)
+            differs = (
+                f" (its cells are separated by {_DELIMITER_NAMES.get(other, repr(other))}, the lines above "
+                f"by {_DELIMITER_NAMES.get(self.delimiter, repr(self.delimiter))})"
+                if other != self.delimiter and len(split_line(line, other)) == self.n_cols
+                else ""
+            )
             raise FormatError(
-                f"{self.name} line {number}: {count(len(cells), 'column')}, expected {self.n_cols}"
+                f"{self.name} line {number}: {count(len(cells), 'column')}, expected {self.n_cols}{differs}"
             )
         if self.header is not None and not self.values and self.units_row is None:
             units = _units_row(cells)

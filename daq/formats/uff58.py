@@ -350,6 +350,13 @@ def _hits(path: Path, name: str, records: list[_Record], stamp: str, details: di
             "acceleration time records do not pair up into hits; the FRFs are imported"
         )
         return None
+    if responses and not forces:
+        # Output-only data (operational modal analysis): no hit to divide by.
+        raise FormatError(
+            f"{name}: {len(responses)} acceleration time record{'s' if len(responses) > 1 else ''} and no "
+            "force record: an impact test needs the hammer's force beside each response (output-only "
+            "data cannot give FRFs here)"
+        )
     if len(forces) != len(responses):
         points = sorted({(_int(r.nodes[2], -1), _int(r.nodes[3], 0)) for r in responses})
         several = (
