@@ -203,6 +203,59 @@ def _check_ends_whole(path: Path, name: str) -> None:
         raise FormatError(f"{name}: truncated UFF file (it does not end with a -1 delimiter line)")
 
 
+def _which_dataset_fails(path: Path, uff) -> str:
+    """ ", at dataset #k (from line L)": the first dataset pyuff cannot read alone, or "".
+    pyuff says only "Error when reading data-set(s)" of a file of hundreds; its block
+    index (byte offsets, a private attribute) gives the line where the dataset starts."""
+    try:
+        count = len(uff.get_set_types())
+    except Exception:
+        return ""
+    for k in range(count):
+        try:
+            uff.read_sets(k)
+        except Exception:
+            block = getattr(uff, "_block_ind", None)
+            try:
+                with open(path, "rb") as handle:
+                    text = handle.read(int(block[k][1]))
+                first = text[: int(block[k][0])].count(b"\n") + 1
+                bad = _first_bad_line(text[int(block[k][0]) :].decode("latin-1").splitlines())
+            except Exception:
+                return f", at dataset #{k + 1}"
+            if bad is None:
+                return f", at dataset #{k + 1} (from line {first})"
+            offset, token = bad
+            return f", at dataset #{k + 1}: line {first + offset} holds {token!r}, which is no number"
+    return ""
+
+
+#: A number as an ASCII dataset 58 prints it (Fortran E or D format).
+_FORTRAN_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?")
+
+
+def _first_bad_line(lines: list[str]) -> tuple[int, str] | None:
+    """(index in ``lines``, token) of the first field of an ASCII dataset 58 (its lines from
+    the -1 that opens it) that should be a number and is not: records 6 and 7 whole, the
+    four data-type fields of records 8-11, and every data line; None if none (or binary)."""
+    if len(lines) < 2 or lines[1].strip() != "58":
+        return None  # 58b: binary values, no lines to blame
+    for index, line in enumerate(lines[2:], start=2):
+        if line.strip() == "-1":
+            return None
+        if index < 7:
+            continue  # records 1-5: free text
+        tokens = line.split()
+        if 9 <= index <= 12:
+            tokens = tokens[:4]
+        for token in tokens:
+            if index in (7, 8) and token.upper() == "NONE":
+                continue  # record 6 names its entities in text
+            if not _FORTRAN_NUMBER.fullmatch(token):
+                return index, token[:20]
+    return None
+
+
 def read_uff_sets(path: Path, name: str) -> list[dict]:
     """The datasets 58 of ``path`` as pyuff reads them (their text fields decoded as
     :func:`decode_texts` does); FormatError (one line) if there are none or pyuff fails."""
@@ -218,6 +271,7 @@ def _read_sets58(path: Path, name: str) -> tuple[list[dict], list[int]]:
     other: list[int] = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
+        uff = None
         try:
             uff = pyuff.UFF(str(path))
             types = [int(t) for t in uff.get_set_types()]
@@ -229,6 +283,8 @@ def _read_sets58(path: Path, name: str) -> tuple[list[dict], list[int]]:
         except Exception as exc:
             failure = one_line(str(exc))[:100] or type(exc).__name__
             del exc
+            if uff is not None:
+                failure = failure.rstrip(".") + _which_dataset_fails(path, uff)
         if failure:
             # pyuff leaves its open file in the frames of the traceback; collect it
             # here, where its ResourceWarning is silenced, not in some later test or call.
