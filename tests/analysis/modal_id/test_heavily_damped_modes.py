@@ -71,9 +71,12 @@ SMALL_HZ = [300, 800, 1230, 1500, 1810, 2310, 2770, 3000, 3400, 3900, 4500]
 SMALL_ZETA = [0.04, 0.1, 0.04, 0.028, 0.018, 0.015, 0.015, 0.01, 0.022, 0.02, 0.02]
 
 
-def tool_holder_like(seed: int, noise: float = 0.4) -> tuple[np.ndarray, np.ndarray]:
+def tool_holder_like(
+    seed: int, noise: float = 0.4, small_residues: dict[int, np.ndarray] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Five roving-hammer accelerances 0-5000 Hz on 1 Hz lines, the noise's RMS
-    ``noise`` x the FRF's RMS x (f / 2 kHz)^2."""
+    ``noise`` x the FRF's RMS x (f / 2 kHz)^2. small_residues: SMALL_HZ index -> (5,)
+    residues that replace that small mode's."""
     f = np.arange(0.0, 5001.0)
     shapes = np.array(
         [[1.0, 0.7, 0.45, 0.3, 0.2], [1.0, 0.4, -0.1, -0.3, -0.35], [1.0, 0.2, -0.15, -0.2, -0.15]]
@@ -82,6 +85,8 @@ def tool_holder_like(seed: int, noise: float = 0.4) -> tuple[np.ndarray, np.ndar
     small = shape_rng.uniform(-0.3, 0.3, (len(SMALL_HZ), 5)) * shape_rng.uniform(
         0.05, 0.3, (len(SMALL_HZ), 1)
     )
+    for k, residue in (small_residues or {}).items():
+        small[k] = residue
     residues = np.vstack([shapes * shapes[:, :1], small])
     h = accelerance(f, MAIN_HZ + SMALL_HZ, MAIN_ZETA + SMALL_ZETA, residues.T, noise=0.0)
     rng = np.random.default_rng(seed)
