@@ -189,12 +189,14 @@ def _metadata_row(line: str, width: int) -> tuple[str, str] | None:
     else _metadata's forms."""
     cells, delimiter = split_cells(line)
     filled = [c for c in cells if c]
-    if delimiter in (",", ";") and len(filled) >= 2 and cells[0] and ":" not in cells[0]:
-        key, value = cells[0], " ".join(filled[1:])
+    if delimiter in (",", ";") and len(filled) == 2 and cells[0] and ":" not in cells[0]:
+        key, value = filled
         # As wide as the data, the row may be the header, unless it states the sample rate
-        # (a file of force and response alone: "Sample rate,2048" above "Force,Acc").
+        # (a file of force and response alone: "Sample rate,2048" above "Force,Acc"); a
+        # name with a unit ("Force [kN]") is a column's, never a key.
         states_rate = _is_rate_key(key) and _RATE_VALUE.fullmatch(value) is not None
-        if (len(filled) < width or states_rate) and not is_number_text(key):
+        named = any(header_name_unit(c)[1] is not None for c in filled)
+        if (len(filled) < width or states_rate) and not is_number_text(key) and not named:
             return key, value
     return _metadata(line)
 
@@ -295,12 +297,16 @@ def preamble_lines(texts: list[str]) -> list[tuple[int, tuple[str, str]]]:
 
 
 def _names_row(line: str, width: int) -> bool:
-    """A delimited row of ``width`` filled cells, none a number nor a "key:": the names of
-    the data's columns ("Operator: me" or "Operator:<TAB>me" stays a preamble line)."""
+    """A delimited row of ``width`` filled cells, none a number, one or more with a unit
+    ("Force [N]<TAB>Accel [g]", "CH1: Force [N]<TAB>CH2: Accel [g]"), its first no sample-rate
+    key: the names of the data's columns. "Operator<TAB>A. Smith", "Sample rate<TAB>2048 Hz"
+    and "Input<TAB>Hammer" stay preamble lines."""
     cells, delimiter = split_cells(line.strip())
     filled = [c for c in cells if c]
-    named = delimiter is not None and 0 < len(filled) == width and ":" not in filled[0]
-    return named and not any(is_number_text(c) for c in filled)
+    if delimiter is None or not 0 < len(filled) == width or _is_rate_key(filled[0].partition("[")[0]):
+        return False
+    with_unit = any(header_name_unit(c)[1] is not None for c in filled)
+    return with_unit and not any(is_number_text(c) for c in filled)
 
 
 def _is_rate_key(key: str) -> bool:
@@ -1075,10 +1081,15 @@ class Table:
         text = f"column{plural} {shown} ignored: a run holds one time, force and response"
         if complex_mode:
             return text
-        # Without a time column (--sample-rate), the column left out may be the time: an
-        # example of NO_TIME's -1 is refused as "no column '-1'".
         if picked[0] == NO_TIME:
-            cols = (ignored[0], picked[1], picked[2])
+            # Without a time column (--sample-rate; an example of NO_TIME's -1 was refused as
+            # "no column '-1'"): a time column left out is meant so, another column is
+            # offered as the response.
+            left = ignored[0]
+            unit = self.units[left] if self.header is not None else None
+            if self.find("time") == left or (unit is not None and unit in TIME_UNITS):
+                return f"{text} (the times come from --sample-rate)"
+            cols: tuple[int, ...] = (picked[1], left)
         else:
             cols = (picked[0], picked[1], ignored[0])
         example = [header[i] if header else str(i) for i in cols]

@@ -236,8 +236,9 @@ _FORTRAN_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?")
 
 def _first_bad_line(lines: list[str]) -> tuple[int, str] | None:
     """(index in ``lines``, token) of the first field of an ASCII dataset 58 (its lines from
-    the -1 that opens it) that should be a number and is not: records 6 and 7 whole, the
-    four data-type fields of records 8-11, and every data line; None if none (or binary)."""
+    the -1 that opens it) that should be a number and is not: record 6's function type,
+    record 7 whole, the four data-type fields of records 8-11, and every data line; None
+    if none (or binary)."""
     if len(lines) < 2 or lines[1].strip() != "58":
         return None  # 58b: binary values, no lines to blame
     for index, line in enumerate(lines[2:], start=2):
@@ -246,11 +247,11 @@ def _first_bad_line(lines: list[str]) -> tuple[int, str] | None:
         if index < 7:
             continue  # records 1-5: free text
         tokens = line.split()
-        if 9 <= index <= 12:
-            tokens = tokens[:4]
+        if index == 7:
+            tokens = tokens[:1]  # record 6: its function type; its entity names are text
+        elif 9 <= index <= 12:
+            tokens = tokens[:4]  # records 8-11: data types and exponents, then labels
         for token in tokens:
-            if index in (7, 8) and token.upper() == "NONE":
-                continue  # record 6 names its entities in text
             if not _FORTRAN_NUMBER.fullmatch(token):
                 return index, token[:20]
     return None
@@ -407,11 +408,16 @@ def _hits(path: Path, name: str, records: list[_Record], stamp: str, details: di
         )
         return None
     if responses and not forces:
-        # Output-only data (operational modal analysis): no hit to divide by.
+        # Output-only data (operational modal analysis): no hit to divide by. Beside
+        # records of other types, one of them may be the force, written under another type.
+        also = (
+            f"; the file's other time records ({_records_text(other)}) are no force by their data type"
+            if other
+            else " (output-only data cannot give FRFs here)"
+        )
         raise FormatError(
             f"{name}: {len(responses)} acceleration time record{'s' if len(responses) > 1 else ''} and no "
-            "force record: an impact test needs the hammer's force beside each response (output-only "
-            "data cannot give FRFs here)"
+            f"force record: an impact test needs the hammer's force beside each response{also}"
         )
     if len(forces) != len(responses):
         points = sorted({(_int(r.nodes[2], -1), _int(r.nodes[3], 0)) for r in responses})

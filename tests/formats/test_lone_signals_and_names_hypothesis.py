@@ -7,7 +7,8 @@ changed):
 - time and one signal, with --sample-rate, stored the time ramp as the force;
 - a headerless time record in ms (0, 0.488, 0.977, ...) was imported as an FRF table, the
   force as its real part;
-- a note's example `--columns -1,1,0` was refused as "no column '-1'";
+- a note's example `--columns -1,1,0` was refused as "no column '-1'", and one without a
+  time column offered the column left out as the time;
 - jittered time stamps were refused without the way round that --sample-rate gives.
 """
 
@@ -144,7 +145,7 @@ def test_a_headerless_frf_table_still_imports_as_frfs(tmp_path):
     assert "frf-text: 1 FRF of 801 points" in result.stdout
 
 
-def test_the_ignored_time_columns_example_is_a_command_that_runs(tmp_path):
+def test_a_time_column_left_out_for_the_sample_rate_gets_no_example_back(tmp_path):
     force, response = hit()
     path = tmp_path / "hit.csv"
     pairs = enumerate(zip(force, response, strict=True))
@@ -152,10 +153,22 @@ def test_the_ignored_time_columns_example_is_a_command_that_runs(tmp_path):
     path.write_text("Time [s],Force [N],Accel [m/s^2]\n" + rows, encoding="utf-8")
     first = daq_import(tmp_path / "a", path, "--columns", "1,2", "--sample-rate", "2048")
     assert first.returncode == 0, first.stderr
+    (note,) = [line for line in first.stdout.splitlines() if "ignored" in line]
+    assert note.endswith("(the times come from --sample-rate)")
+    assert "-1" not in note
+
+
+def test_another_column_left_out_is_offered_as_the_response_and_that_runs(tmp_path):
+    force, response = hit()
+    path = tmp_path / "two.csv"
+    rows = "".join(f"{f:.17g},{r:.17g},{-r:.17g}\n" for f, r in zip(force, response, strict=True))
+    path.write_text("Force [N],Acc1 [g],Acc2 [g]\n" + rows, encoding="utf-8")
+    first = daq_import(tmp_path / "a", path, "--columns", "0,1", "--sample-rate", "2048")
+    assert first.returncode == 0, first.stderr
     (note,) = [line for line in first.stdout.splitlines() if "e.g. --columns" in line]
     example = note.rsplit("e.g. --columns ", 1)[1].split()
-    assert example == ["0,1,2"]
-    again = daq_import(tmp_path / "b", path, "--columns", *example)
+    assert example == ["0,2"]  # before: "2,0,1", Acc2 as the time ("unknown time unit 'g'")
+    again = daq_import(tmp_path / "b", path, "--columns", *example, "--sample-rate", "2048")
     assert again.returncode == 0, again.stderr
 
 
@@ -172,3 +185,49 @@ def test_jittered_times_are_offered_the_sample_rate_a_dropped_sample_is_not(tmp_
     store = tmp_path / "store"
     line = refused(daq_import(store, path), store, "uneven time step")
     assert ("--columns 1,2 --sample-rate HZ" in line) == offered
+
+
+@pytest.mark.parametrize(
+    ("preamble", "rate_hz"),
+    [
+        ("Title\tHammer test\nSample rate\t2048 Hz\n", 2048.0),
+        ("Sample rate,2048 Hz\n", 2048.0),
+        ("Sample rate;4000\n", 4000.0),
+        ("Input\tHammer\nOutput\tAccelerometer\n", None),
+    ],
+)
+def test_preamble_rows_as_wide_as_two_columns_stay_preamble_rows(preamble, rate_hz):
+    # A review of the names-row rule: these rows, as wide as force and response, carry no
+    # unit and are no header (the first two lost their rate, the last was read as names).
+    force, response = hit()
+    sep = "\t" if "\t" in preamble else preamble.split("\n")[0][11]
+    path = WORK / "wide-preamble.txt"
+    rows = "".join(f"{f:.17g}{sep}{r:.17g}\n" for f, r in zip(force, response, strict=True))
+    path.write_text(preamble + rows, encoding="utf-8")
+    data = read_csv(path, sample_rate_hz=None if rate_hz else 2048.0)
+    assert data.hits.sample_rate_hz == (rate_hz or 2048.0)
+    assert any(note.startswith("preamble line") for note in data.details["notes"])
+
+
+@SETTINGS
+@given(
+    force_unit=st.sampled_from(sorted(FORCE_UNITS)),
+    response_unit=st.sampled_from(sorted(RESPONSE_UNITS)),
+    trailing=st.booleans(),
+)
+def test_a_header_with_units_above_an_extra_column_keeps_its_units(force_unit, response_unit, trailing):
+    # Three names with units above four columns (a spare channel, or a delimiter at the end
+    # of every row): a header, not a "key,value" row of fewer cells than the data.
+    force, response = hit()
+    head = f"Time [s],Force [{force_unit}],Accel [{response_unit}]" + ("," if trailing else "")
+    pairs = enumerate(zip(force, response, strict=True))
+    rows = "".join(f"{k / 2048:.17g},{f:.17g},{r:.17g},0\n" for k, (f, r) in pairs)
+    path = WORK / "spare.csv"
+    path.write_text(head + "\n" + rows, encoding="utf-8")
+    if not trailing:
+        with pytest.raises(FormatError, match="4 columns, expected 3"):
+            read_csv(path)
+        return
+    data = read_csv(path)
+    np.testing.assert_allclose(data.hits.force_n[0], force * FORCE_UNITS[force_unit], rtol=1e-12)
+    assert data.details["units_from"]["response"] == "header"

@@ -23,6 +23,8 @@ def three_frfs(path: Path) -> list[str]:
     """Three FRFs of 64 lines; the file's lines."""
     f = np.arange(64.0)
     sets = [frf_set((k + 1) / (100.0 - f + 1j * (k + 1)), f, id1=f"FRF {k}") for k in range(3)]
+    for dset in sets[1:]:
+        dset.update(rsp_ent_name="Acc pt", ref_ent_name="Hammer")  # text in record 6
     path.unlink(missing_ok=True)
     write_sets(path, sets)
     return path.read_text(encoding="latin-1").splitlines()
