@@ -12,6 +12,11 @@ stability diagram that the data do not need: the spurious-pole rule of issue 20
 (docs/analysis.md) applied to the peer. Whether our defaults found each mode is read
 from ``daq analyze --json`` with default options.
 
+Then, beside our own modes (their poles, residues fitted the same way): how well they
+reproduce the FRF over the peer's band, and for each peer mode we miss, the misfit around
+it with that mode added to ours, as a factor (x0.27: the data need it beside what we
+found; x1.00: they do not).
+
 Run: python bench/corpus_peer_needed.py --corpus CORPUS_DIR [--only tool-holder ...]
 """
 
@@ -55,8 +60,8 @@ def frf_of(corpus: Path, spec) -> tuple[np.ndarray, np.ndarray]:
     return f, np.atleast_2d(h)
 
 
-def ours(corpus: Path, spec) -> list[float]:
-    """Our modes' frequencies (Hz), daq import and daq analyze with default options."""
+def ours(corpus: Path, spec) -> list[tuple[float, float]]:
+    """Our modes' (frequency Hz, damping ratio), daq import and daq analyze with default options."""
     with tempfile.TemporaryDirectory() as store:
         run = [sys.executable, "-m", "daq"]
         subprocess.run(
@@ -64,7 +69,7 @@ def ours(corpus: Path, spec) -> list[float]:
         )
         out = subprocess.run([*run, "analyze", "latest", "--json", "--store", store], check=True,
                              capture_output=True, text=True).stdout  # fmt: skip
-    return [m["frequency_hz"] for m in json.loads(out)[0]["modes"]]
+    return [(m["frequency_hz"], m["damping_ratio"]) for m in json.loads(out)[0]["modes"]]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -96,12 +101,39 @@ def main(argv: list[str] | None = None) -> int:
             worse = np.linalg.norm((hu - without.synthesized)[:, there]) / np.linalg.norm(
                 (hu - with_all.synthesized)[:, there]
             )
-            hit = any(near(x, fn, ref["frequency_step_hz"], zeta) for x in found)
+            hit = any(near(x, fn, ref["frequency_step_hz"], zeta) for x, _ in found)
             print(
                 f"  {fn:10.2f} Hz {100 * zeta:5.2f} %: the misfit around it x{worse:.2f} without it"
                 + ("" if hit else "   (not found by our defaults)")
             )
+        _beside_ours(fu, hu, ref, modes, found)
     return 0
+
+
+def _beside_ours(fu, hu, ref: dict, modes: list[dict], found: list[tuple[float, float]]) -> None:
+    """Print how well our modes reproduce the FRF over the peer's band, and, for each peer
+    mode we miss, how much adding it to ours lowers the misfit around it: whether the data
+    still need it beside what we found."""
+    line = ref["frequency_step_hz"]
+    inside = [(f, z) for f, z in found if ref["band_hz"][0] <= f <= ref["band_hz"][1]]
+    if not inside:
+        return
+    mine = np.array([pole(f, z) for f, z in inside])
+    base = lsfd(fu, hu, mine, "accelerance")
+    print(f"  our {len(inside)} modes in this band reproduce the FRF to {100 * base.relative_error:.1f} %")
+    for m in modes:
+        fn, zeta = m["frequency_hz"], m["damping_ratio"]
+        if any(near(x, fn, line, zeta) for x, _ in inside):
+            continue
+        there = np.abs(fu - fn) <= max(LOCAL_HALF_WIDTHS * zeta * fn, 3 * line)
+        more = lsfd(fu, hu, np.append(mine, pole(fn, zeta)), "accelerance")
+        better = np.linalg.norm((hu - base.synthesized)[:, there]) / np.linalg.norm(
+            (hu - more.synthesized)[:, there]
+        )
+        print(
+            f"  {fn:10.2f} Hz {100 * zeta:5.2f} %, added to ours: the misfit around it x{1 / better:.2f}, "
+            f"the whole {100 * more.relative_error:.1f} %"
+        )
 
 
 if __name__ == "__main__":
