@@ -184,9 +184,9 @@ def _metadata(line: str) -> tuple[str, str] | None:
 def _metadata_row(line: str, width: int) -> tuple[str, str] | None:
     """(key, value) of a preamble line: a ``key,value`` row of a delimited table (``,`` or
     ``;``, quoted or not, as oscilloscopes and acquisition programs write their settings
-    above the data: ``"Sample rate","2048 Hz"``), holding fewer filled cells than the
-    ``width`` filled cells of a data row (or a sample rate: RATE_KEYS), its first no number;
-    else _metadata's forms."""
+    above the data: ``"Sample rate","2048 Hz"``) of two filled cells, fewer than the
+    ``width`` filled cells of a data row (or a sample rate: RATE_KEYS), its key no number
+    and without a colon, neither cell with a unit; else _metadata's forms."""
     cells, delimiter = split_cells(line)
     filled = [c for c in cells if c]
     if delimiter in (",", ";") and len(filled) == 2 and cells[0] and ":" not in cells[0]:
