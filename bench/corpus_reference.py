@@ -138,6 +138,23 @@ SETS: tuple[SetSpec, ...] = (
         # of analysis/band_choice.py; -22 dB at 1.4 kHz, -31 dB at 2 kHz, computed from the record).
         (50.0, 1400.0),
     ),
+    SetSpec(
+        "free-beam",
+        "free-beam/poutre_Al_flexion.txt",
+        "text-hit",
+        # Our default band's ends (force within 20 dB up to 6 kHz), from the first line above 0 Hz.
+        (9.0, 6000.0),
+        published={
+            "source": "github.com/lcharleux/numerical_analysis @794d4626f5a45a9003992755d52ef803e3943fcc",
+            "where": "doc/Traitement_signal.rst, '2. Etude de la poutre': an aluminium beam "
+            "600 x 30 x 15 mm, rho 2700 kg/m^3, struck by an impact hammer to vibrate in bending; "
+            "f_n = C_n^2 / (2 pi l^2) sqrt(E / rho) sqrt(I / S), C_n^2 = 22.37, 61.67, "
+            "((2n + 1) pi / 2)^2; E is the exercise's unknown",
+            "method": "Euler-Bernoulli free-free bending; the frequencies' ratios to the first are exact",
+            "modes": [],
+            "damping": "not published",
+        },
+    ),
 )
 
 #: UFF 58 ordinate data types of the response, and the factor of (j omega)^k that turns
@@ -215,9 +232,16 @@ def read_uff_frf(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_text_hit(path: Path) -> tuple[float, np.ndarray, np.ndarray]:
-    """One hit in a headerless text table of time [s], force, response: fs and (1, n) arrays.
-    The rate comes from the time column's mean step (printed to 7 significant digits)."""
-    table = np.loadtxt(path, ndmin=2)
+    """One hit in a text table of time [s], force, response (a header row of names, or none):
+    fs and (1, n) arrays. The rate comes from the time column's mean step."""
+    with path.open(encoding="latin-1") as handle:
+        first = handle.readline().split()
+    try:
+        [float(cell) for cell in first]
+        skip = 0
+    except ValueError:
+        skip = 1  # "T[s] F[N] A[g]"
+    table = np.loadtxt(path, ndmin=2, skiprows=skip)
     fs = (table.shape[0] - 1) / (table[-1, 0] - table[0, 0])
     return float(fs), table[None, :, 1], table[None, :, 2]
 
