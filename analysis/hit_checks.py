@@ -54,6 +54,9 @@ NO_IMPACT = "no impact"
 #: A file whose response column looks like the hammer pulse and force column like a
 #: decaying response (channels_swapped): the columns were read the wrong way round.
 SWAPPED = "swapped columns"
+#: A file whose response moves before the hammer strikes, or long after (response_timing):
+#: the channels are skewed.
+RESPONSE_TIMING = "response timing"
 
 
 @dataclass(frozen=True)
@@ -332,6 +335,84 @@ def channels_swapped(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: 
     return HitCheck(SWAPPED, True, detail, r_share - f_share)
 
 
+#: response timing: the force pulse starts where the force first rises above this share
+#: of its peak excursion (about the record's median), as pretrigger.impact_starts reads it.
+TIMING_START_FRACTION = 0.05
+#: ... and the response where it first reaches this share of its own peak excursion. In
+#: every correctly aligned record we hold it does so within 0-4 ms of the force's start
+#: (measured: pyfrf-impact 0.1-0.2 ms, tool-holder-impact 0.0 ms, free-beam 0.25 ms,
+#: lvm-2ch 0-3 ms at 1024 Hz, the simulator's captures 2-4 ms at 512 Hz, the synthetic
+#: plates 1.3-1.6 ms at 48 kHz); 25 % before the force's start never more than 0 samples.
+TIMING_ONSET_FRACTION = 0.10
+TIMING_LEAD_FRACTION = 0.25
+#: The response moving this many samples before the hammer strikes is a skew between the
+#: channels: nothing moves before it is hit, and both channels pass the same filters (their
+#: ringing ahead of a pulse is the same in both). Two samples of slack: the force's start
+#: is read on a sampled edge.
+TIMING_LEAD_SAMPLES = 2
+#: The response still quiet this long after the force's start, s: a bending wave crosses a
+#: lab-sized structure (metres of beam or plate) in a few ms at the frequencies an impact
+#: test reads, so a longer wait is a channel delay or records from different triggers.
+TIMING_LAG_S = 0.010
+#: The response counts as quiet before its onset when its RMS excursion there stays under
+#: this share of its peak excursion: a response that is noise (a dead channel) is never
+#: quiet, and its "onset" says nothing.
+TIMING_QUIET_SHARE = 0.05
+#: Records shorter than this are not judged.
+TIMING_MIN_SAMPLES = 64
+
+
+def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> HitCheck:
+    """Failed when the response moves before the hammer strikes (it reaches
+    TIMING_LEAD_FRACTION of its peak excursion more than TIMING_LEAD_SAMPLES samples before
+    the force pulse starts), or stays quiet for more than TIMING_LAG_S after it (its first
+    TIMING_ONSET_FRACTION of its peak comes that late): a skew between the channels, which
+    turns the FRF's phase by 360 degrees every 1/skew Hz, so that no modal model holds.
+    value: the response's onset less the force's start, s (negative: before the hit).
+
+    force_n, response : (n_samples,) real records (a zoomed, complex record is not judged:
+    its envelope is smeared over the band's width). sample_rate_hz : Hz.
+    """
+    force, resp = np.asarray(force_n), np.asarray(response)
+    n = int(force.size)
+    if np.iscomplexobj(force) or np.iscomplexobj(resp):
+        return HitCheck(RESPONSE_TIMING, True, "not judged: a zoomed record", None)
+    if n < TIMING_MIN_SAMPLES or not sample_rate_hz > 0:
+        return HitCheck(RESPONSE_TIMING, True, f"not judged: {n} samples are too few", None)
+    f_dev = np.abs(force - np.median(force))
+    r_dev = np.abs(resp - np.median(resp))
+    f_peak, r_peak = float(f_dev.max()), float(r_dev.max())
+    if not (f_peak > 0 and r_peak > 0):
+        return HitCheck(RESPONSE_TIMING, True, "not judged: a channel is constant", None)
+    i_peak = int(np.argmax(f_dev))
+    quiet = np.flatnonzero(f_dev[: i_peak + 1] < TIMING_START_FRACTION * f_peak)
+    start = int(quiet[-1]) + 1 if quiet.size else 0
+    lead_at = int(np.argmax(r_dev >= TIMING_LEAD_FRACTION * r_peak))
+    onset = int(np.argmax(r_dev >= TIMING_ONSET_FRACTION * r_peak))
+
+    # Quiet before its onset: a rise that crosses the lead fraction a few samples after the
+    # onset fraction is the onset's own edge, not noise.
+    quiet = onset >= 8 and float(np.sqrt(np.mean((r_dev[:onset] / r_peak) ** 2))) <= TIMING_QUIET_SHARE
+    ms = 1e3 / sample_rate_hz
+    if start - lead_at > TIMING_LEAD_SAMPLES and quiet:
+        lead = start - lead_at
+        detail = f"the response moves {lead * ms:.3g} ms ({lead} samples) before the hammer strikes"
+        return HitCheck(RESPONSE_TIMING, False, detail, -lead / sample_rate_hz)
+    lag_s = (onset - start) / sample_rate_hz
+    if lag_s > TIMING_LAG_S and quiet:
+        detail = (
+            f"the response starts {lag_s * 1e3:.3g} ms after the hammer strikes "
+            f"({TIMING_LAG_S * 1e3:g} ms at most on a lab-sized structure)"
+        )
+        return HitCheck(RESPONSE_TIMING, False, detail, lag_s)
+    return HitCheck(
+        RESPONSE_TIMING,
+        True,
+        f"the response starts {(onset - start) * ms:+.3g} ms from the force",
+        (onset - start) / sample_rate_hz,
+    )
+
+
 def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> list[HitCheck]:
     """The checks a hit read from a file can have without the analyzer's settings and
     flags: double impact for a force that is a pulse (else "no impact", failed: noise or
@@ -358,7 +439,12 @@ def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float
         impact = HitCheck(NO_IMPACT, False, detail, crest)
     else:
         impact = double_impact(force_n, sample_rate_hz)
-    return [impact, clipped(force_n, response), channels_swapped(force_n, response, sample_rate_hz)]
+    return [
+        impact,
+        clipped(force_n, response),
+        channels_swapped(force_n, response, sample_rate_hz),
+        response_timing(force_n, response, sample_rate_hz),
+    ]
 
 
 def run_checks(

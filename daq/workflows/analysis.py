@@ -226,13 +226,22 @@ def input_cautions(run: Run, notes: dict[str, Any]) -> list[str]:
 def _averaged_against_checks(run: Run) -> str | None:
     """One caution naming the accepted hits whose checks failed (a double impact, a clipped
     record: their FRFs are wrong and bias the average), or None. Hits counted from 1."""
-    from daq.workflows.run_views import accepted_against_checks, failed_check_names, swapped_columns
+    from daq.workflows.run_views import (
+        accepted_against_checks,
+        failed_check_names,
+        skewed_channels,
+        swapped_columns,
+    )
 
     against = accepted_against_checks(run)
     swapped = swapped_columns(run)
     if swapped is not None and set(against) & set(swapped[0]):
         # One caution for the file: the other checks of those hits read the response as the force.
         return f"{swapped[1]}; until then the modes and damping are not the structure's"
+    skewed = skewed_channels(run)
+    if skewed is not None and set(against) & set(skewed[0]):
+        # One caution for the file: leaving hits out does not mend the recorder's skew.
+        return f"{skewed[1]}; until then the modes, damping and residues may not be the structure's"
     if not against:
         return None
     checks = run.hits.checks

@@ -124,6 +124,46 @@ def swapped_columns(run) -> tuple[list[int], str] | None:
     return bad, f"{text}; if so, swap the force and response records of the file and import it again"
 
 
+def _hz(value: float) -> str:
+    """A frequency in Hz for a sentence: 4266, 19.9."""
+    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
+
+
+def skewed_channels(run) -> tuple[list[int], str] | None:
+    """(the 0-based indices of the hits whose response moves before the hammer strikes or
+    long after it, analysis/hit_checks.py response_timing; one line saying what that does
+    to the FRF and what to do) or None when every hit's timing is right or unjudged. One
+    line for the file: a skew between the channels is the recorder's, not a hit's."""
+    from analysis.hit_checks import RESPONSE_TIMING
+
+    hits = run.hits
+    if hits is None:
+        return None
+    bad = [
+        i
+        for i, checks in enumerate(hits.checks)
+        if (checks.get(RESPONSE_TIMING) or {}).get("passed") is False
+    ]
+    if not bad:
+        return None
+    n = int(hits.n_hits)
+    which = (
+        "every hit" if len(bad) == n else f"hit{'s' * (len(bad) > 1)} {', '.join(str(i + 1) for i in bad)}"
+    )
+    first = hits.checks[bad[0]][RESPONSE_TIMING]
+    skew_s = first.get("value")
+    turn = (
+        f", and the FRF's phase turns an extra full turn every {_hz(1 / abs(skew_s))} Hz"
+        if isinstance(skew_s, (int, float)) and skew_s
+        else ""
+    )
+    return bad, (
+        f"the response is not timed with the force in {which} (hit {bad[0] + 1}: {first.get('detail', '')}): "
+        f"the channels are skewed, by a delay between them or records cut from different triggers{turn}; "
+        "align the response with the force and import the file again"
+    )
+
+
 def _number(value: Any, unit: str) -> str:
     if value is None:
         return "auto"

@@ -13,6 +13,7 @@ from analysis.hit_checks import (
     CLIPPED,
     DOUBLE_IMPACT,
     NO_IMPACT,
+    RESPONSE_TIMING,
     SWAPPED,
     clipped,
     double_impact,
@@ -86,7 +87,7 @@ def test_huge_or_non_finite_records_neither_overflow_nor_warn():
     overflow; a record with NaN or inf gets no checks (the store refuses it anyway)."""
     force, response = _hit(1)
     checks = file_checks(force * 1e200, response * 1e200, FS)
-    assert [c.name for c in checks] == [DOUBLE_IMPACT, CLIPPED, SWAPPED]
+    assert [c.name for c in checks] == [DOUBLE_IMPACT, CLIPPED, SWAPPED, RESPONSE_TIMING]
     assert all(c.passed for c in checks)
     assert file_checks(np.where(np.arange(force.size) == 5, np.nan, force), response, FS) == []
     assert file_checks(force, np.where(np.arange(response.size) == 5, np.inf, response), FS) == []

@@ -298,3 +298,13 @@ def test_every_mode_carries_a_standard_uncertainty(name, analysed):
         assert np.isfinite(m["frequency_u_hz"]), m
         assert m["damping_u"] is not None, m
         assert np.isfinite(m["damping_u"]), m
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(SETS))
+def test_no_measured_set_is_called_skewed(name, analysed):
+    """Every measured set's response is timed with its force (analysis/hit_checks.py
+    response_timing): its hits start within 0-3 ms of the force, far inside the limits,
+    and the caution a skewed file gets must never come on them."""
+    cautions = analysed(name)["cautions"]
+    assert not [c for c in cautions if "not timed with the force" in c], cautions

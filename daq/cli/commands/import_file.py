@@ -399,7 +399,8 @@ def failed_hit_checks(run) -> list[str]:
     """One line per hit whose checks failed (double impact, clipped), counted from 1:
     kept and accepted, and `daq analyze` cautions about them, unless the file rejects
     the hit (then it says so)."""
-    from daq.workflows.run_views import failed_check_names, swapped_columns
+    from analysis.hit_checks import RESPONSE_TIMING
+    from daq.workflows.run_views import failed_check_names, skewed_channels, swapped_columns
 
     if run.hits is None:
         return []
@@ -407,6 +408,9 @@ def failed_hit_checks(run) -> list[str]:
     swapped = swapped_columns(run)
     if swapped is not None:  # one line for the file; the hits' other checks read the wrong channel
         out.append(swapped[1])
+    skewed = skewed_channels(run) if swapped is None else None
+    if skewed is not None:  # one line for the file: the recorder's skew, not a hit's
+        out.append(skewed[1])
     for i, checks in enumerate(run.hits.checks):
         if swapped is not None and i in swapped[0]:
             continue
@@ -418,6 +422,8 @@ def failed_hit_checks(run) -> list[str]:
             else "the file rejects it, so it is left out of the average"
         )
         for name in failed_check_names(checks):
+            if name == RESPONSE_TIMING and skewed is not None:
+                continue
             out.append(f"hit {i + 1} failed the {name} check ({checks[name].get('detail', '')}); {fate}")
     return out
 

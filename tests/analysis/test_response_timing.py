@@ -1,0 +1,190 @@
+"""A file whose response is not timed with its force (analysis/hit_checks.py
+response_timing): the response moves before the hammer strikes, or stays quiet long
+after. Found in such files, said once for the file at import and as a caution of the
+analysis; never in a file timed right, nor in the simulator's captures."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from analysis.hit_checks import (
+    RESPONSE_TIMING,
+    TIMING_LAG_S,
+    TIMING_LEAD_SAMPLES,
+    file_checks,
+    response_timing,
+)
+from tests.analysis.impact_synth import impact_hits
+from tests.cli_helpers import invoke_daq
+
+#: More damped structures, whose response rings down within a few ms (as test_swapped_columns).
+DAMPED = [
+    ([80.0, 210.0, 560.0], [0.015, 0.01, 0.02], [1.0, 1.0, 2.0], 4096.0, 1.0, 1.5e-3),
+    ([300.0, 420.0, 1100.0], [0.03, 0.05, 0.04], [1.0, 1.5, 3.0], 8192.0, 1.0, 8e-4),
+    ([250.0, 1200.0, 1250.0, 3300.0], [0.01, 0.02, 0.025, 0.03], [1.0, 2.0, 1.5, 3.0], 25600.0, 0.5, 3e-4),
+]
+CASES = [
+    # (modes Hz, damping, amplitudes, fs, seconds, pulse s): light and heavy damping,
+    # close modes, a short record, a soft tip (as test_swapped_columns).
+    ([42.0, 155.0, 388.0, 710.0], [0.012, 0.006, 0.02, 0.004], [1.0, -0.6, 0.4, 0.3], 5120.0, 1.0, 1e-3),
+    ([45.0, 132.0, 310.0], [0.015, 0.008, 0.02], [1.0, -0.6, 0.4], 2048.0, 2.0, 2e-3),
+    ([100.0, 104.0], [0.002, 0.002], [1.0, 0.8], 1024.0, 4.0, 3e-3),
+    ([30.0, 300.0], [0.1, 0.08], [1.0, 0.5], 1024.0, 1.0, 5e-3),
+    ([800.0, 2500.0], [0.01, 0.02], [1.0, 0.5], 25600.0, 0.08, 2e-4),
+]
+
+
+def _delayed(response: np.ndarray, samples: int) -> np.ndarray:
+    """The response recorded ``samples`` later (> 0) or earlier (< 0) than the force, as a
+    skewed recorder gives it: the samples shifted in are the record's quiet start or its
+    decayed end, not the other end wrapped round."""
+    if samples > 0:
+        return np.concatenate([np.full(samples, response[0]), response[:-samples]])
+    return np.concatenate([response[-samples:], np.full(-samples, response[-1])])
+
+
+@pytest.mark.parametrize("case", CASES + DAMPED)
+@pytest.mark.parametrize("noise", [0.0, 0.01, 0.05])
+def test_hits_timed_right_pass(case, noise):
+    fn, zeta, amp, fs, seconds, pulse = case
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 3, noise, pulse, 11, pretrigger_s=0.02)
+    for f, a in zip(force, response, strict=True):
+        check = response_timing(f, a, fs)
+        assert check.passed, check.detail
+        assert response_timing(-f, -a, fs).passed  # gauges wired the other way
+        assert abs(check.value) < 2e-3, check.detail  # pinned: the response starts with the hit
+
+
+@pytest.mark.parametrize("case", CASES + DAMPED)
+def test_a_response_later_than_the_lab_allows_fails(case):
+    fn, zeta, amp, fs, seconds, pulse = case
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 1, 0.01, pulse, 3, pretrigger_s=0.02)
+    lag = round(3 * TIMING_LAG_S * fs)
+    check = response_timing(force[0], _delayed(response[0], lag), fs)
+    assert not check.passed
+    assert check.name == RESPONSE_TIMING
+    assert check.value == pytest.approx(lag / fs, abs=3 / fs + pulse)
+    assert "after the hammer strikes" in check.detail
+    assert RESPONSE_TIMING in {
+        c.name for c in file_checks(force[0], _delayed(response[0], lag), fs) if not c.passed
+    }
+
+
+@pytest.mark.parametrize("case", CASES + DAMPED)
+def test_a_response_ahead_of_the_hammer_fails(case):
+    fn, zeta, amp, fs, seconds, pulse = case
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 1, 0.01, pulse, 3, pretrigger_s=0.02)
+    lead = TIMING_LEAD_SAMPLES + 8
+    check = response_timing(force[0], _delayed(response[0], -lead), fs)
+    assert not check.passed, check.detail
+    assert "before the hammer strikes" in check.detail
+    # The onset read at a quarter of the peak, the force's start at 5 % of its: within the pulse.
+    assert -check.value == pytest.approx(lead / fs, abs=pulse + 2 / fs)
+
+
+def test_a_lead_within_the_slack_passes():
+    fn, zeta, amp, fs, seconds, pulse = CASES[0]
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 1, 0.01, pulse, 3, pretrigger_s=0.02)
+    assert response_timing(force[0], _delayed(response[0], -TIMING_LEAD_SAMPLES), fs).passed
+
+
+def test_a_response_of_noise_only_is_not_called_skewed():
+    """A dead accelerometer: its 'onset' is wherever the noise first crosses a share of its
+    largest value, which says nothing of timing."""
+    fn, zeta, amp, fs, seconds, pulse = CASES[0]
+    force, _ = impact_hits(fn, zeta, amp, fs, seconds, 1, 0.01, pulse, 3, pretrigger_s=0.02)
+    noise = np.random.default_rng(0).standard_normal(force.shape[1])
+    assert response_timing(force[0], noise, fs).passed
+
+
+def test_short_constant_and_zoomed_records_are_not_judged():
+    assert response_timing(np.r_[0.0, 1.0, np.zeros(30)], np.ones(32), 1000.0).value is None
+    assert response_timing(np.r_[np.zeros(100), 1.0, np.zeros(99)], np.zeros(200), 1000.0).value is None
+    zoomed = np.exp(1j * np.arange(256.0))
+    assert response_timing(zoomed, zoomed, 1000.0).value is None
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    fn=st.floats(20.0, 400.0),
+    zeta=st.floats(0.001, 0.08),
+    noise=st.floats(0.0, 0.05),
+    skew_ms=st.sampled_from([-6.0, -3.0, 0.0, 25.0, 60.0]),
+    seed=st.integers(0, 2**16),
+)
+def test_the_skew_is_found_whatever_the_structure(fn, zeta, noise, skew_ms, seed):
+    """Timed right: never called skewed. Skewed: found wherever the response is quiet
+    before the hit (a response still ringing from before, here the synthesis' own
+    wrap-around of a light mode as a previous hit's ring-down would be, may go unjudged)."""
+    fs = 2048.0
+    force, response = impact_hits([fn], [zeta], [1.0], fs, 1.0, 1, noise, 2e-3, seed, pretrigger_s=0.02)
+    samples = round(skew_ms * 1e-3 * fs)
+    check = response_timing(force[0], _delayed(response[0], samples) if samples else response[0], fs)
+    if samples == 0:
+        assert check.passed, check.detail
+        return
+    before = response[0][: round(0.02 * fs) - abs(min(samples, 0)) - 1]
+    quiet = np.sqrt(np.mean((before - np.median(response[0])) ** 2)) < 0.01 * np.max(np.abs(response[0]))
+    if quiet:
+        assert not check.passed, check.detail
+
+
+@pytest.mark.parametrize("scenario", ["seed", "realistic"])
+@pytest.mark.parametrize("analyzer", ["35660A", "3562A", "35670A"])
+def test_the_simulators_captures_are_timed_right(tmp_path, scenario, analyzer):
+    from daq.store import Store
+
+    result = invoke_daq(
+        "capture", "--sim", "--yes", "--scenario", scenario, "--analyzer", analyzer, "--hits", "3",
+        "--time-scale", "0", "--seed", "5", "--store", str(tmp_path),
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    (summary,) = Store(tmp_path).list()
+    hits = Store(tmp_path).open(summary.run_id).hits
+    for k in range(hits.n_hits):
+        check = response_timing(hits.force_n[k], hits.response_m_s2[k], hits.sample_rate_hz)
+        assert check.passed, check.detail
+
+
+def _skewed_file(tmp_path, lag_s: float):
+    fn, zeta, amp, fs, seconds, pulse = CASES[0]
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 3, 0.01, pulse, 7, pretrigger_s=0.02)
+    rows = ["hit,time,force,response"]
+    for k in range(3):
+        late = _delayed(response[k], round(lag_s * fs))
+        rows += [f"{k},{i / fs:.9g},{force[k, i]:.9g},{late[i]:.9g}" for i in range(force.shape[1])]
+    path = tmp_path / "skewed.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_a_skewed_file_is_said_once_at_import_and_in_the_analysis(tmp_path):
+    path = _skewed_file(tmp_path, 0.05)
+    store = tmp_path / "store"
+    imported = invoke_daq("import", str(path), "--store", str(store))
+    assert imported.returncode == 0, imported.stderr
+    output = imported.stdout + imported.stderr
+    said = [line for line in output.splitlines() if "not timed with the force" in line]
+    assert len(said) == 1, output
+    assert "in every hit" in said[0]
+    assert "align the response with the force" in said[0]
+    assert "failed the response timing check" not in output  # not once more per hit
+    analysed = invoke_daq("analyze", "latest", "--store", str(store), "--json")
+    assert analysed.returncode == 0, analysed.stderr
+    (result,) = json.loads(analysed.stdout)
+    skew = [c for c in result["cautions"] if "not timed with the force" in c]
+    assert len(skew) == 1, result["cautions"]
+    assert "may not be the structure's" in skew[0]
+
+
+def test_a_file_timed_right_says_nothing_of_timing(tmp_path):
+    path = _skewed_file(tmp_path, 0.0)
+    store = tmp_path / "store"
+    imported = invoke_daq("import", str(path), "--store", str(store))
+    assert imported.returncode == 0, imported.stderr
+    assert "not timed with the force" not in imported.stdout + imported.stderr
