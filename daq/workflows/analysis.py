@@ -239,7 +239,7 @@ def _averaged_against_checks(run: Run) -> str | None:
         # One caution for the file: the other checks of those hits read the response as the force.
         return f"{swapped[1]}; until then the modes and damping are not the structure's"
     skewed = skewed_channels(run)
-    if skewed is not None and set(against) & set(skewed[0]):
+    if skewed is not None and any(run.hits.accepted[i] for i in skewed[0]):
         # One caution for the file: leaving hits out does not mend the recorder's skew.
         return f"{skewed[1]}; until then the modes, damping and residues may not be the structure's"
     if not against:

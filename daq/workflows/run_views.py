@@ -134,23 +134,29 @@ def skewed_channels(run) -> tuple[list[int], str] | None:
     long after it, analysis/hit_checks.py response_timing; one line saying what that does
     to the FRF and what to do) or None when every hit's timing is right or unjudged. One
     line for the file: a skew between the channels is the recorder's, not a hit's."""
-    from analysis.hit_checks import RESPONSE_TIMING
+    from analysis.hit_checks import RESPONSE_TIMING, response_timing
 
     hits = run.hits
     if hits is None:
         return None
-    bad = [
-        i
-        for i, checks in enumerate(hits.checks)
-        if (checks.get(RESPONSE_TIMING) or {}).get("passed") is False
-    ]
+    timing = [checks.get(RESPONSE_TIMING) for checks in hits.checks]
+    if run.kind == "imported":
+        # Runs imported before the check existed carry no verdict: judged here from their
+        # records (an analyzer's channels are sampled together; its captures need none).
+        timing = [
+            t
+            if t is not None
+            else response_timing(hits.force_n[i], hits.response_m_s2[i], hits.sample_rate_hz).as_dict()
+            for i, t in enumerate(timing)
+        ]
+    bad = [i for i, t in enumerate(timing) if (t or {}).get("passed") is False]
     if not bad:
         return None
     n = int(hits.n_hits)
     which = (
         "every hit" if len(bad) == n else f"hit{'s' * (len(bad) > 1)} {', '.join(str(i + 1) for i in bad)}"
     )
-    first = hits.checks[bad[0]][RESPONSE_TIMING]
+    first = timing[bad[0]]
     skew_s = first.get("value")
     turn = (
         f", and the FRF's phase turns an extra full turn every {_hz(1 / abs(skew_s))} Hz"

@@ -188,3 +188,22 @@ def test_a_file_timed_right_says_nothing_of_timing(tmp_path):
     imported = invoke_daq("import", str(path), "--store", str(store))
     assert imported.returncode == 0, imported.stderr
     assert "not timed with the force" not in imported.stdout + imported.stderr
+
+
+def test_a_run_imported_before_the_check_is_judged_from_its_records(tmp_path):
+    """A run whose hits carry no timing verdict (imported by an earlier version) gets the
+    caution from its records when analysed."""
+    from daq.store import Store
+    from daq.workflows.run_views import skewed_channels
+
+    path = _skewed_file(tmp_path, 0.05)
+    store = tmp_path / "store"
+    assert invoke_daq("import", str(path), "--store", str(store)).returncode == 0
+    (summary,) = Store(store).list()
+    run = Store(store).open(summary.run_id)
+    for checks in run.hits.checks:
+        del checks[RESPONSE_TIMING]
+    skewed = skewed_channels(run)
+    assert skewed is not None
+    assert skewed[0] == [0, 1, 2]
+    assert "50" in skewed[1]
