@@ -255,7 +255,8 @@ def read_frf_text(path: Path, frf_form: str | None = None, max_bytes: int = MAX_
                 )
             kinds.append(kind)
             labels_of.append(label)
-        units = list(table.units)
+        # A bracketed part that named the column's kind ("(Real)") is no unit.
+        units = [None if _kind_as_unit(u) is not None else u for u in table.units]
         for i, cell_name in enumerate(table.names):
             if kinds[i] == "phase" and units[i] is None and _bare_phase_unit(cell_name):
                 units[i] = _bare_phase_unit(cell_name)  # a column named "°" or "rad" only
@@ -402,6 +403,16 @@ def f_then_frf_columns(cells: list[str]) -> bool:
     )
 
 
+def _kind_as_unit(unit: str | None) -> str | None:
+    """The kind a header cell's bracketed part names where a unit would stand ("Real",
+    "Imag.", "Magnitude", "Phase": an export that brackets the part, e.g. "Signal 2
+    (Real)"), or None."""
+    if unit is None:
+        return None
+    word = unit.strip().rstrip(".").lower()
+    return _KINDS.get(word) if word not in ("db",) else None
+
+
 def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
     """(kind, label) of a header cell: kind "freq", "re", "im", "mag", "phase", "coh"
     ("f" as the first cell is frequency here: the table is read as FRFs, f_then_frf_columns)."""
@@ -409,6 +420,8 @@ def _kind(cell: str, unit: str | None, first: bool) -> tuple[str | None, str]:
         return "freq", ""
     tokens = _TOKEN.findall(cell)
     kind = next((_KINDS[t.lower()] for t in tokens if t.lower() in _KINDS), None)
+    if kind is None and _kind_as_unit(unit) is not None:
+        return _kind_as_unit(unit), " ".join(tokens)  # "Signal 2 (Real)", "Signal 2 (Imag.)"
     if kind is None and unit is not None and clean_label(unit).lower() in ("db",):
         kind = "mag"
     if kind is None and unit is not None and clean_label(unit).lower() in _PHASE_UNITS:
