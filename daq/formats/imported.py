@@ -167,6 +167,16 @@ def make_hits(
         )
     for k in silent:
         rejected.setdefault(k, "the force is zero in every sample")
+    # A response that is zero throughout has no FRF either (a dead or unplugged sensor):
+    # its H1 is zero, and the analysis of it failed as a "Singular matrix".
+    still = [k for k in range(n_hits) if k not in silent and response[k].size and not np.any(response[k])]
+    if still and len(still) + len(silent) == n_hits:
+        raise FormatError(
+            f"{show_path(path)}: the response is zero in every sample of every hit with a force: nothing "
+            "moved, or the sensor was dead or unplugged (is the response column the right one?)"
+        )
+    for k in still:
+        rejected.setdefault(k, "the response is zero in every sample")
     try:
         return Hits(
             force_n=force,

@@ -63,3 +63,27 @@ def test_noise_for_a_force_is_imported_with_a_failed_no_impact_check_that_analyz
         "no hit in the average is a hammer impact (hit 1 failed the no impact"
     )
     assert "not the structure's" in info["cautions"][0]
+
+
+def test_a_response_of_zeros_in_every_hit_is_refused_and_nothing_stored(tmp_path):
+    """A dead or unplugged accelerometer (a new user's trial): imported without a word, its
+    analysis then failed with 'Singular matrix' alone."""
+    force, _ = _pulse_hits(2, 1)
+    _write(tmp_path / "zero.csv", force, np.zeros_like(force))
+    result = invoke_daq("import", str(tmp_path / "zero.csv"), "--store", str(tmp_path / "store"))
+    assert result.returncode != 0
+    (line,) = result.stderr.splitlines()
+    assert "the response is zero in every sample of every hit with a force" in line
+    assert not (tmp_path / "store").exists() or Store(tmp_path / "store").list() == []
+
+
+def test_one_hit_with_a_response_of_zeros_is_kept_as_rejected(tmp_path):
+    force, response = _pulse_hits(3, 2)
+    response[2] = 0.0
+    _write(tmp_path / "one.csv", force, response)
+    assert invoke_daq("import", str(tmp_path / "one.csv"), "--store", str(tmp_path / "store")).returncode == 0
+    (run,) = [Store(tmp_path / "store").open(s.run_id) for s in Store(tmp_path / "store").list()]
+    assert list(run.hits.accepted) == [True, True, False]
+    assert run.hits.reject_reason[2] == "the response is zero in every sample"
+    analysed = invoke_daq("analyze", "latest", "--json", "--store", str(tmp_path / "store"))
+    assert analysed.returncode == 0, analysed.stderr
