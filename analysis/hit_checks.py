@@ -360,6 +360,11 @@ TIMING_LAG_S = 0.010
 TIMING_QUIET_SHARE = 0.05
 #: Records shorter than this are not judged.
 TIMING_MIN_SAMPLES = 64
+#: A response whose largest value stands alone (everything beyond TIMING_SPIKE_SAMPLES
+#: samples of it under TIMING_SPIKE_SHARE of it) peaks on a glitch: not judged. A response
+#: rings on after its peak at a good share of it.
+TIMING_SPIKE_SAMPLES = 2
+TIMING_SPIKE_SHARE = 0.1
 
 
 def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> HitCheck:
@@ -384,6 +389,14 @@ def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: f
     f_peak, r_peak = float(f_dev.max()), float(r_dev.max())
     if not (f_peak > 0 and r_peak > 0):
         return HitCheck(RESPONSE_TIMING, True, "not judged: a channel is constant", None)
+    r_at = int(np.argmax(r_dev))
+    beside = np.concatenate(
+        [r_dev[: max(r_at - TIMING_SPIKE_SAMPLES, 0)], r_dev[r_at + TIMING_SPIKE_SAMPLES + 1 :]]
+    )
+    if beside.size and float(beside.max()) < TIMING_SPIKE_SHARE * r_peak:
+        # A lone sample far above the rest (a glitch) is no onset: timed by it, a clean
+        # file's response "started 250 ms after the hammer" (a new user's trial).
+        return HitCheck(RESPONSE_TIMING, True, "not judged: the response's peak is a lone spike", None)
     i_peak = int(np.argmax(f_dev))
     quiet = np.flatnonzero(f_dev[: i_peak + 1] < TIMING_START_FRACTION * f_peak)
     start = int(quiet[-1]) + 1 if quiet.size else 0

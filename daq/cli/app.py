@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 from typing import Annotated
 
 # Before numpy loads: the analysis solves many small matrices, where BLAS threads cost
@@ -190,7 +191,12 @@ def main(argv: list[str] | None = None) -> int:
     command = typer.main.get_command(app)
     options.take_notes()  # none left from an earlier call in this process
     try:
-        result = command.main(args=argv, prog_name="daq", standalone_mode=False)
+        with warnings.catch_warnings():
+            if not os.environ.get("DAQ_DEBUG"):
+                # numpy's RuntimeWarnings name source lines, not the input: a failure is one
+                # line from the layers' own errors, and what may mislead is a caution.
+                warnings.simplefilter("ignore", RuntimeWarning)
+            result = command.main(args=argv, prog_name="daq", standalone_mode=False)
     except typer.TyperException as exc:
         # Usage errors (exit code 2), bad files given to typer and the like.
         code = exc.exit_code or 1

@@ -167,6 +167,8 @@ def make_hits(
         )
     for k in silent:
         rejected.setdefault(k, "the force is zero in every sample")
+    _check_magnitudes(path, force, "force", "N")
+    _check_magnitudes(path, response, "response", "m/s^2")
     # A response that is zero throughout has no FRF either (a dead or unplugged sensor):
     # its H1 is zero, and the analysis of it failed as a "Singular matrix".
     still = [k for k in range(n_hits) if k not in silent and response[k].size and not np.any(response[k])]
@@ -198,6 +200,42 @@ def make_hits(
         raise FormatError(f"{show_path(path)}: {one_line(str(exc))}") from None
 
 
+#: Magnitudes (SI) beyond which a channel is no measurement: their squares overflow the
+#: spectra (1e306 N gave ten numpy warnings and "Singular matrix"), and below which they
+#: underflow (1e-300 N was called "no force"). A wrong unit or scaling, never data.
+MAX_MAGNITUDE = 1e100
+MIN_MAGNITUDE = 1e-100
+
+
+def _check_magnitudes(
+    path: Path, values: np.ndarray, what: str, unit: str, frequency_hz: np.ndarray | None = None
+) -> None:
+    """FormatError when the largest magnitude of ``values`` ((n_hits or n_frf, n) real or
+    complex) lies beyond MAX_MAGNITUDE, or below MIN_MAGNITUDE while not zero, naming the
+    hit and sample (counted from 1) or, for FRFs on ``frequency_hz`` (n,), the FRF and
+    frequency."""
+    magnitude = np.abs(values)
+    if magnitude.size == 0 or not np.all(np.isfinite(magnitude)):
+        return
+    k, i = np.unravel_index(int(np.argmax(magnitude)), magnitude.shape)
+    peak = float(magnitude[k, i])
+    if frequency_hz is None:
+        where = f"hit {k + 1}, sample {i + 1}" if magnitude.shape[0] > 1 else f"sample {i + 1}"
+    else:
+        at = f"at {float(frequency_hz[i]):.6g} Hz"
+        where = f"FRF {k + 1} {at}" if magnitude.shape[0] > 1 else at
+    if peak > MAX_MAGNITUDE:
+        raise FormatError(
+            f"{show_path(path)}: the {what} reaches {peak:.3g} {unit} ({where}), beyond any measurement: "
+            "is its unit or scaling right?"
+        )
+    if 0 < peak < MIN_MAGNITUDE:
+        raise FormatError(
+            f"{show_path(path)}: the {what} is at most {peak:.3g} {unit} ({where}), below any measurement: "
+            "is its unit or scaling right?"
+        )
+
+
 def make_frfs(
     path: Path,
     frequency_hz: np.ndarray,
@@ -207,6 +245,7 @@ def make_frfs(
     form: str = "accelerance",
 ) -> MeasuredFrf:
     """MeasuredFrf from imported arrays; the model's ValueError becomes a FormatError naming the file."""
+    _check_magnitudes(path, np.atleast_2d(frf), "FRF", "in its form's SI unit", np.asarray(frequency_hz))
     try:
         return MeasuredFrf(frequency_hz=frequency_hz, frf=frf, coherence=coherence, labels=labels, form=form)
     except ValueError as exc:

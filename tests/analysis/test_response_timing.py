@@ -207,3 +207,15 @@ def test_a_run_imported_before_the_check_is_judged_from_its_records(tmp_path):
     assert skewed is not None
     assert skewed[0] == [0, 1, 2]
     assert "50" in skewed[1]
+
+
+def test_a_lone_spike_in_the_response_is_no_onset():
+    """One glitched sample 1000 times the response's peak, 250 ms into the record: timed by
+    it, the response 'started 250 ms after the hammer' (a new user's trial)."""
+    fn, zeta, amp, fs, seconds, pulse = CASES[0]
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 1, 0.01, pulse, 3, pretrigger_s=0.02)
+    glitched = response[0].copy()
+    glitched[round(0.25 * fs)] = 1000 * np.max(np.abs(glitched))
+    check = response_timing(force[0], glitched, fs)
+    assert check.passed
+    assert "lone spike" in check.detail
