@@ -143,7 +143,8 @@ def test_our_own_export_layout_leaves_nothing_out(tmp_path):
 
 def test_a_frequency_table_forced_as_csv_is_refused_with_the_way_out(tmp_path):
     f = np.arange(100.0)
-    path = table(tmp_path / "frf.txt", np.column_stack([f, np.ones_like(f), np.zeros_like(f)]))
+    # Re and Im of an FRF (an Im of zeros is now refused sooner, as a response of zeros).
+    path = table(tmp_path / "frf.txt", np.column_stack([f, np.ones_like(f), 0.5 * np.ones_like(f)]))
     store = tmp_path / "runs"
     message = refused(
         daq_import(store, path, "--format", "csv"),

@@ -198,7 +198,7 @@ def test_units_g_and_millivolts(tmp_path):
 
 
 def test_lbf(tmp_path):
-    path = write(tmp_path, "0 1 0\n1 2 0\n")
+    path = write(tmp_path, "0 1 0.5\n1 2 0.25\n")
     assert read_csv(path, force_unit="lbf").hits.force_n[0] == pytest.approx(
         [4.4482216152605, 8.896443230521]
     )
