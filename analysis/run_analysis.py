@@ -362,6 +362,7 @@ def _identify(frequency_hz, frf, coherence, source, options, decay, band, noise=
                     "accepted": bool(mode.quality.accepted),
                     "refined": bool(mode.quality.refined),
                     "added": bool(mode.quality.added),
+                    "for_peak": bool(mode.quality.for_peak),
                     "frequency_spread_top_hz": float(mode.quality.frequency_spread_top_hz),
                     "damping_spread_top": float(mode.quality.damping_spread_top),
                     "normalisation": mode.normalisation,
@@ -447,6 +448,8 @@ def _cautions(result: RunAnalysis, options: AnalysisOptions | None = None) -> li
         )
     if aside:
         out.append(_set_aside_caution(result, aside, options))
+    if for_peak := [m for m in result.modes if m.quality.get("for_peak")]:
+        out.append(_for_peak_caution(result, for_peak, options))
     unexplained = _unexplained(result, aside)
     if unexplained and not asked:
         out.append(_unexplained_caution(result, unexplained, options))
@@ -612,6 +615,31 @@ def _keep_options(result: RunAnalysis, more_hz: list[float], options: AnalysisOp
     if options.estimator != AnalysisOptions.estimator and result.source == "hits":
         again += f" --estimator {options.estimator}"
     return again
+
+
+def _for_peak_caution(result: RunAnalysis, kept: list[ModeEstimate], options: AnalysisOptions) -> str:
+    """Modes kept for a clear peak of the FRF that the stability diagram holds over too
+    few orders (analysis/modal_id/identify.py, _kept_for_peaks): what they rest on, and
+    the --frequencies that leave them out."""
+    one = len(kept) == 1
+    listed = ", ".join(f"{m.frequency_hz:.4g}" for m in kept)
+    orders = ", ".join(str(m.quality.get("n_stable_orders", 0)) for m in kept)
+    others = [m.frequency_hz for m in result.modes if not m.quality.get("for_peak")]
+    leave = ""
+    if others:
+        leave = (
+            "; to leave "
+            + ("it" if one else "them")
+            + " out, "
+            + _keep_options(replace(result, modes=[]), others, options)
+        )
+    return (
+        f"the mode{'' if one else 's'} at {listed} Hz {'is' if one else 'are'} kept for a clear peak of "
+        f"the FRF ({UNEXPLAINED_SNR_DB:g} dB or more above the noise, no other mode there) that the "
+        f"stability diagram holds over {orders} order{'' if orders == '1' else 's'} only, too few for a mode "
+        f"found by itself; {'its' if one else 'their'} values rest on those orders (a mode narrower than a "
+        f"line, one of a close pair){leave}"
+    )
 
 
 def _unexplained(result: RunAnalysis, aside: list[tuple[float, float]]) -> list[float]:

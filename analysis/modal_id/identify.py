@@ -40,7 +40,9 @@ class ModeQuality:
     stable orders, ...); refined: the pole was refined on the FRF (analysis.modal_id.refine),
     not LSCF's; added: a mode LSCF missed among close ones or beside a heavily damped
     one, found by refitting them (refine.missing, refine.missing_beside_heavy), with no
-    cluster (n_stable_orders 0, scatters NaN); *_spread_top:
+    cluster (n_stable_orders 0, scatters NaN); for_peak: kept by the third pass for a
+    clear peak of the FRF no other mode accounts for (_kept_for_peaks), whether or not its
+    chain passed the selection rules; *_spread_top:
     standard deviation of the cluster's frequency (Hz) and damping over its poles in the
     top TOP_ORDERS orders of its zone (the models a result is read from; the lowest
     orders of a chain are still immature), with,
@@ -56,6 +58,7 @@ class ModeQuality:
     frequency_spread_top_hz: float = float("nan")
     damping_spread_top: float = float("nan")
     added: bool = False
+    for_peak: bool = False
 
 
 @dataclass
@@ -264,8 +267,11 @@ def identify_modes(
     if peaks:
         # A second pass, as a user would take it with --band: each clear peak no mode
         # accounts for in a zone of its own, the modes elsewhere read as before.
-        result = _identify_in_zones(fu, hu, around_peaks(fu, zones, peaks, line_hz, max_order), None, *args)
+        local = around_peaks(fu, zones, peaks, line_hz, max_order)
+        result = _identify_in_zones(fu, hu, local, None, *args)
         result.unexplained_peaks_hz = unexplained_peaks(fu, hu, result, line_hz, noise_u)
+        if result.unexplained_peaks_hz:
+            result = _kept_for_peaks(fu, hu, local, result, args, line_hz, max_order)
     # Peaks too shallow for a second pass (which moves the zones, and with them modes
     # elsewhere: pyfrf-impact lost 5074 Hz at 6 dB) are named, not looked at.
     weak = unexplained_peaks(fu, hu, result, line_hz, noise_u, WEAK_PEAK_PROMINENCE_DB)
@@ -273,6 +279,46 @@ def identify_modes(
         p for p in weak if all(abs(p - q) > 2 * line_hz for q in result.unexplained_peaks_hz)
     ]
     return result
+
+
+#: A third pass keeps what the diagram holds at the clear peaks still unexplained only
+#: when the synthesis error falls to this fraction of the second pass's or below.
+PEAK_PASS_GAIN = 0.9
+
+
+def _kept_for_peaks(fu, hu, zones, result: ModalResult, args, line_hz: float, max_order) -> ModalResult:
+    """The third pass: what the stability diagram holds nearest each clear peak still
+    unexplained, kept beside the modes found, as --frequencies keeps it (the modes found
+    and the peaks asked for, the peaks in zones of their own); ``result`` unchanged unless
+    every mode found is found again, a mode stands at each peak, and the synthesis error
+    falls to PEAK_PASS_GAIN of result's. The modes kept for a peak are marked
+    (ModeQuality.for_peak)."""
+    peaks = list(result.unexplained_peaks_hz)
+    found = [m.frequency_hz for m in result.modes]
+    asked = np.array(sorted(found + peaks))
+    local = around_peaks(fu, zones, peaks, line_hz, max_order)
+    trial = _identify_in_zones(fu, hu, local, asked, *args)
+    trial_f = np.array([m.frequency_hz for m in trial.modes])
+
+    def near(f: float, width: float) -> np.ndarray:
+        return np.abs(trial_f - f) <= max(width, 2 * line_hz)
+
+    if trial_f.size != asked.size:
+        return result
+    again = [int(np.argmin(np.abs(trial_f - m.frequency_hz))) for m in result.modes]
+    for m, k in zip(result.modes, again, strict=True):
+        if not near(m.frequency_hz, m.damping_ratio * m.frequency_hz)[k]:
+            return result
+    new = [int(np.argmin(np.abs(trial_f - p))) for p in peaks]
+    if any(not near(p, 0.0)[k] or k in again for p, k in zip(peaks, new, strict=True)):
+        return result
+    if not trial.synthesis_error <= PEAK_PASS_GAIN * result.synthesis_error:
+        return result
+    for k in new:
+        trial.modes[k].quality.for_peak = True
+    trial.set_aside = result.set_aside
+    trial.unexplained_peaks_hz = unexplained_peaks(fu, hu, trial, line_hz, args[6])
+    return trial
 
 
 #: A clear peak this close (relative) to a frequency asked for is read in its own zone.

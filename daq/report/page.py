@@ -567,7 +567,8 @@ def sections(
                 100 * zeta, None if m.get("damping_u") is None else 100 * m["damping_u"], ".3g")),
             # A mode added among close ones (analysis/modal_id/refine.py, missing) has no chain.
             "none: added (LSCF missed it)" if q.get("added") else
-            str(q["n_stable_orders"]) + (" (alpha_0 = 1)" if q.get("normalisation") == "lowest" else ""),
+            str(q["n_stable_orders"]) + (" (alpha_0 = 1)" if q.get("normalisation") == "lowest" else "")
+            + (" (kept for a clear peak)" if q.get("for_peak") else ""),
             f"{plain(100 * q['synthesis_share'], '.2g')} %",
         ])  # fmt: skip
     modes = Section("Modes", [Para(note, "note")])

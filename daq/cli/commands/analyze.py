@@ -277,7 +277,13 @@ def _mode_text(mode: dict) -> str:
             f" ± {z_u_text} %" if z_u_text != "–" else ""
         )
     q = mode["quality"]
-    flag = "" if q.get("accepted", True) else " (asked for; fails a selection rule)"
+    flag = (
+        ""
+        if q.get("accepted", True)
+        else " (kept for a clear peak; fails a selection rule)"
+        if q.get("for_peak")
+        else " (asked for; fails a selection rule)"
+    )
     # The second LSCF normalisation (analysis/modal_id/identify.py) is said: its poles differ.
     read_with = " with alpha_0 = 1" if q.get("normalisation") == "lowest" else ""
     # A mode added among close ones (analysis/modal_id/refine.py, missing) has no chain.
