@@ -113,7 +113,10 @@ def swapped_columns(run) -> tuple[list[int], str] | None:
             given = ",".join(named)
             shown = given if all(_PLAIN_COLUMN.fullmatch(c) for c in named) else f"'{given}'"
             rate = f" --sample-rate {float(hits.sample_rate_hz):g}" if columns[0] is None else ""
-            return bad, f"{text}; if so, import the file again with --columns {shown}{rate}"
+            return (
+                bad,
+                f"{text}; if so, import the file again with --columns {shown}{rate}{_units_kept(imported)}",
+            )
     if isinstance(imported, dict) and imported.get("format") == "lvm" and isinstance(columns, list):
         from daq.formats.csv_text import header_name_unit
 
@@ -168,6 +171,25 @@ def skewed_channels(run) -> tuple[list[int], str] | None:
         f"the channels are skewed, by a delay between them or records cut from different triggers{turn}; "
         "align the response with the force and import the file again"
     )
+
+
+def _units_kept(imported: dict) -> str:
+    """The --force-unit and --response-unit that keep a swapped file's units with their
+    quantities (" --force-unit N --response-unit g"), or "" when both were the defaults.
+    A header's units belong to its labels, which the swap leaves where they were: read the
+    other way round, 'Accel (g)' is refused as a force (a new user went round in a circle)."""
+    from_ = imported.get("units_from") or {}
+    if not any(from_.get(q) in ("header", "option") for q in ("force", "response")):
+        return ""
+    force, response = imported.get("force_unit"), imported.get("response_unit")
+    if not (isinstance(force, str) and isinstance(response, str)):
+        return ""
+    return f" --force-unit {_shell_word(force)} --response-unit {_shell_word(response)}"
+
+
+def _shell_word(unit: str) -> str:
+    """A unit as one shell word: quoted where it holds a space, brackets or the like."""
+    return unit if _PLAIN_COLUMN.fullmatch(unit.replace("/", "").replace("^", "")) else f"'{unit}'"
 
 
 def _number(value: Any, unit: str) -> str:

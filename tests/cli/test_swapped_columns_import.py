@@ -50,3 +50,29 @@ def test_a_file_the_right_way_round_says_nothing_of_swapped_columns(tmp_path):
     result = invoke_daq("import", str(path), "--store", str(tmp_path / "runs"))
     assert result.returncode == 0, result.stderr
     assert "note:" not in result.stdout
+
+
+def test_a_swapped_file_with_units_in_its_header_is_offered_a_command_that_works(tmp_path):
+    """A new user's file: 'Time (s),Force (N),Accel (g)' above the response and the force.
+    The note offered --columns 'Time (s),Accel (g),Force (N)', which was refused ('Accel
+    (g)' read as the force has an acceleration unit) with a suggestion of the swapped
+    reading again. The note now keeps each unit with its quantity, and its command imports."""
+    force, response = impact_hits([42.0, 155.0, 388.0, 710.0], [0.012, 0.006, 0.02, 0.004],
+                                  [1.0, -0.6, 0.4, 0.3], FS, 1.0, 3, 0.01, 1e-3, 4)  # fmt: skip
+    path = tmp_path / "swapped.csv"
+    _write(path, "hit,Time (s),Force (N),Accel (g)", response / 9.80665, force)
+    store = tmp_path / "runs"
+    result = invoke_daq("import", str(path), "--store", str(store))
+    assert result.returncode == 0, result.stderr
+    (note,) = [line for line in result.stdout.splitlines() if line.startswith("note: ")]
+    offered = "--columns 'Time (s),Accel (g),Force (N)' --force-unit N --response-unit g"
+    assert note.endswith(f"; if so, import the file again with {offered}")
+    again = invoke_daq(
+        "import", str(path), "--columns", "Time (s),Accel (g),Force (N)", "--force-unit", "N",
+        "--response-unit", "g", "--store", str(store),
+    )  # fmt: skip
+    assert again.returncode == 0, again.stderr
+    assert "look swapped" not in again.stdout
+    (info,) = daq_json("analyze", store, "latest")
+    assert not [c for c in info["cautions"] if "swapped" in c or "failed" in c]
+    assert any(abs(m["frequency_hz"] - 155.0) < 0.5 for m in info["modes"])
