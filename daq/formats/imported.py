@@ -8,6 +8,7 @@ is a one-line :class:`~daq.formats.errors.FormatError` naming the file.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import math
 import os
 import stat
@@ -179,6 +180,16 @@ def make_hits(
         )
     for k in still:
         rejected.setdefault(k, "the response is zero in every sample")
+    # A hit that repeats an earlier one sample for sample is a copy (a block pasted twice),
+    # not a second hit: averaged, it shrank the ± as if it were new data.
+    seen: dict[bytes, int] = {}
+    for k in range(n_hits):
+        key = hashlib.sha256(
+            np.ascontiguousarray(force[k]).tobytes() + np.ascontiguousarray(response[k]).tobytes()
+        )
+        first = seen.setdefault(key.digest(), k)
+        if first != k:
+            rejected.setdefault(k, f"a copy of hit {first + 1}, sample for sample")
     try:
         return Hits(
             force_n=force,

@@ -87,3 +87,28 @@ def test_one_hit_with_a_response_of_zeros_is_kept_as_rejected(tmp_path):
     assert run.hits.reject_reason[2] == "the response is zero in every sample"
     analysed = invoke_daq("analyze", "latest", "--json", "--store", str(tmp_path / "store"))
     assert analysed.returncode == 0, analysed.stderr
+
+
+def test_a_hit_pasted_twice_is_kept_as_rejected_and_said(tmp_path):
+    """A record pasted twice (a new user's trial) was two hits: averaged, the copy shrank
+    the ± eightfold as if it were new data. It is now kept as rejected, and said."""
+    force, response = _pulse_hits(3, 5)
+    force[2], response[2] = force[0], response[0]
+    _write(tmp_path / "twice.csv", force, response)
+    result = invoke_daq("import", str(tmp_path / "twice.csv"), "--store", str(tmp_path / "store"))
+    assert result.returncode == 0, result.stderr
+    assert (
+        "note: hit 3 is kept but left out of the average: a copy of hit 1, sample for sample" in result.stdout
+    )
+    (run,) = [Store(tmp_path / "store").open(s.run_id) for s in Store(tmp_path / "store").list()]
+    assert list(run.hits.accepted) == [True, True, False]
+
+
+def test_hits_that_differ_in_one_sample_are_two_hits(tmp_path):
+    force, response = _pulse_hits(2, 5)
+    force[1], response[1] = force[0], response[0].copy()
+    response[1, 100] += 1e-9
+    _write(tmp_path / "close.csv", force, response)
+    result = invoke_daq("import", str(tmp_path / "close.csv"), "--store", str(tmp_path / "store"))
+    assert result.returncode == 0, result.stderr
+    assert "left out" not in result.stdout

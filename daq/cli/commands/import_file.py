@@ -287,6 +287,8 @@ def import_file(
         typer.echo(f"note: {short}")
     for line in failed_hit_checks(run):
         typer.echo(f"note: {line}")
+    for line in left_out_hits(run):
+        typer.echo(f"note: {line}")
     if earlier:
         more = f" (and {counted(len(earlier) - 1, 'earlier run')})" if len(earlier) > 1 else ""
         typer.echo(
@@ -393,6 +395,18 @@ def said_units(details: dict[str, Any]) -> list[str]:
     if forms:
         return [f"form: {', '.join(forms)} (from the UFF records' data types and units)"]
     return []
+
+
+def left_out_hits(run) -> list[str]:
+    """One line per hit stored as rejected at import, counted from 1, with why: the file
+    rejects it, its force or response is zero throughout, or it copies an earlier hit."""
+    if run.hits is None:
+        return []
+    return [
+        f"hit {i + 1} is kept but left out of the average: {run.hits.reject_reason[i]}"
+        for i in range(int(run.hits.n_hits))
+        if not run.hits.accepted[i]
+    ]
 
 
 def failed_hit_checks(run) -> list[str]:
