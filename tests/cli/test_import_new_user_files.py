@@ -16,11 +16,12 @@ def notes(result) -> list[str]:
     return [line for line in result.stdout.splitlines() if line.startswith("note: ")]
 
 
-def hit_rows(n: int = 1024) -> list[tuple[str, str, str]]:
+def hit_rows(n: int = 1024, hit: int = 0) -> list[tuple[str, str, str]]:
     """(time, force, response) as the user's files print them: time to 10 digits at
-    4096 Hz, a hammer pulse, a decaying response, 6 significant digits."""
+    4096 Hz, a hammer pulse, a decaying response, 6 significant digits; ``hit`` moves the
+    force's noise, so that hits differ (a hit repeating another is a copy, left out)."""
     t = np.arange(n) / RATE_HZ
-    force = np.where(np.arange(n) == 4, 50.0, 0.0) + 0.05 * np.sin(7.0 * np.arange(n))
+    force = np.where(np.arange(n) == 4, 50.0, 0.0) + 0.05 * np.sin(7.0 * np.arange(n) + hit)
     response = np.exp(-3.0 * t) * np.sin(2 * np.pi * 45.0 * t)
     return [(f"{a:.10g}", f"{b:.6g}", f"{c:.6g}") for a, b, c in zip(t, force, response, strict=True)]
 
@@ -70,7 +71,7 @@ def test_a_fully_quoted_csv_is_read(tmp_path):
 
 
 def test_a_csv_with_cr_line_ends_is_read(tmp_path):
-    rows = hit_rows() * 3  # three hits, the time starting over
+    rows = [row for k in range(3) for row in hit_rows(hit=k)]  # three hits, the time starting over
     path = write_rows(tmp_path / "b_cr.csv", "Time [s],Force [kN],Accel [g]", rows, end="\r")
     assert b"\n" not in path.read_bytes()
     store = tmp_path / "runs"
@@ -79,7 +80,7 @@ def test_a_csv_with_cr_line_ends_is_read(tmp_path):
     assert "(csv: 3 hits of 1024 samples at 4096 Hz)" in result.stdout
     (run_id,) = runs_in(store)
     hits = Store(store).open(run_id).hits
-    np.testing.assert_array_equal(hits.force_n[2], [float(r[1]) * 1000.0 for r in rows[:1024]])
+    np.testing.assert_array_equal(hits.force_n[2], [float(r[1]) * 1000.0 for r in rows[2048:]])
     assert "no line end" not in result.stdout  # the last line ends in CR
 
 
@@ -111,7 +112,7 @@ def test_an_excel_workbook_renamed_csv_is_told_to_be_saved_as_csv(tmp_path):
 
 
 def test_a_trailing_comma_on_every_line_is_no_column(tmp_path):
-    rows = hit_rows() * 3
+    rows = [row for k in range(3) for row in hit_rows(hit=k)]
     path = write_rows(tmp_path / "q_trailing_comma.csv", "Time [s],Force [N],Accel [g]", rows, after=",")
     store = tmp_path / "runs"
     result = daq_import(store, path)
@@ -190,7 +191,10 @@ def test_an_ascii_uff_at_4096_hz_comes_back_at_4096_hz(tmp_path):
     accel = np.array([float(r[2]) for r in rows]) * 9.80665
     sets = []
     for k in range(3):  # hit k: force (node 1), then acceleration (node 2), as the user's file
-        for what, node, kind, unit, data in (("force", 1, 13, "N", force), ("accel", 2, 12, "m/s^2", accel)):
+        for what, node, kind, unit, data in (
+            ("force", 1, 13, "N", force * (1 + 0.01 * k)),  # hits that differ: no copies
+            ("accel", 2, 12, "m/s^2", accel),
+        ):
             dset = pyuff.prepare_58(
                 binary=0, id1=f"hit {k} {what}", func_type=1, rsp_node=node, rsp_dir=3, ref_node=1, ref_dir=3,
                 abscissa_spacing=1, abscissa_spec_data_type=17, ordinate_spec_data_type=kind,
