@@ -448,7 +448,16 @@ class Table:
             if mark is not None:
                 self._comment(stripped[len(mark) :])
                 continue
-            self._row(line, number)
+            try:
+                self._row(line, number)
+            except FormatError as exc:
+                if raw.endswith((b"\n", b"\r")):
+                    raise
+                # Only the file's last line can lack a line end: a copy or download cut short.
+                raise FormatError(
+                    f"{exc}; it is the file's last line and has no line end: the file looks cut short "
+                    "(compare its end with the source)"
+                ) from None
         if not self.lines:
             raise FormatError(f"{self.name} holds no data rows")
         # A copy or download cut short ends mid-line, and its last number may be cut too

@@ -7,10 +7,12 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from daq.formats.csv_text import read_csv
+from daq.formats.errors import FormatError
 from daq.formats.frf_text import read_frf_text
 from tests.cli_helpers import invoke_daq
 
@@ -70,3 +72,27 @@ def test_the_trial_file_cut_mid_number_imports_with_the_note(tmp_path):
     result = invoke_daq("import", str(path), "--store", str(tmp_path / "store"))
     assert result.returncode == 0, result.stderr
     assert "note: line 102, the last, has no line end: the file may be cut short" in result.stdout
+
+
+@SETTINGS
+@given(
+    n=st.integers(3, 200),
+    end=st.sampled_from(["\n", "\r\n"]),
+    kept_cells=st.integers(1, 2),
+    frf=st.booleans(),
+)
+def test_a_last_row_cut_into_its_cells_is_refused_as_cut_short(n, end, kept_cells, frf):
+    """Cut before its last cells (a new user's truncated files): refused with the line, as
+    before, and now also said to be the file's last line without a line end."""
+    header = "freq (Hz),H Re,H Im" if frf else "t,F,a"
+    rows = [header] + [f"{(i + 1) / 4!r},{1.0 + i!r},{0.5 * i + 0.25!r}" for i in range(n)]
+    cells = rows[-1].split(",")
+    rows[-1] = ",".join(cells[:kept_cells]) + ("," if kept_cells == 2 else "")
+    path = WORK / ("cut.frf.csv" if frf else "cut.csv")
+    path.write_text(end.join(rows), encoding="utf-8")  # no line end after the last row
+    with pytest.raises(FormatError, match=f"line {n + 1}.*it is the file's last line and has no line end"):
+        (read_frf_text if frf else read_csv)(path)
+    path.write_text(end.join(rows) + end, encoding="utf-8")  # ended: not called cut short
+    with pytest.raises(FormatError) as refused:
+        (read_frf_text if frf else read_csv)(path)
+    assert "cut short" not in str(refused.value)
