@@ -89,6 +89,10 @@ def looks_like_lvm(head: bytes) -> bool:
     return head.lstrip(b"\xef\xbb\xbf").startswith(SIGNATURE.encode())
 
 
+#: A channel name that says it holds a spectrum, not a time record.
+_SPECTRUM_NAME = re.compile(r"(?i)\b(fft|spectrum|psd|power spectr|auto ?spectr|frequency response)\b")
+
+
 def read_lvm(
     path: Path,
     columns: str | None = None,
@@ -113,6 +117,14 @@ def read_lvm(
     with open_checked(path, max_bytes) as (handle, info):
         layout = _scan(name, text_lines(handle))
         header = _column_names(layout.segments[0])
+        spectra = [h for h in header if _SPECTRUM_NAME.search(h)]
+        if spectra:
+            # LabVIEW's FFT VIs log a spectrum with X_Dimension still 'Time' (a new user's
+            # cantilever file: "Acceleration (FFT - (RMS))" in dB, every 0.128 Hz).
+            raise FormatError(
+                f"{name} holds a spectrum ({spectra[0]}), not time records: a run needs the force and "
+                "response as recorded in time, before any FFT; log the raw channels"
+            )
         if len(header) < 2:
             raise FormatError(
                 f"{name} has {len(header)} channel ({header[0]}); a run needs two, a force and a response"

@@ -576,3 +576,27 @@ def test_a_time_column_with_a_dropped_sample_is_not_passed_over(tmp_path):
     with pytest.raises(FormatError) as excinfo:
         read_lvm(write(tmp_path / "gap.lvm", text))
     assert f"line {sample_line(text, 150)}" in one_line_refusal(excinfo)
+
+
+@pytest.mark.parametrize(
+    "name", ["Acceleration (FFT - (RMS))", "Power Spectrum", "PSD a1", "Force FFT", "Frequency Response"]
+)
+def test_a_logged_spectrum_is_refused_as_a_spectrum(tmp_path, name):
+    """LabVIEW's FFT VIs log a spectrum with X_Dimension 'Time' (a new user's cantilever
+    file, PujaChowdhury/Dataset-4...): it was refused as 'has 1 channel', which said nothing
+    of why. With a force beside it, it would have been read as a response in time."""
+    force, a1, _ = hammer_hit(256, 1024.0, 87.5)
+    for channels in ([(name, "g", a1)], [("F", "N", force), (name, "g", a1)]):
+        path = write(tmp_path / "spectrum.lvm", lvm_text([channels]))
+        with pytest.raises(FormatError) as excinfo:
+            read_lvm(path)
+        message = one_line_refusal(excinfo)
+        assert f"holds a spectrum ({name}" in message or "holds a spectrum (" in message, message
+        assert "not time records" in message
+
+
+def test_channel_names_of_time_records_are_no_spectrum(tmp_path):
+    force, a1, a2 = hammer_hit(256, 1024.0, 87.5)
+    names = [("Force", "N", force), ("Accel FF-1", "m/s^2", a1), ("Response Spec 2", "m/s^2", a2)]
+    data = read_lvm(write(tmp_path / "time.lvm", lvm_text([names])), columns="Force,Accel FF-1")
+    assert data.hits.n_samples == 256
