@@ -426,6 +426,47 @@ def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: f
     )
 
 
+#: force glitch: the force's largest value is a lone sample (both neighbours under
+#: GLITCH_NEIGHBOUR_SHARE of it) and the response within GLITCH_WINDOW_S of it stays under
+#: GLITCH_RESPONSE_SHARE of its own largest excursion: no hammer put it there. A one-sample
+#: hammer pulse (a hard tip at 4 kHz) sets the response ringing at once, usually at its peak.
+GLITCH_NEIGHBOUR_SHARE = 0.1
+GLITCH_WINDOW_S = 0.005
+GLITCH_RESPONSE_SHARE = 0.05
+#: The check's name.
+FORCE_GLITCH = "force glitch"
+
+
+def force_glitch(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> HitCheck:
+    """Failed when the force's largest value (about the record's median) is a lone sample
+    that the response does not answer (GLITCH_NEIGHBOUR_SHARE, GLITCH_WINDOW_S,
+    GLITCH_RESPONSE_SHARE): a glitch of the recorder, which then stands for the hit in every
+    other check and in the band chosen from the force spectrum. value: the glitch over the
+    largest force elsewhere. Zoomed (complex) records are not judged."""
+    force, resp = np.asarray(force_n), np.asarray(response)
+    if np.iscomplexobj(force) or np.iscomplexobj(resp) or force.size < 8 or not sample_rate_hz > 0:
+        return HitCheck(FORCE_GLITCH, True, "not judged", None)
+    f_dev = np.abs(force - np.median(force))
+    r_dev = np.abs(resp - np.median(resp))
+    i = int(np.argmax(f_dev))
+    peak, r_peak = float(f_dev[i]), float(r_dev.max())
+    if not (peak > 0 and r_peak > 0):
+        return HitCheck(FORCE_GLITCH, True, "not judged: a channel is constant", None)
+    neighbours = f_dev[max(i - 1, 0) : i + 2]
+    lone = float(np.sort(neighbours)[-2]) < GLITCH_NEIGHBOUR_SHARE * peak if neighbours.size > 1 else False
+    reach = max(1, round(GLITCH_WINDOW_S * sample_rate_hz))
+    answered = float(r_dev[max(i - reach, 0) : i + reach + 1].max()) >= GLITCH_RESPONSE_SHARE * r_peak
+    if lone and not answered:
+        rest = np.concatenate([f_dev[: max(i - 1, 0)], f_dev[i + 2 :]])
+        other = float(rest.max()) if rest.size else 0.0
+        detail = (
+            f"the force's largest value, {peak:.3g} N at {i / sample_rate_hz:.4g} s, is a lone sample the "
+            f"response does not answer (the largest force elsewhere is {other:.3g} N): a glitch, not a hit"
+        )
+        return HitCheck(FORCE_GLITCH, False, detail, peak / other if other > 0 else None)
+    return HitCheck(FORCE_GLITCH, True, "the force's peak is answered by the response", None)
+
+
 def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> list[HitCheck]:
     """The checks a hit read from a file can have without the analyzer's settings and
     flags: double impact for a force that is a pulse (else "no impact", failed: noise or
@@ -457,6 +498,7 @@ def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float
         clipped(force_n, response),
         channels_swapped(force_n, response, sample_rate_hz),
         response_timing(force_n, response, sample_rate_hz),
+        force_glitch(force_n, response, sample_rate_hz),
     ]
 
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from analysis.beam import TABLE_1, BeamProperties
-from analysis.hit_checks import NO_IMPACT
+from analysis.hit_checks import FORCE_GLITCH, NO_IMPACT
 from analysis.modal_id import NORMALISATIONS
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits, set_aside
 from analysis.spectra import convert_form
@@ -259,10 +259,26 @@ def _averaged_against_checks(run: Run) -> str | None:
             "modes are those of noise or of an excitation this analysis is not made for, not the "
             "structure's; import the hits of a hammer test"
         )
+    glitched = [i for i in against if FORCE_GLITCH in failed_check_names(checks[i])]
+    glitch = ""
+    if glitched:
+        # Leaving the hit out throws its hammer hit away with the glitch: mend the sample.
+        which = ", ".join(str(i + 1) for i in glitched)
+        glitch = (
+            f"the force of hit{'s' * (len(glitched) > 1)} {which} holds a glitch (hit {glitched[0] + 1}: "
+            f"{checks[glitched[0]][FORCE_GLITCH].get('detail', '')}): it stands for the hammer in the FRF "
+            "and in the band chosen from the force spectrum, both wrong; set that sample to the force's "
+            "level beside it in the file and import it again"
+        )
+        against = [i for i in against if failed_check_names(checks[i]) != [FORCE_GLITCH]]
+        if not against:
+            return glitch
+        glitch += "; "
     said = "; ".join(
         f"hit {i + 1}: {name} ({checks[i][name].get('detail', 'failed')})"
         for i in against
         for name in failed_check_names(checks[i])
+        if name != FORCE_GLITCH
     )
     count = (
         "1 hit in the average failed its checks"
@@ -275,7 +291,7 @@ def _averaged_against_checks(run: Run) -> str | None:
         if len(against) == 1
         else "their FRFs are wrong and pull the modes and damping"
     )
-    return f"{count}, {said}: {wrong}; {leave_out}"
+    return f"{glitch}{count}, {said}: {wrong}; {leave_out}"
 
 
 def _leave_out(run: Run, against: list[int], reasons: list[str]) -> str:

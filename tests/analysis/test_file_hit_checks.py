@@ -12,12 +12,14 @@ from analysis.hit_checks import (
     CLIP_SAMPLES,
     CLIPPED,
     DOUBLE_IMPACT,
+    FORCE_GLITCH,
     NO_IMPACT,
     RESPONSE_TIMING,
     SWAPPED,
     clipped,
     double_impact,
     file_checks,
+    force_glitch,
 )
 from tests.analysis.impact_synth import impact_hits
 
@@ -87,7 +89,7 @@ def test_huge_or_non_finite_records_neither_overflow_nor_warn():
     overflow; a record with NaN or inf gets no checks (the store refuses it anyway)."""
     force, response = _hit(1)
     checks = file_checks(force * 1e200, response * 1e200, FS)
-    assert [c.name for c in checks] == [DOUBLE_IMPACT, CLIPPED, SWAPPED, RESPONSE_TIMING]
+    assert [c.name for c in checks] == [DOUBLE_IMPACT, CLIPPED, SWAPPED, RESPONSE_TIMING, FORCE_GLITCH]
     assert all(c.passed for c in checks)
     assert file_checks(np.where(np.arange(force.size) == 5, np.nan, force), response, FS) == []
     assert file_checks(force, np.where(np.arange(response.size) == 5, np.inf, response), FS) == []
@@ -111,3 +113,30 @@ def test_a_clean_tap_on_an_offset_or_drifting_gauge_is_an_impact(offset, drift):
     response = np.exp(-3 * t) * np.sin(2 * np.pi * 40 * t)
     (impact, *_) = file_checks(force, response, rate)
     assert impact.name != NO_IMPACT, impact
+
+
+def test_a_lone_force_sample_the_response_does_not_answer_is_a_glitch():
+    """A new user's file: one force sample of 1e6 N at 0.75 s, long after the real tap. It
+    stood for the hit in every check and in the band; the import said nothing."""
+    force, response = _hit(3)
+    glitched = force.copy()
+    glitched[int(0.75 * FS)] = 1e6
+    check = force_glitch(glitched, response, FS)
+    assert not check.passed
+    assert check.detail.startswith("the force's largest value, 1e+06 N at 0.75 s, is a lone sample")
+    assert FORCE_GLITCH in {c.name for c in file_checks(glitched, response, FS) if not c.passed}
+
+
+def test_a_one_sample_hammer_pulse_is_no_glitch():
+    """A hard tip at a low rate: the pulse is one sample, and the response answers it."""
+    fs = 1024.0
+    n = 2048
+    force = np.zeros(n)
+    force[100] = 80.0
+    t = (np.arange(n) - 100) / fs
+    response = np.where(t >= 0, np.exp(-2.0 * t) * np.sin(2 * np.pi * 60.0 * t + 0.3), 0.0)
+    assert force_glitch(force, response, fs).passed
+    assert force_glitch(-force, response, fs).passed
+    for seed in range(3):
+        f, a = _hit(seed)
+        assert force_glitch(f, a, FS).passed
