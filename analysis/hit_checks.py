@@ -358,6 +358,11 @@ TIMING_LAG_S = 0.010
 #: this share of its peak excursion: a response that is noise (a dead channel) is never
 #: quiet, and its "onset" says nothing.
 TIMING_QUIET_SHARE = 0.05
+#: ... and never fewer than this many samples (a response one sample late at a low rate).
+TIMING_LAG_SAMPLES = 3
+#: The force's first tap: its first sample at this share of the peak (as
+#: pretrigger.EARLIER_TAP_FRACTION), walked back to TIMING_START_FRACTION.
+TIMING_TAP_FRACTION = 0.20
 #: Records shorter than this are not judged.
 TIMING_MIN_SAMPLES = 64
 #: A response whose largest value stands alone (everything beyond TIMING_SPIKE_SAMPLES
@@ -365,6 +370,16 @@ TIMING_MIN_SAMPLES = 64
 #: rings on after its peak at a good share of it.
 TIMING_SPIKE_SAMPLES = 2
 TIMING_SPIKE_SHARE = 0.1
+
+
+def _sustained(r_dev: np.ndarray, level: float) -> int:
+    """The first sample at or above ``level`` whose next two samples reach half of it (a
+    response that has started goes on; a lone glitched sample in a pre-trigger does not),
+    or the first at or above it where none is so."""
+    above = r_dev >= level
+    after = np.maximum(np.r_[r_dev[1:], 0.0], np.r_[r_dev[2:], 0.0, 0.0]) >= 0.5 * level
+    both = np.flatnonzero(above & after)
+    return int(both[0]) if both.size else int(np.argmax(above))
 
 
 def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> HitCheck:
@@ -397,11 +412,13 @@ def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: f
         # A lone sample far above the rest (a glitch) is no onset: timed by it, a clean
         # file's response "started 250 ms after the hammer" (a new user's trial).
         return HitCheck(RESPONSE_TIMING, True, "not judged: the response's peak is a lone spike", None)
-    i_peak = int(np.argmax(f_dev))
-    quiet = np.flatnonzero(f_dev[: i_peak + 1] < TIMING_START_FRACTION * f_peak)
+    # The hammer strikes where its first tap starts, not its largest (a double impact's
+    # second strike, larger, made the response to the first "move 14.6 ms before the hammer").
+    first_tap = int(np.argmax(f_dev >= TIMING_TAP_FRACTION * f_peak))
+    quiet = np.flatnonzero(f_dev[: first_tap + 1] < TIMING_START_FRACTION * f_peak)
     start = int(quiet[-1]) + 1 if quiet.size else 0
-    lead_at = int(np.argmax(r_dev >= TIMING_LEAD_FRACTION * r_peak))
-    onset = int(np.argmax(r_dev >= TIMING_ONSET_FRACTION * r_peak))
+    lead_at = _sustained(r_dev, TIMING_LEAD_FRACTION * r_peak)
+    onset = _sustained(r_dev, TIMING_ONSET_FRACTION * r_peak)
 
     # Quiet before its onset: a rise that crosses the lead fraction a few samples after the
     # onset fraction is the onset's own edge, not noise.
@@ -412,10 +429,12 @@ def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: f
         detail = f"the response moves {lead * ms:.3g} ms ({lead} samples) before the hammer strikes"
         return HitCheck(RESPONSE_TIMING, False, detail, -lead / sample_rate_hz)
     lag_s = (onset - start) / sample_rate_hz
-    if lag_s > TIMING_LAG_S and quiet:
+    # At least TIMING_LAG_SAMPLES samples: at 64 Hz one sample is 15.6 ms.
+    limit_s = max(TIMING_LAG_S, TIMING_LAG_SAMPLES / sample_rate_hz)
+    if lag_s > limit_s and quiet:
         detail = (
             f"the response starts {lag_s * 1e3:.3g} ms after the hammer strikes "
-            f"({TIMING_LAG_S * 1e3:g} ms at most on a lab-sized structure)"
+            f"({limit_s * 1e3:.3g} ms at most on a lab-sized structure)"
         )
         return HitCheck(RESPONSE_TIMING, False, detail, lag_s)
     return HitCheck(

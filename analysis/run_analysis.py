@@ -618,12 +618,22 @@ def _keep_options(result: RunAnalysis, more_hz: list[float], options: AnalysisOp
 
 
 def _for_peak_caution(result: RunAnalysis, kept: list[ModeEstimate], options: AnalysisOptions) -> str:
-    """Modes kept for a clear peak of the FRF that the stability diagram holds over too
-    few orders (analysis/modal_id/identify.py, _kept_for_peaks): what they rest on, and
-    the --frequencies that leave them out."""
+    """Modes kept for a clear peak of the FRF by the third pass (analysis/modal_id/
+    identify.py, _kept_for_peaks): what they rest on, and the --frequencies that leave
+    them out."""
     one = len(kept) == 1
     listed = ", ".join(f"{m.frequency_hz:.4g}" for m in kept)
-    orders = ", ".join(str(m.quality.get("n_stable_orders", 0)) for m in kept)
+    failed = [m for m in kept if not m.quality.get("accepted", True)]
+    if failed:
+        orders = ", ".join(str(int(m.quality.get("n_stable_orders", 0))) for m in failed)
+        plural = "" if orders == "1" else "s"
+        held = (
+            f"; the stability diagram holds {'it' if one else 'those failing a selection rule'} over "
+            f"{orders} order{plural}, too few or too unsteady for a mode found by itself, so its values rest "
+            "on little"
+        )
+    else:
+        held = "; the stability diagram holds it in a zone of its own, where the passes before did not"
     others = [m.frequency_hz for m in result.modes if not m.quality.get("for_peak")]
     leave = ""
     if others:
@@ -635,10 +645,8 @@ def _for_peak_caution(result: RunAnalysis, kept: list[ModeEstimate], options: An
         )
     return (
         f"the mode{'' if one else 's'} at {listed} Hz {'is' if one else 'are'} kept for a clear peak of "
-        f"the FRF ({UNEXPLAINED_SNR_DB:g} dB or more above the noise, no other mode there) that the "
-        f"stability diagram holds over {orders} order{'' if orders == '1' else 's'} only, too few for a mode "
-        f"found by itself; {'its' if one else 'their'} values rest on those orders (a mode narrower than a "
-        f"line, one of a close pair){leave}"
+        f"the FRF ({UNEXPLAINED_SNR_DB:g} dB or more above the noise, no other mode there; a mode narrower "
+        f"than a line, or one of a close pair){held}{leave}"
     )
 
 

@@ -451,7 +451,7 @@ class Table:
             try:
                 self._row(line, number)
             except FormatError as exc:
-                if raw.endswith((b"\n", b"\r")):
+                if raw.endswith((b"\n", b"\r")) or not self._cut_into_cells(line):
                     raise
                 # Only the file's last line can lack a line end: a copy or download cut short.
                 raise FormatError(
@@ -465,6 +465,19 @@ class Table:
         # the last line without a line end, so it is told, not refused.
         if not raw.endswith((b"\n", b"\r")) and self.lines[-1] == number:
             self.unended = number
+
+    def _cut_into_cells(self, line: str) -> bool:
+        """Whether ``line`` reads as a row cut short: fewer cells than the rows above, or its
+        last cell empty (a footer, an extra cell or a word in a cell is no cut)."""
+        if self.n_cols == 0 or (self.delimiter is None and not line.strip()):
+            return False
+        cells = self._split(line)
+        if len(cells) > self.n_cols:
+            return False
+        if len(cells) < self.n_cols:
+            filled = [cell for cell in cells if cell.strip()]
+            return all(self._is_number(cell) for cell in filled)
+        return not cells[-1].strip()
 
     def unended_note(self) -> list[str]:
         """The note on a last data row with no line end, or none."""

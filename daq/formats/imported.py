@@ -189,7 +189,8 @@ def make_hits(
         )
         first = seen.setdefault(key.digest(), k)
         if first != k:
-            rejected.setdefault(k, f"a copy of hit {first + 1}, sample for sample")
+            # Counted from 1 and said so: an exported '# rejected hit K' line counts from 0.
+            rejected.setdefault(k, f"the same samples as hit {first + 1} (counted from 1): a copy")
     try:
         return Hits(
             force_n=force,

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from analysis.beam import TABLE_1, BeamProperties
-from analysis.hit_checks import FORCE_GLITCH, NO_IMPACT
+from analysis.hit_checks import FORCE_GLITCH, NO_IMPACT, RESPONSE_TIMING
 from analysis.modal_id import NORMALISATIONS
 from analysis.run_analysis import AnalysisOptions, RunAnalysis, analyze_frfs, analyze_hits, set_aside
 from analysis.spectra import convert_form
@@ -240,13 +240,15 @@ def _averaged_against_checks(run: Run) -> str | None:
     if swapped is not None and set(against) & set(swapped[0]):
         # One caution for the file: the other checks of those hits read the response as the force.
         return f"{swapped[1]}; until then the modes and damping are not the structure's"
+    checks = run.hits.checks if run.hits is not None else []
     skewed = skewed_channels(run)
-    if skewed is not None and any(run.hits.accepted[i] for i in skewed[0]):
-        # One caution for the file: leaving hits out does not mend the recorder's skew.
-        return f"{skewed[1]}; until then the modes, damping and residues may not be the structure's"
+    skew = ""
+    if skewed is not None:
+        # Said once for the file (leaving hits out does not mend the recorder's skew), and
+        # the hits' other failed checks after it.
+        skew = f"{skewed[1]}; until then the modes, damping and residues may not be the structure's; "
     if not against:
-        return None
-    checks = run.hits.checks
+        return skew.removesuffix("; ") or None
     if set(against) == set(np.flatnonzero(run.hits.accepted)) and all(
         NO_IMPACT in failed_check_names(checks[i]) for i in against
     ):
@@ -270,28 +272,36 @@ def _averaged_against_checks(run: Run) -> str | None:
             "and in the band chosen from the force spectrum, both wrong; set that sample to the force's "
             "level beside it in the file and import it again"
         )
-        against = [i for i in against if failed_check_names(checks[i]) != [FORCE_GLITCH]]
-        if not against:
-            return glitch
         glitch += "; "
+
+    def named(i: int) -> list[str]:
+        # What is left to say of hit i once the file's skew and its glitch are said.
+        return [
+            n
+            for n in failed_check_names(checks[i])
+            if n != FORCE_GLITCH and not (skew and n == RESPONSE_TIMING)
+        ]
+
+    against = [i for i in against if named(i)]
+    if not against:
+        return f"{skew}{glitch}".removesuffix("; ") or None
     said = "; ".join(
         f"hit {i + 1}: {name} ({checks[i][name].get('detail', 'failed')})"
         for i in against
-        for name in failed_check_names(checks[i])
-        if name != FORCE_GLITCH
+        for name in named(i)
     )
     count = (
         "1 hit in the average failed its checks"
         if len(against) == 1
         else (f"{len(against)} hits in the average failed their checks")
     )
-    leave_out = _leave_out(run, against, [", ".join(failed_check_names(checks[i])) for i in against])
+    leave_out = _leave_out(run, against, [", ".join(named(i)) for i in against])
     wrong = (
         "its FRF is wrong and pulls the modes and damping"
         if len(against) == 1
         else "their FRFs are wrong and pull the modes and damping"
     )
-    return f"{glitch}{count}, {said}: {wrong}; {leave_out}"
+    return f"{skew}{glitch}{count}, {said}: {wrong}; {leave_out}"
 
 
 def _leave_out(run: Run, against: list[int], reasons: list[str]) -> str:

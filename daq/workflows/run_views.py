@@ -135,8 +135,8 @@ def _hz(value: float) -> str:
 def skewed_channels(run) -> tuple[list[int], str] | None:
     """(the 0-based indices of the hits whose response moves before the hammer strikes or
     long after it, analysis/hit_checks.py response_timing; one line saying what that does
-    to the FRF and what to do) or None when every hit's timing is right or unjudged. One
-    line for the file: a skew between the channels is the recorder's, not a hit's."""
+    to the FRF and what to do) when every accepted hit does, else None. One line for the
+    file: a skew between the channels is the recorder's, not a hit's."""
     from analysis.hit_checks import RESPONSE_TIMING, response_timing
 
     hits = run.hits
@@ -152,13 +152,15 @@ def skewed_channels(run) -> tuple[list[int], str] | None:
             else response_timing(hits.force_n[i], hits.response_m_s2[i], hits.sample_rate_hz).as_dict()
             for i, t in enumerate(timing)
         ]
-    bad = [i for i, t in enumerate(timing) if (t or {}).get("passed") is False]
-    if not bad:
+    # The recorder's skew is every hit's: only where every hit in the average fails is it
+    # said once for the file; a hit of its own (cut from another trigger) is a failed check
+    # like any other, with the line that leaves it out.
+    kept = [i for i in range(int(hits.n_hits)) if hits.accepted[i]]
+    bad = [i for i in kept if (timing[i] or {}).get("passed") is False]
+    if not bad or len(bad) < len(kept):
         return None
     n = int(hits.n_hits)
-    which = (
-        "every hit" if len(bad) == n else f"hit{'s' * (len(bad) > 1)} {', '.join(str(i + 1) for i in bad)}"
-    )
+    which = "every hit" if len(bad) == n else "every hit in the average"
     first = timing[bad[0]]
     skew_s = first.get("value")
     turn = (

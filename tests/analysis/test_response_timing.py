@@ -219,3 +219,83 @@ def test_a_lone_spike_in_the_response_is_no_onset():
     check = response_timing(force[0], glitched, fs)
     assert check.passed
     assert "lone spike" in check.detail
+
+
+def test_a_double_impact_with_the_larger_second_strike_is_no_skew():
+    """The response to the first, smaller strike came before the larger second one: timed
+    from the largest, it 'moved 14.6 ms before the hammer' (review of the first version).
+    The hammer strikes where its first tap starts."""
+    fn, zeta, amp, fs, seconds, pulse = CASES[1]
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 1, 0.01, pulse, 3, pretrigger_s=0.1)
+    lag = round(0.015 * fs)
+    force2 = force[0] + 1.5 * np.r_[np.zeros(lag), force[0][:-lag]]
+    response2 = response[0] + 1.5 * np.r_[np.zeros(lag), response[0][:-lag]]
+    check = response_timing(force2, response2, fs)
+    assert check.passed, check.detail
+
+
+def test_a_lone_glitch_in_the_pre_trigger_is_no_lead():
+    """One response sample at 30 % of the peak, 0.35 s before the hit: a glitch, not a
+    response that moves before the hammer (review of the first version)."""
+    fn, zeta, amp, fs, seconds, pulse = CASES[1]
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, 1, 0.01, pulse, 3, pretrigger_s=0.5)
+    glitched = response[0].copy()
+    glitched[round(0.15 * fs)] = 0.3 * np.max(np.abs(glitched))
+    check = response_timing(force[0], glitched, fs)
+    assert check.passed, check.detail
+
+
+def test_a_response_one_sample_late_at_a_low_rate_is_no_skew():
+    """At 64 Hz one sample is 15.6 ms, more than the 10 ms limit: a low-frequency
+    structure's response reaching a tenth of its peak one sample after the force is
+    timed right (the limit is never under TIMING_LAG_SAMPLES samples)."""
+    fs = 64.0
+    n = 512
+    force = np.zeros(n)
+    force[40] = 50.0
+    t = (np.arange(n) - 40) / fs
+    response = np.where(
+        t > 0, np.exp(-0.3 * t) * (np.sin(2 * np.pi * 2 * t) - np.sin(2 * np.pi * 6 * t)), 0.0
+    )
+    check = response_timing(force, response, fs)
+    assert check.passed, check.detail
+    late = np.r_[np.zeros(8), response[:-8]]  # 8 samples, 125 ms: a skew
+    assert not response_timing(force, late, fs).passed
+
+
+def _file_of(tmp_path, lags_s: list[float], clip_hit: int | None = None):
+    fn, zeta, amp, fs, seconds, pulse = CASES[0]
+    force, response = impact_hits(fn, zeta, amp, fs, seconds, len(lags_s), 0.01, pulse, 7, pretrigger_s=0.02)
+    rows = ["hit,time,force,response"]
+    for k, lag in enumerate(lags_s):
+        r = _delayed(response[k], round(lag * fs))
+        if k == clip_hit:
+            r = np.clip(r, -0.5 * np.max(np.abs(r)), 0.5 * np.max(np.abs(r)))
+        rows += [f"{k},{i / fs:.9g},{force[k, i]:.9g},{r[i]:.9g}" for i in range(force.shape[1])]
+    path = tmp_path / "hits.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_one_hit_out_of_time_is_a_failed_check_with_the_line_that_leaves_it_out(tmp_path):
+    """A recorder's skew is every hit's; one hit of three 30 ms late was cut from another
+    trigger: a failed check of that hit, not the file's (review of the first version)."""
+    store = tmp_path / "store"
+    imported = invoke_daq("import", str(_file_of(tmp_path, [0.0, 0.03, 0.0])), "--store", str(store))
+    assert imported.returncode == 0, imported.stderr
+    assert "hit 2 failed the response timing check" in imported.stdout
+    assert "not timed with the force in every hit" not in imported.stdout
+    (result,) = json.loads(invoke_daq("analyze", "latest", "--store", str(store), "--json").stdout)
+    (caution,) = [c for c in result["cautions"] if "response timing" in c]
+    assert "'# rejected hit 1: response timing'" in caution
+
+
+def test_a_skewed_file_with_a_clipped_hit_says_both(tmp_path):
+    store = tmp_path / "store"
+    path = _file_of(tmp_path, [0.05, 0.05, 0.05], clip_hit=2)
+    assert invoke_daq("import", str(path), "--store", str(store)).returncode == 0
+    (result,) = json.loads(invoke_daq("analyze", "latest", "--store", str(store), "--json").stdout)
+    (caution,) = [c for c in result["cautions"] if "not timed with the force" in c]
+    assert "hit 3: clipped" in caution
+    assert "'# rejected hit 2: clipped'" in caution
+    assert "response timing (" not in caution  # the skew is said once, for the file

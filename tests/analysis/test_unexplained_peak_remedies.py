@@ -71,11 +71,19 @@ def test_the_whole_analysis_finds_the_peaks_mode_by_default():
 
 
 def test_the_caution_for_a_kept_peak_says_how_to_leave_it_out(first):
-    kept = replace(first.modes[0], quality={**first.modes[0].quality, "for_peak": True, "n_stable_orders": 2})
+    quality = {**first.modes[0].quality, "for_peak": True, "n_stable_orders": 2, "accepted": False}
+    kept = replace(first.modes[0], quality=quality)
     result = replace(first, modes=[kept, *first.modes[1:]])
     caution = _for_peak_caution(result, [kept], AnalysisOptions())
     assert caution.startswith(f"the mode at {kept.frequency_hz:.4g} Hz is kept for a clear peak of the FRF")
-    assert "holds over 2 orders only" in caution
+    assert "holds it over 2 orders, too few or too unsteady" in caution
+    # A chain that passed the selection rules in its own zone is not blamed for too few orders.
+    steady = replace(kept, quality={**quality, "n_stable_orders": 25, "accepted": True})
+    caution_steady = _for_peak_caution(
+        replace(first, modes=[steady, *first.modes[1:]]), [steady], AnalysisOptions()
+    )
+    assert "too few" not in caution_steady
+    assert "in a zone of its own, where the passes before did not" in caution_steady
     others = ",".join(f"{m.frequency_hz:.6g}" for m in first.modes[1:])
     assert caution.endswith(f"to leave it out, --frequencies {others}")
 

@@ -98,7 +98,8 @@ def test_a_hit_pasted_twice_is_kept_as_rejected_and_said(tmp_path):
     result = invoke_daq("import", str(tmp_path / "twice.csv"), "--store", str(tmp_path / "store"))
     assert result.returncode == 0, result.stderr
     assert (
-        "note: hit 3 is kept but left out of the average: a copy of hit 1, sample for sample" in result.stdout
+        "note: hit 3 is kept but left out of the average: the same samples as hit 1 (counted from 1): a copy"
+        in result.stdout
     )
     (run,) = [Store(tmp_path / "store").open(s.run_id) for s in Store(tmp_path / "store").list()]
     assert list(run.hits.accepted) == [True, True, False]

@@ -96,3 +96,18 @@ def test_a_last_row_cut_into_its_cells_is_refused_as_cut_short(n, end, kept_cell
     with pytest.raises(FormatError) as refused:
         (read_frf_text if frf else read_csv)(path)
     assert "cut short" not in str(refused.value)
+
+
+@pytest.mark.parametrize(
+    "last",
+    ["End of data", "0.002,3,0.1,7", "0.002,3,NaN", "0.002,3,n/a"],
+    ids=["footer", "extra", "nan", "word"],
+)
+def test_a_last_line_that_is_no_cut_row_is_not_called_cut_short(last):
+    """A footer, an extra cell or a word is refused as before, without the cut-short
+    sentence, which is for a row cut into its cells (review of the first version)."""
+    path = WORK / "footer.csv"
+    path.write_text("t,F,a\n0,1,0.5\n0.001,2,0.25\n" + last, encoding="utf-8")
+    with pytest.raises(FormatError) as refused:
+        read_csv(path)
+    assert "cut short" not in str(refused.value)

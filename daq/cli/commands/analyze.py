@@ -290,7 +290,8 @@ def _mode_text(mode: dict) -> str:
     how = (
         "found by refitting the close modes beside it (LSCF missed it)"
         if q.get("added")
-        else f"stable over {q['n_stable_orders']} orders{read_with}{flag}"
+        else f"stable over {q['n_stable_orders']} order{'' if q['n_stable_orders'] == 1 else 's'}"
+        f"{read_with}{flag}"
     )
     share = plain(100 * q["synthesis_share"], ".2g")
     return f"{f_text} Hz{spread}, damping {zeta_text}; {how}, {share} % of the synthesis"

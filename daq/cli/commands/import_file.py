@@ -400,12 +400,15 @@ def said_units(details: dict[str, Any]) -> list[str]:
 def left_out_hits(run) -> list[str]:
     """One line per hit stored as rejected at import, counted from 1, with why: the file
     rejects it, its force or response is zero throughout, or it copies an earlier hit."""
+    from daq.workflows.run_views import failed_check_names
+
     if run.hits is None:
         return []
+    # A hit with a failed check is already said, with its fate, by failed_hit_checks.
     return [
         f"hit {i + 1} is kept but left out of the average: {run.hits.reject_reason[i]}"
         for i in range(int(run.hits.n_hits))
-        if not run.hits.accepted[i]
+        if not run.hits.accepted[i] and not failed_check_names(run.hits.checks[i])
     ]
 
 
