@@ -354,12 +354,12 @@ TIMING_LEAD_SAMPLES = 2
 #: lab-sized structure (metres of beam or plate) in a few ms at the frequencies an impact
 #: test reads, so a longer wait is a channel delay or records from different triggers.
 TIMING_LAG_S = 0.010
+#: ... and never fewer than this many samples (a response one sample late at a low rate).
+TIMING_LAG_SAMPLES = 3
 #: The response counts as quiet before its onset when its RMS excursion there stays under
 #: this share of its peak excursion: a response that is noise (a dead channel) is never
 #: quiet, and its "onset" says nothing.
 TIMING_QUIET_SHARE = 0.05
-#: ... and never fewer than this many samples (a response one sample late at a low rate).
-TIMING_LAG_SAMPLES = 3
 #: The force's first tap: its first sample at this share of the peak (as
 #: pretrigger.EARLIER_TAP_FRACTION), walked back to TIMING_START_FRACTION.
 TIMING_TAP_FRACTION = 0.20

@@ -50,3 +50,22 @@ def wideband_modes() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     zeta = 10 ** rng.uniform(np.log10(2e-4), np.log10(2e-3), 26)
     amp = 10 ** rng.uniform(-1, 1, 26) * rng.choice([-1, 1], 26)
     return fn, zeta, amp
+
+
+#: Impact tests to check hit checks on: (modes Hz, damping, amplitudes, fs Hz, record s,
+#: pulse s). Light and heavy damping, close modes, a short record, a soft tip.
+IMPACT_CASES = [
+    ([42.0, 155.0, 388.0, 710.0], [0.012, 0.006, 0.02, 0.004], [1.0, -0.6, 0.4, 0.3], 5120.0, 1.0, 1e-3),
+    ([45.0, 132.0, 310.0], [0.015, 0.008, 0.02], [1.0, -0.6, 0.4], 2048.0, 2.0, 2e-3),
+    ([100.0, 104.0], [0.002, 0.002], [1.0, 0.8], 1024.0, 4.0, 3e-3),
+    ([30.0, 300.0], [0.1, 0.08], [1.0, 0.5], 1024.0, 1.0, 5e-3),
+    ([800.0, 2500.0], [0.01, 0.02], [1.0, 0.5], 25600.0, 0.08, 2e-4),
+]
+
+#: More damped structures, whose response rings down within the span: 1.5-2 % at 80-560 Hz
+#: (a new user's file), 3-5 % at 300-1100 Hz, 2-2.5 % at 1.2 kHz on 25.6 kHz.
+DAMPED_CASES = [
+    ([80.0, 210.0, 560.0], [0.015, 0.01, 0.02], [1.0, 1.0, 2.0], 4096.0, 1.0, 1.5e-3),
+    ([300.0, 420.0, 1100.0], [0.03, 0.05, 0.04], [1.0, 1.5, 3.0], 8192.0, 1.0, 8e-4),
+    ([250.0, 1200.0, 1250.0, 3300.0], [0.01, 0.02, 0.025, 0.03], [1.0, 2.0, 1.5, 3.0], 25600.0, 0.5, 3e-4),
+]

@@ -19,24 +19,10 @@ from analysis.hit_checks import (
     file_checks,
     response_timing,
 )
+from tests.analysis.impact_synth import DAMPED_CASES as DAMPED
+from tests.analysis.impact_synth import IMPACT_CASES as CASES
 from tests.analysis.impact_synth import impact_hits
 from tests.cli_helpers import invoke_daq
-
-#: More damped structures, whose response rings down within a few ms (as test_swapped_columns).
-DAMPED = [
-    ([80.0, 210.0, 560.0], [0.015, 0.01, 0.02], [1.0, 1.0, 2.0], 4096.0, 1.0, 1.5e-3),
-    ([300.0, 420.0, 1100.0], [0.03, 0.05, 0.04], [1.0, 1.5, 3.0], 8192.0, 1.0, 8e-4),
-    ([250.0, 1200.0, 1250.0, 3300.0], [0.01, 0.02, 0.025, 0.03], [1.0, 2.0, 1.5, 3.0], 25600.0, 0.5, 3e-4),
-]
-CASES = [
-    # (modes Hz, damping, amplitudes, fs, seconds, pulse s): light and heavy damping,
-    # close modes, a short record, a soft tip (as test_swapped_columns).
-    ([42.0, 155.0, 388.0, 710.0], [0.012, 0.006, 0.02, 0.004], [1.0, -0.6, 0.4, 0.3], 5120.0, 1.0, 1e-3),
-    ([45.0, 132.0, 310.0], [0.015, 0.008, 0.02], [1.0, -0.6, 0.4], 2048.0, 2.0, 2e-3),
-    ([100.0, 104.0], [0.002, 0.002], [1.0, 0.8], 1024.0, 4.0, 3e-3),
-    ([30.0, 300.0], [0.1, 0.08], [1.0, 0.5], 1024.0, 1.0, 5e-3),
-    ([800.0, 2500.0], [0.01, 0.02], [1.0, 0.5], 25600.0, 0.08, 2e-4),
-]
 
 
 def _delayed(response: np.ndarray, samples: int) -> np.ndarray:
