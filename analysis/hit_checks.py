@@ -385,10 +385,12 @@ def _sustained(r_dev: np.ndarray, level: float) -> int:
 def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float) -> HitCheck:
     """Failed when the response moves before the hammer strikes (it reaches
     TIMING_LEAD_FRACTION of its peak excursion more than TIMING_LEAD_SAMPLES samples before
-    the force pulse starts), or stays quiet for more than TIMING_LAG_S after it (its first
-    TIMING_ONSET_FRACTION of its peak comes that late): a skew between the channels, which
-    turns the FRF's phase by 360 degrees every 1/skew Hz, so that no modal model holds.
-    value: the response's onset less the force's start, s (negative: before the hit).
+    the force's first tap starts), or stays quiet for more than TIMING_LAG_S, and at least
+    TIMING_LAG_SAMPLES samples, after it (its first TIMING_ONSET_FRACTION of its peak comes
+    that late): a skew between the channels, which turns the FRF's phase by 360 degrees
+    every 1/skew Hz, a turn no modal model follows. Judged only where the response is quiet
+    before its onset. value: the response's onset less the force's start, s (negative:
+    before the hit); None where not judged.
 
     force_n, response : (n_samples,) real records (a zoomed, complex record is not judged:
     its envelope is smeared over the band's width). sample_rate_hz : Hz.
@@ -415,13 +417,13 @@ def response_timing(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: f
     # The hammer strikes where its first tap starts, not its largest (a double impact's
     # second strike, larger, made the response to the first "move 14.6 ms before the hammer").
     first_tap = int(np.argmax(f_dev >= TIMING_TAP_FRACTION * f_peak))
-    quiet = np.flatnonzero(f_dev[: first_tap + 1] < TIMING_START_FRACTION * f_peak)
-    start = int(quiet[-1]) + 1 if quiet.size else 0
+    calm = np.flatnonzero(f_dev[: first_tap + 1] < TIMING_START_FRACTION * f_peak)
+    start = int(calm[-1]) + 1 if calm.size else 0
     lead_at = _sustained(r_dev, TIMING_LEAD_FRACTION * r_peak)
     onset = _sustained(r_dev, TIMING_ONSET_FRACTION * r_peak)
 
-    # Quiet before its onset: a rise that crosses the lead fraction a few samples after the
-    # onset fraction is the onset's own edge, not noise.
+    # Only a response quiet before its onset says when it started: a dead channel's noise
+    # or a previous hit's ring-down never is.
     quiet = onset >= 8 and float(np.sqrt(np.mean((r_dev[:onset] / r_peak) ** 2))) <= TIMING_QUIET_SHARE
     ms = 1e3 / sample_rate_hz
     if start - lead_at > TIMING_LEAD_SAMPLES and quiet:
@@ -512,12 +514,16 @@ def file_checks(force_n: np.ndarray, response: np.ndarray, sample_rate_hz: float
         impact = HitCheck(NO_IMPACT, False, detail, crest)
     else:
         impact = double_impact(force_n, sample_rate_hz)
+    glitch = force_glitch(force_n, response, sample_rate_hz)
     return [
         impact,
         clipped(force_n, response),
         channels_swapped(force_n, response, sample_rate_hz),
-        response_timing(force_n, response, sample_rate_hz),
-        force_glitch(force_n, response, sample_rate_hz),
+        # A glitch stands for the hammer in the timing too: said once, as the glitch.
+        response_timing(force_n, response, sample_rate_hz)
+        if glitch.passed
+        else HitCheck(RESPONSE_TIMING, True, "not judged: the force holds a glitch", None),
+        glitch,
     ]
 
 

@@ -140,3 +140,18 @@ def test_a_one_sample_hammer_pulse_is_no_glitch():
     for seed in range(3):
         f, a = _hit(seed)
         assert force_glitch(f, a, FS).passed
+
+
+def test_a_glitch_is_said_as_a_glitch_not_also_as_a_skew():
+    """With a pre-trigger, the response to the real tap comes long before the glitch that
+    stands for the hammer: said once, as the glitch, not also as a response that moves
+    before the hammer strikes."""
+    from analysis.hit_checks import RESPONSE_TIMING
+
+    force, response = impact_hits([45.0, 132.0, 310.0], [0.03, 0.03, 0.03], [1.0, -0.6, 0.4], FS, 2.0, 1,
+                                  0.01, 2e-3, 8, pretrigger_s=0.1)  # fmt: skip
+    glitched = force[0].copy()
+    glitched[int(1.5 * FS)] = 1e6
+    failed = {c.name for c in file_checks(glitched, response[0], FS) if not c.passed}
+    assert FORCE_GLITCH in failed
+    assert RESPONSE_TIMING not in failed
